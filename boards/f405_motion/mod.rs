@@ -1,0 +1,70 @@
+//! A generic STM32F405RG motion board: six step/dir pairs, a shared driver enable, an e-stop
+//! input, a quadrature spindle encoder, four analog force sensors and a USART host link.
+//! Pin map: see `README.md` beside this file (and `pins.rs`, which is the source of truth).
+//!
+//! | resource | use |
+//! | --- | --- |
+//! | HSE 8 MHz -> PLL | SYSCLK 168 MHz, AHB 168, APB1 42 (timers 84), APB2 84 (timers 168) MHz |
+//! | TIM2 | DDA tick (update interrupt at `tick_hz`) |
+//! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2) |
+//! | ADC1 | force sensors |
+//! | USART1 | host link, 115200 8N1 |
+//! | EXTI12 | e-stop (EXTI15_10 interrupt) |
+//! | DWT.CYCCNT | cycle counter for benchmarks |
+//! | RTT | defmt log frames (probe-rs) |
+
+mod clocks;
+mod cycles;
+mod io;
+mod log;
+mod pins;
+mod step_port;
+#[path = "../common/tick_timer.rs"]
+mod tick_timer;
+
+pub use cycles::CycleCounter;
+pub use io::EStop;
+pub use step_port::StepPort;
+pub use tick_timer::TickTimer;
+
+use stm32f4::stm32f405 as pac;
+
+pub const NAME: &str = "f405-motion";
+
+/// Everything the app needs from the board, configured and idle (drivers disabled).
+pub struct Board {
+    pub tick_timer: TickTimer,
+    pub step_port: StepPort,
+    pub cycles: CycleCounter,
+    pub estop: EStop,
+}
+
+pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
+    let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
+    clocks::enable_peripherals(&dp.RCC);
+    pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
+    io::init_spindle_encoder(&dp.TIM4);
+    io::init_force_adc(&dp.ADC1, &dp.ADC_COMMON);
+    io::init_host_link(&dp.USART1, clocks.pclk2_hz);
+    Board {
+        tick_timer: TickTimer::new(dp.TIM2, clocks.apb1_timer_hz, tick_hz),
+        step_port: StepPort::new(dp.GPIOC, dp.GPIOB),
+        cycles: CycleCounter::new(core),
+        estop: EStop::new(dp.EXTI, &dp.SYSCFG),
+    }
+}
+
+/// Ends the run. Outputs go to their safe state (drivers disabled, STEP low). Under a debugger the
+/// core halts on a breakpoint so `probe-rs run` returns; standalone it parks in `wfi` (a motion
+/// controller must not restart a job by itself after a fault).
+pub fn exit(_ok: bool) -> ! {
+    step_port::force_safe();
+    // SAFETY: reading DHCSR has no side effects.
+    let debugger = unsafe { (*cortex_m::peripheral::DCB::PTR).dhcsr.read() } & 1 != 0;
+    if debugger {
+        cortex_m::asm::bkpt();
+    }
+    loop {
+        cortex_m::asm::wfi();
+    }
+}

@@ -1,0 +1,127 @@
+//! Pin map of the board (mirrored in README.md). STEP and DIR sit on consecutive bits of GPIOC so
+//! one BSRR write moves all six axes at once.
+
+use stm32f4::stm32f405 as pac;
+
+#[derive(Clone, Copy)]
+pub enum Port {
+    A,
+    B,
+    C,
+}
+
+#[derive(Clone, Copy)]
+pub enum Mode {
+    /// Push-pull output at the given initial level.
+    Output {
+        high: bool,
+    },
+    /// Input with pull-up.
+    InputPullUp,
+    /// Alternate function `af`, pulled up when `pull_up`.
+    Alternate {
+        af: u8,
+        pull_up: bool,
+    },
+    Analog,
+}
+
+pub struct Pin {
+    pub name: &'static str,
+    pub port: Port,
+    pub pin: u8,
+    pub mode: Mode,
+}
+
+/// STEP0..5 = PC0..PC5 (active high: rising edge = one step).
+pub const STEP_SHIFT: u32 = 0;
+/// DIR0..5 = PC6..PC11 (high = negative direction).
+pub const DIR_SHIFT: u32 = 6;
+/// Shared driver enable, active low (high = drivers disabled), on GPIOB.
+pub const DRV_EN_N: u32 = 5;
+/// E-stop loop on GPIOB (EXTI line 12): closed to ground = run, open (high) = stop.
+pub const ESTOP: u32 = 12;
+
+const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
+    Pin { name, port, pin, mode }
+}
+
+const LOW: Mode = Mode::Output { high: false };
+
+pub const PINS: [Pin; 22] = [
+    pin("STEP0", Port::C, 0, LOW),
+    pin("STEP1", Port::C, 1, LOW),
+    pin("STEP2", Port::C, 2, LOW),
+    pin("STEP3", Port::C, 3, LOW),
+    pin("STEP4", Port::C, 4, LOW),
+    pin("STEP5", Port::C, 5, LOW),
+    pin("DIR0", Port::C, 6, LOW),
+    pin("DIR1", Port::C, 7, LOW),
+    pin("DIR2", Port::C, 8, LOW),
+    pin("DIR3", Port::C, 9, LOW),
+    pin("DIR4", Port::C, 10, LOW),
+    pin("DIR5", Port::C, 11, LOW),
+    pin("DRV_EN_N", Port::B, DRV_EN_N as u8, Mode::Output { high: true }),
+    pin("ESTOP", Port::B, ESTOP as u8, Mode::InputPullUp),
+    pin("SPINDLE_A", Port::B, 6, Mode::Alternate { af: 2, pull_up: true }), // TIM4_CH1
+    pin("SPINDLE_B", Port::B, 7, Mode::Alternate { af: 2, pull_up: true }), // TIM4_CH2
+    pin("FORCE0", Port::A, 0, Mode::Analog),                                // ADC1_IN0
+    pin("FORCE1", Port::A, 1, Mode::Analog),                                // ADC1_IN1
+    pin("FORCE2", Port::A, 2, Mode::Analog),                                // ADC1_IN2
+    pin("FORCE3", Port::A, 3, Mode::Analog),                                // ADC1_IN3
+    pin("HOST_TX", Port::A, 9, Mode::Alternate { af: 7, pull_up: false }),  // USART1_TX
+    pin("HOST_RX", Port::A, 10, Mode::Alternate { af: 7, pull_up: true }),  // USART1_RX
+];
+
+/// Force-sensor ADC channels, in FORCE0.. order.
+pub const FORCE_CHANNELS: [u8; 4] = [0, 1, 2, 3];
+
+/// Writes one pin's configuration. All GPIO ports share one register layout but are distinct
+/// PAC types, hence a macro.
+macro_rules! configure {
+    ($gpio:expr, $p:expr) => {{
+        let gpio = $gpio;
+        let n = $p.pin as u32;
+        let (moder, pull, af, out_high) = match $p.mode {
+            Mode::Output { high } => (0b01, 0b00, 0, Some(high)),
+            Mode::InputPullUp => (0b00, 0b01, 0, None),
+            Mode::Alternate { af, pull_up } => (0b10, pull_up as u32, af as u32, None),
+            Mode::Analog => (0b11, 0b00, 0, None),
+        };
+        // Level first, so an output never glitches to the wrong state.
+        if let Some(high) = out_high {
+            let bit = if high { 1 << n } else { 1 << (n + 16) };
+            // SAFETY: BSRR accepts any bit pattern.
+            gpio.bsrr().write(|w| unsafe { w.bits(bit) });
+        }
+        let two = |v: u32, r: u32| (r & !(0b11 << (2 * n))) | (v << (2 * n));
+        // SAFETY (all below): 2- and 4-bit fields written with values defined in RM0090 8.4.
+        gpio.otyper().modify(|r, w| unsafe { w.bits(r.bits() & !(1 << n)) });
+        gpio.ospeedr().modify(|r, w| unsafe { w.bits(two(0b11, r.bits())) });
+        gpio.pupdr().modify(|r, w| unsafe { w.bits(two(pull, r.bits())) });
+        if n < 8 {
+            let s = 4 * n;
+            gpio.afrl().modify(|r, w| unsafe { w.bits((r.bits() & !(0xf << s)) | (af << s)) });
+        } else {
+            let s = 4 * (n - 8);
+            gpio.afrh().modify(|r, w| unsafe { w.bits((r.bits() & !(0xf << s)) | (af << s)) });
+        }
+        gpio.moder().modify(|r, w| unsafe { w.bits(two(moder, r.bits())) });
+    }};
+}
+
+pub fn init(a: &pac::GPIOA, b: &pac::GPIOB, c: &pac::GPIOC) {
+    for p in &PINS {
+        let port = match p.port {
+            Port::A => 'A',
+            Port::B => 'B',
+            Port::C => 'C',
+        };
+        defmt::debug!("pin {=str} = P{=char}{=u8}", p.name, port, p.pin);
+        match p.port {
+            Port::A => configure!(a, p),
+            Port::B => configure!(b, p),
+            Port::C => configure!(c, p),
+        }
+    }
+}

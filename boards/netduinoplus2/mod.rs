@@ -1,0 +1,61 @@
+//! QEMU's `netduinoplus2` machine: an STM32F405 whose timers, NVIC and SysTick are modelled but
+//! whose GPIO, RCC, DWT and DMA are not. The step port therefore records its outputs instead of
+//! driving pins, logs go out over semihosting, and `exit` ends the QEMU process.
+//!
+//! | resource | use |
+//! | --- | --- |
+//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
+//! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
+//! | semihosting | defmt log frames on QEMU's stdout, exit status |
+
+mod clocks;
+mod cycles;
+mod log;
+mod step_port;
+#[path = "../common/tick_timer.rs"]
+mod tick_timer;
+
+pub use cycles::CycleCounter;
+pub use step_port::StepPort;
+pub use tick_timer::TickTimer;
+
+use stm32f4::stm32f405 as pac;
+
+pub const NAME: &str = "netduinoplus2";
+
+/// Everything the app needs from the board, configured and idle.
+pub struct Board {
+    pub tick_timer: TickTimer,
+    pub step_port: StepPort,
+    pub cycles: CycleCounter,
+    pub estop: EStop,
+}
+
+pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
+    let clocks = clocks::init(&dp.RCC);
+    Board {
+        tick_timer: TickTimer::new(dp.TIM2, clocks.tim2_hz, tick_hz),
+        step_port: StepPort::new(),
+        cycles: CycleCounter::new(dp.TIM5),
+        estop: EStop,
+    }
+}
+
+/// Ends the run: QEMU exits with status 0 (`ok`) or 1.
+pub fn exit(ok: bool) -> ! {
+    use cortex_m_semihosting::debug;
+    debug::exit(if ok { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+    // Only reached without a semihosting host (e.g. QEMU started without semihosting).
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// QEMU has no e-stop input: the interrupt is never raised.
+pub struct EStop;
+
+impl EStop {
+    pub fn clear(&mut self) -> bool {
+        false
+    }
+}

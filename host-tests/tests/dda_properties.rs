@@ -1,0 +1,390 @@
+//! Property tests of the DDA: exact step totals, straight lines, step timing, override and hold,
+//! and the driver timing every edge must honour.
+
+use host_tests::{run_segments, Run};
+use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
+use motion::segment::{Rate, Segment};
+use motion::Command;
+use proptest::prelude::*;
+
+const TICK_HZ: u32 = 100_000;
+
+fn cfg(pulse_ns: u32, setup_ns: u32, hold_ns: u32) -> MachineConfig {
+    MachineConfig {
+        tick_hz: TICK_HZ,
+        timing: StepTiming { pulse_ns, dir_setup_ns: setup_ns, dir_hold_ns: hold_ns },
+        axis_count: MAX_AXES as u8,
+        axes: [AxisLimits {
+            max_rate_hz: TICK_HZ / (2 * pulse_ns.div_ceil(10_000).max(1)),
+            accel_steps_per_s2: 1_000_000,
+            junction_jerk_hz: 1_000,
+        }; MAX_AXES],
+    }
+}
+
+fn rate(x: f64) -> Rate {
+    Rate::from_num(x)
+}
+
+/// A valid segment: each axis at most duration / spacing steps so the nominal rate is legal.
+fn segment_strategy(spacing: u32) -> impl Strategy<Value = Segment> {
+    (20u32..3_000, prop::array::uniform6(-1000i32..=1000), 0.0f64..=1.0, 0.0f64..=1.0, 1u32..400)
+        .prop_map(move |(t, frac, entry, exit, accel)| {
+            let max = (t / spacing) as i32;
+            let mut steps = [0i32; MAX_AXES];
+            for (s, f) in steps.iter_mut().zip(frac) {
+                *s = f * max / 1000;
+            }
+            if steps.iter().all(|&s| s == 0) {
+                steps[0] = max.max(1);
+            }
+            Segment {
+                steps,
+                duration_ticks: t,
+                entry_rate: rate(entry),
+                exit_rate: rate(exit),
+                accel_per_tick: Rate::from_bits(accel * 1000),
+                id: 0,
+            }
+        })
+}
+
+fn command_strategy() -> impl Strategy<Value = (u64, Command)> {
+    (
+        0u64..40_000,
+        prop_oneof![
+            (0.0f64..=2.0).prop_map(|r| Command::SetOverride(rate(r))),
+            Just(Command::Hold),
+            Just(Command::Resume),
+        ],
+    )
+}
+
+fn total(segs: &[Segment]) -> [i64; MAX_AXES] {
+    let mut t = [0i64; MAX_AXES];
+    for s in segs {
+        for i in 0..MAX_AXES {
+            t[i] += s.steps[i] as i64;
+        }
+    }
+    t
+}
+
+fn abs_total(segs: &[Segment]) -> [u64; MAX_AXES] {
+    let mut t = [0u64; MAX_AXES];
+    for s in segs {
+        for i in 0..MAX_AXES {
+            t[i] += s.steps[i].unsigned_abs() as u64;
+        }
+    }
+    t
+}
+
+fn assert_clean(run: &Run) {
+    assert!(run.pins.violations.is_empty(), "pin timing: {:?}", run.pins.violations);
+    assert_eq!(run.position_mismatches, 0, "positions() disagreed with the pins");
+}
+
+/// Ends every command script with resume at 100 % so the job can finish.
+fn finishing(mut cmds: Vec<(u64, Command)>) -> Vec<(u64, Command)> {
+    cmds.push((40_001, Command::Resume));
+    cmds.push((40_001, Command::SetOverride(Rate::ONE)));
+    cmds
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+    /// Random segments, overrides, holds and resumes: every commanded step comes out, exactly.
+    #[test]
+    fn totals_are_exact_under_override_and_hold(
+        segs in prop::collection::vec(segment_strategy(2), 1..12),
+        cmds in prop::collection::vec(command_strategy(), 0..10),
+    ) {
+        let run = run_segments(&cfg(2_500, 5_000, 5_000), &segs, &finishing(cmds), 5_000_000);
+        prop_assert!(run.dda.is_idle(), "did not finish in {} ticks", run.ticks);
+        prop_assert_eq!(run.rec.net, total(&segs));
+        prop_assert_eq!(run.rec.steps, abs_total(&segs));
+        prop_assert_eq!(run.dda.positions(), total(&segs));
+        assert_clean(&run);
+    }
+
+    /// Longer pulses and DIR times than a tick: still exact, still honoured.
+    #[test]
+    fn slow_driver_timing_is_honoured(
+        segs in prop::collection::vec(segment_strategy(14), 1..8),
+        pulse_ticks in 1u32..=7,
+        setup in 0u32..=60_000,
+        hold in 0u32..=60_000,
+    ) {
+        let c = cfg(pulse_ticks * 10_000, setup, hold);
+        let run = run_segments(&c, &segs, &[], 5_000_000);
+        prop_assert!(run.dda.is_idle());
+        prop_assert_eq!(run.rec.net, total(&segs));
+        assert_clean(&run);
+    }
+
+    /// Every step of a straight line lies within half a step (per axis) of the ideal line: some
+    /// point k/T of the segment is within 0.5 step of the position on every axis at once.
+    #[test]
+    fn steps_stay_within_half_a_step_of_the_line(seg in segment_strategy(2), ovr in 0.1f64..=2.0) {
+        let run = run_segments(&cfg(2_500, 0, 0), &[seg], &[(0, Command::SetOverride(rate(ovr)))], 5_000_000);
+        let t = seg.duration_ticks as f64;
+        let mut pos = [0i64; MAX_AXES];
+        for &(_, rise, dir) in &run.edges {
+            for (i, p) in pos.iter_mut().enumerate() {
+                if rise & (1 << i) != 0 {
+                    *p += if dir & (1 << i) != 0 { -1 } else { 1 };
+                }
+            }
+            // Interval of line parameter u (in virtual ticks) compatible with each axis.
+            let (mut lo, mut hi) = (0.0f64, t);
+            for i in 0..MAX_AXES {
+                let d = seg.steps[i] as f64;
+                if d == 0.0 {
+                    prop_assert_eq!(pos[i], 0);
+                    continue;
+                }
+                let a = (pos[i] as f64 - 0.5) * t / d;
+                let b = (pos[i] as f64 + 0.5) * t / d;
+                lo = lo.max(a.min(b));
+                hi = hi.min(a.max(b));
+            }
+            prop_assert!(lo <= hi + 1e-9, "position {:?} is off the line", pos);
+        }
+    }
+
+    /// At constant feed (rate exactly 1.0) each step's tick is within one tick of its ideal time.
+    #[test]
+    fn constant_feed_steps_are_within_one_tick(
+        d in prop::array::uniform6(0i32..=1500),
+        t in 3_000u32..6_000,
+    ) {
+        // Segment A accelerates to full feed and hands over at 1.0; B runs at 1.0 throughout.
+        let mut steps = d;
+        steps[0] = steps[0].max(1);
+        let a = Segment { steps, duration_ticks: t, entry_rate: Rate::ZERO, exit_rate: Rate::ONE,
+            accel_per_tick: Rate::from_bits(1 << 20), id: 0 };
+        let b = Segment { entry_rate: Rate::ONE, exit_rate: Rate::ONE, id: 1, ..a };
+        let c = Segment { entry_rate: Rate::ONE, exit_rate: Rate::ZERO, id: 2, ..a };
+        let run = run_segments(&cfg(2_500, 0, 0), &[a, b, c], &[], 1_000_000);
+        let (a_end, b_end) = (run.segment_ends[0], run.segment_ends[1]);
+        prop_assert_eq!(b_end - a_end, t as u64, "B must take exactly T ticks at rate 1.0");
+        for i in 0..MAX_AXES {
+            let di = steps[i] as f64;
+            if di == 0.0 {
+                continue;
+            }
+            let b_steps: Vec<u64> = run.edges.iter()
+                .filter(|e| e.0 > a_end && e.0 <= b_end && e.1 & (1 << i) != 0)
+                .map(|e| e.0).collect();
+            prop_assert_eq!(b_steps.len() as i32, steps[i]);
+            for (j, &tick) in b_steps.iter().enumerate() {
+                // Ideal: the line reaches step j + 1/2 ... the half-way point between positions.
+                let ideal = a_end as f64 + (j as f64 + 0.5) * t as f64 / di;
+                prop_assert!((tick as f64 - ideal).abs() <= 1.0,
+                    "axis {} step {} at tick {} ideal {:.2}", i, j, tick, ideal);
+            }
+        }
+    }
+}
+
+/// The cruise fast path and the full tick produce the same pins, tick for tick, through ramps,
+/// junctions, overrides, holds, commands scheduled ahead and commands applied between ticks.
+#[test]
+fn cruise_fast_path_equals_the_full_tick() {
+    use proptest::test_runner::{Config, TestRunner};
+    let strategy = (
+        prop::collection::vec(segment_strategy(2), 1..10),
+        prop::collection::vec(command_strategy(), 0..8),
+        prop::collection::vec(command_strategy(), 0..4),
+    );
+    let mut runner = TestRunner::new(Config { cases: 96, ..Config::default() });
+    let cases_cruising = std::cell::Cell::new(0u32);
+    runner
+        .run(&strategy, |(segs, cmds, immediate)| {
+            let c = cfg(2_500, 5_000, 5_000);
+            let mut fast = motion::Dda::new(&c).unwrap();
+            let mut full = motion::Dda::new(&c).unwrap();
+            full.disable_cruise_path();
+            let mut pf = motion::dda::Preparer::new(&c).unwrap();
+            let mut pu = motion::dda::Preparer::new(&c).unwrap();
+            for &(at, cmd) in finishing(cmds).iter() {
+                fast.schedule(at, cmd).ok();
+                full.schedule(at, cmd).ok();
+            }
+            let mut next = 0;
+            let mut cruising = 0u64;
+            while fast.now() < 3_000_000 {
+                while next < segs.len() && fast.ready_free() > 0 {
+                    fast.push(&pf.prepare(&segs[next]).unwrap()).unwrap();
+                    full.push(&pu.prepare(&segs[next]).unwrap()).unwrap();
+                    next += 1;
+                }
+                for &(at, cmd) in &immediate {
+                    if at == fast.now() {
+                        fast.apply(cmd);
+                        full.apply(cmd);
+                    }
+                }
+                if next == segs.len() && fast.is_idle() && fast.now() > 40_001 {
+                    break;
+                }
+                let (a, b) = (fast.tick(), full.tick());
+                prop_assert_eq!(a, b, "tick {}", fast.now());
+                prop_assert_eq!(fast.rate(), full.rate());
+                prop_assert!(!full.in_cruise());
+                cruising += fast.in_cruise() as u64;
+            }
+            prop_assert_eq!(fast.positions(), full.positions());
+            prop_assert!(fast.is_idle() && full.is_idle());
+            if cruising > 0 {
+                cases_cruising.set(cases_cruising.get() + 1);
+            }
+            Ok(())
+        })
+        .unwrap();
+    // About a third of these random jobs settle somewhere; the comparison must cover those.
+    assert!(cases_cruising.get() >= 24, "fast path ran in only {} cases", cases_cruising.get());
+}
+
+#[test]
+fn hold_stops_on_the_path_and_resumes_from_the_exact_position() {
+    let seg = Segment {
+        steps: [20_000, -15_000, 5_000, 0, 0, 0],
+        duration_ticks: 60_000,
+        entry_rate: Rate::ZERO,
+        exit_rate: Rate::ZERO,
+        accel_per_tick: Rate::from_bits(1 << 17),
+        id: 7,
+    };
+    let cmds = [(20_000, Command::Hold), (40_000, Command::Resume)];
+    let run = run_segments(&cfg(2_500, 5_000, 5_000), &[seg], &cmds, 1_000_000);
+    assert_eq!(run.rec.net, total(&[seg]));
+    assert_clean(&run);
+    // Stopped well before the resume, and never moved while held.
+    let held: Vec<_> = run.edges.iter().filter(|e| e.0 > 30_000 && e.0 <= 40_000).collect();
+    assert!(held.is_empty(), "steps while held: {held:?}");
+    // Decelerated rather than stopping dead: step intervals grow before the stop.
+    let x: Vec<u64> = run
+        .edges
+        .iter()
+        .filter(|e| e.0 > 15_000 && e.0 <= 30_000 && e.1 & 1 != 0)
+        .map(|e| e.0)
+        .collect();
+    let gaps: Vec<u64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+    assert!(gaps.len() > 10 && gaps.last() > gaps.first(), "no deceleration: {gaps:?}");
+    // The same job without the hold ends in the same place.
+    let plain = run_segments(&cfg(2_500, 5_000, 5_000), &[seg], &[], 1_000_000);
+    assert_eq!(plain.dda.positions(), run.dda.positions());
+    assert!(run.ticks > plain.ticks + 15_000);
+}
+
+#[test]
+fn override_takes_effect_on_the_next_tick() {
+    let seg = Segment {
+        steps: [4_000, 0, 0, 0, 0, 0],
+        duration_ticks: 40_000,
+        entry_rate: Rate::ZERO,
+        exit_rate: Rate::ZERO,
+        accel_per_tick: Rate::from_bits(1 << 16),
+        id: 0,
+    };
+    let mut dda = motion::Dda::new(&cfg(2_500, 0, 0)).unwrap();
+    let mut prep = motion::dda::Preparer::new(&cfg(2_500, 0, 0)).unwrap();
+    dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+    while dda.rate() < Rate::ONE {
+        dda.tick();
+    }
+    dda.apply(Command::SetOverride(rate(0.5)));
+    let before = dda.rate();
+    dda.tick();
+    assert!(dda.rate() < before, "rate must start falling on the next tick");
+    // It ramps down at the segment's acceleration (2^16 / 2^30 per tick), then settles.
+    for _ in 0..(1 << 13) + 1 {
+        dda.tick();
+    }
+    assert_eq!(dda.rate(), rate(0.5));
+    dda.apply(Command::SetOverride(Rate::ZERO));
+    for _ in 0..(1 << 13) + 1 {
+        dda.tick();
+    }
+    assert_eq!(dda.rate(), Rate::ZERO);
+    let parked = dda.positions();
+    for _ in 0..1000 {
+        dda.tick();
+    }
+    assert_eq!(dda.positions(), parked, "override 0 parks the axis");
+    assert_eq!(dda.state(), motion::dda::MotionState::Moving);
+}
+
+/// Direction reversals with slow drivers: the DDA delays the first step rather than violate the
+/// driver's DIR timing, and releases every held-back step.
+#[test]
+fn reversal_with_long_dir_times_defers_and_keeps_every_step() {
+    let c = cfg(20_000, 65_000, 65_000);
+    let fwd = Segment {
+        steps: [2, 0, 0, 0, 0, 0],
+        duration_ticks: 9,
+        entry_rate: Rate::ONE,
+        exit_rate: Rate::ONE,
+        accel_per_tick: Rate::ONE,
+        id: 0,
+    };
+    let back = Segment { steps: [-2, 0, 0, 0, 0, 0], ..fwd };
+    let segs = [fwd, back, fwd, back, fwd];
+    let run = run_segments(&c, &segs, &[], 100_000);
+    assert!(run.dda.is_idle());
+    assert_eq!(run.rec.net, total(&segs));
+    assert_eq!(run.rec.steps[0], 10);
+    assert_clean(&run);
+}
+
+/// Three segments of ~6e7 steps on each of six axes: 1.08e9 steps, not one gained or lost.
+#[test]
+fn no_drift_over_a_billion_steps() {
+    let c = cfg(2_500, 0, 0);
+    let t = 120_000_000u32;
+    let mut segs = Vec::new();
+    for k in 0..3 {
+        let sign = if k % 2 == 0 { 1 } else { -1 };
+        let mut steps = [0i32; MAX_AXES];
+        for (i, s) in steps.iter_mut().enumerate() {
+            *s = sign * (t / 2 - 1_000 * i as u32) as i32 * if i % 2 == 0 { 1 } else { -1 };
+        }
+        segs.push(Segment {
+            steps,
+            duration_ticks: t,
+            entry_rate: Rate::ONE,
+            exit_rate: Rate::ONE,
+            accel_per_tick: Rate::ONE,
+            id: k,
+        });
+    }
+    let mut dda = motion::Dda::new(&c).unwrap();
+    let mut prep = motion::dda::Preparer::new(&c).unwrap();
+    let mut net = [0i64; MAX_AXES];
+    let mut next = 0;
+    loop {
+        while next < segs.len() && dda.ready_free() > 0 {
+            dda.push(&prep.prepare(&segs[next]).unwrap()).unwrap();
+            next += 1;
+        }
+        if next == segs.len() && dda.is_idle() {
+            break;
+        }
+        let out = dda.tick();
+        if out.rise() != 0 {
+            for (i, n) in net.iter_mut().enumerate() {
+                if out.rise() & (1 << i) != 0 {
+                    *n += if out.dir() & (1 << i) != 0 { -1 } else { 1 };
+                }
+            }
+        }
+    }
+    let expect = total(&segs);
+    let stepped: u64 = abs_total(&segs).iter().sum();
+    assert!(stepped > 1_000_000_000);
+    assert_eq!(net, expect);
+    assert_eq!(dda.positions(), expect);
+}

@@ -1,0 +1,13 @@
+//! Host side of the motion board: job files (TOML and G-code) to planner moves, offline planning
+//! through the host model of the firmware, and the command-line tool's pieces.
+//!
+//! Pipeline: [`job::parse_toml`] or [`gcode::parse`] -> [`job::Job`] -> [`convert::convert`] ->
+//! [`convert::Program`] -> [`plan::Stream`] (segments and events) -> a link ([`transport`]) or the
+//! host model ([`plan::simulate`]).
+
+pub mod cli;
+pub mod convert;
+pub mod gcode;
+pub mod job;
+pub mod plan;
+pub mod transport;

@@ -1,0 +1,189 @@
+//! The G-code subset: modes, units, events, comments, and errors with line:column.
+
+use motionctl::convert;
+use motionctl::gcode;
+use motionctl::job::{self, Feed, Item, Job, Machine, Source, Target};
+
+fn machine() -> Machine {
+    job::parse_machine_toml(include_str!("../examples/machine.toml")).unwrap()
+}
+
+fn items(src: &str) -> Vec<Item> {
+    gcode::parse(src, &machine()).unwrap_or_else(|e| panic!("{src:?}: {e}"))
+}
+
+fn err(src: &str) -> String {
+    match gcode::parse(src, &machine()) {
+        Err(e) => e.to_string(),
+        Ok(i) => panic!("{src:?} was accepted: {i:?}"),
+    }
+}
+
+/// Final position in steps after running `src` through the converter.
+fn final_steps(src: &str) -> [i64; 3] {
+    let job = Job { machine: machine(), items: items(src), feed_commands: vec![] };
+    let p = convert::convert(&job).unwrap_or_else(|e| panic!("{src:?}: {e}"));
+    [p.final_steps[0], p.final_steps[1], p.final_steps[2]]
+}
+
+fn only_move(src: &str) -> (Target, Feed, Source) {
+    match items(src).as_slice() {
+        [Item::Move(m)] => (m.target.clone(), m.feed, m.source),
+        other => panic!("{src:?}: {other:?}"),
+    }
+}
+
+#[test]
+fn part_example_parses_and_ends_where_written() {
+    let src = include_str!("../examples/part.gcode");
+    let items = items(src);
+    let moves = items.iter().filter(|i| matches!(i, Item::Move(_))).count();
+    assert_eq!(moves, 12);
+    let events: Vec<&Item> = items.iter().filter(|i| !matches!(i, Item::Move(_))).collect();
+    assert_eq!(events, [&Item::Spindle(true), &Item::Pause, &Item::Spindle(false)]);
+    // N160 in inches: X1.5 Y1 at F40 in/min.
+    let Some(Item::Move(inch)) = items.iter().rev().nth(2) else { panic!("N160 is a move") };
+    assert_eq!(inch.source, Source::Gcode { line: 18 });
+    assert_eq!(inch.target, Target::Absolute(vec![Some(1.5 * 25.4), Some(25.4), None]));
+    assert_eq!(inch.feed, Feed::MmPerMin(40.0 * 25.4));
+    assert_eq!(final_steps(src), [800, 800, 0]);
+}
+
+#[test]
+fn absolute_and_relative_modes() {
+    assert_eq!(final_steps("G0 X10 Y20\nG91\nG1 X1 F100\nX1 Y-5"), [960, 1200, 0]);
+    assert_eq!(final_steps("G91 G0 X10\nG90 G0 X2"), [160, 0, 0]);
+    // Absolute is the default; unnamed axes stay (None) in absolute mode.
+    assert_eq!(only_move("G0 Y3").0, Target::Absolute(vec![None, Some(3.0), None]));
+    assert_eq!(only_move("G91 G0 Y3").0, Target::Relative(vec![0.0, 3.0, 0.0]));
+    // Motion mode is modal, and G0 is rapid whatever F says.
+    let it = items("G1 X1 F300\nX2\nG0 X3\nX4");
+    let feeds: Vec<Feed> = it
+        .iter()
+        .map(|i| match i {
+            Item::Move(m) => m.feed,
+            _ => panic!(),
+        })
+        .collect();
+    assert_eq!(feeds, [Feed::MmPerMin(300.0), Feed::MmPerMin(300.0), Feed::Rapid, Feed::Rapid]);
+}
+
+#[test]
+fn inches_convert_to_steps_exactly_within_rounding() {
+    assert_eq!(final_steps("G20 G0 X1 Y0.5 Z-0.01"), [2_032, 1_016, -102]);
+    // Every 0.0001 in step from 0 to 0.2 in: 0.0001 in = 0.2032 steps at 80 steps/mm, never a tie.
+    for k in 0..2_000i64 {
+        let x_in = format!("{}.{:04}", k / 10_000, k % 10_000);
+        let exact = (k * 2_032 + 5_000).div_euclid(10_000);
+        assert_eq!(final_steps(&format!("G20 G0 X{x_in}"))[0], exact, "X{x_in} in");
+    }
+    // Units switch back and forth; F follows the units of its block.
+    assert_eq!(final_steps("G20 G0 X1\nG21 G91 G0 X1\nG20 X1"), [2032 + 80 + 2032, 0, 0]);
+    assert_eq!(only_move("G20 G1 X1 F10").1, Feed::MmPerMin(254.0));
+    assert_eq!(only_move("G1 F10 G20 X1").1, Feed::MmPerMin(254.0));
+    // An inch feed becomes the exact step rate: 40 in/min on X = 1016 mm/min = 1354.67 steps/s.
+    let p = convert::convert(&Job {
+        machine: machine(),
+        items: items("G20 G1 X1 F40"),
+        feed_commands: vec![],
+    })
+    .unwrap();
+    assert_eq!(p.moves().next().unwrap().feed_hz, 1_355);
+}
+
+#[test]
+fn comments_line_numbers_case_and_spacing() {
+    let (t, f, s) = only_move("n5 g1 x 10 ( a comment ) y-2.5 F 600 ; tail (not a comment)");
+    assert_eq!(t, Target::Absolute(vec![Some(10.0), Some(-2.5), None]));
+    assert_eq!(f, Feed::MmPerMin(600.0));
+    assert_eq!(s, Source::Gcode { line: 1 });
+    let (t, ..) = only_move("%\n(header)\n\n; note\n  \tG00X+1.5Y-.5Z-0.\r\n%\n");
+    assert_eq!(t, Target::Absolute(vec![Some(1.5), Some(-0.5), Some(-0.0)]));
+    assert_eq!(only_move("\n\nG0 X1").2, Source::Gcode { line: 3 });
+}
+
+#[test]
+fn spindle_pause_and_end_are_items_in_order() {
+    assert_eq!(
+        items("M3\nG0 X1\nM0\nM5").iter().filter(|i| !matches!(i, Item::Move(_))).count(),
+        3
+    );
+    // Within one block: spindle before motion, pause after it.
+    let it = items("G1 X1 F100 M0 M3 S1000");
+    assert!(matches!(it.as_slice(), [Item::Spindle(true), Item::Move(_), Item::Pause]));
+    // M30 ends the program: nothing after it is read.
+    assert_eq!(items("G0 X1\nM30\nthis is not G-code").len(), 1);
+    assert_eq!(items("M2\nG0 X1").len(), 0);
+    // A motion word without axes only sets the mode.
+    assert!(items("G0\nG1 F100\nG90 G21").is_empty());
+}
+
+#[test]
+fn errors_carry_line_column_and_what_was_expected() {
+    let cases = [
+        ("G1 X", "line 1, column 5: expected a number after 'X', found the end of the line"),
+        ("G0 X1\nG1 XQ F1", "line 2, column 5: expected a number after 'X', found 'Q'"),
+        ("G0 X-", "line 1, column 5: expected a number after 'X', found \"-\""),
+        ("G0 X1.2.3", "line 1, column 5: expected a number after 'X', found \"1.2.3\""),
+        ("G0 X.", "line 1, column 5: expected a number after 'X', found \".\""),
+        (
+            "G0 X1 @",
+            "line 1, column 7: expected a word (letter and number) or a comment, found '@'",
+        ),
+        (
+            "G0 (open X1",
+            "line 1, column 4: comment not closed: expected ')' before the end of the line",
+        ),
+        (
+            "G2 X1 Y1",
+            "line 1, column 1: unsupported G-code G2: expected G0, G1, G20, G21, G90 or G91",
+        ),
+        ("G1.5 X1", "line 1, column 1: unsupported G-code G1.5"),
+        ("G0 G1 X1", "line 1, column 4: G1 conflicts with G0 in the same block"),
+        ("G20 G21", "line 1, column 5: G21 conflicts with G20 in the same block"),
+        ("M4", "line 1, column 1: unsupported M-code M4: expected M0, M2, M3, M5 or M30"),
+        ("M3 M5", "line 1, column 4: two spindle M-codes in one block"),
+        ("G1 X1", "line 1, column 1: G1 needs a feed: expected an F word"),
+        ("G1 F100\nG0 X1\nG1 F0 X2", "line 3, column 4: expected a feed > 0"),
+        ("X5", "line 1, column 1: axis words without a motion mode: expected G0 or G1 first"),
+        ("G0 X1 X2", "line 1, column 7: X given twice in one block"),
+        ("G0 X1 x2", "line 1, column 7: X given twice in one block"),
+        (
+            "G0 A1",
+            "line 1, column 4: unsupported word 'A': expected G, M, F, S, N or an axis (X, Y, Z)",
+        ),
+        ("T1 M6", "line 1, column 1: unsupported word 'T'"),
+        ("G0 X1 N10", "line 1, column 7: a line number N must start the block"),
+        ("M3 S-1", "line 1, column 4: spindle speed must be >= 0"),
+        ("G1 F100 X1 F200", "line 1, column 12: F given twice in one block"),
+        ("%\n(ok)\n  G0 X1 %", "line 3, column 9: expected a word"),
+    ];
+    let mut failures = Vec::new();
+    for (src, want) in cases {
+        let got = err(src);
+        if !got.starts_with(want) {
+            failures.push(format!("{src:?}: got {got:?}, want {want:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn soft_limit_error_names_the_line_and_axis() {
+    let job = Job {
+        machine: machine(),
+        items: items("G0 X10\nG91\nG1 Z-30 F100\nZ-30"),
+        feed_commands: vec![],
+    };
+    let e = convert::convert(&job).unwrap_err().to_string();
+    assert_eq!(e, "line 4: axis Z target -60.0000 mm is below its soft limit min_mm = -50");
+    // The start (0, inside the limits) is not a move; X0 with min_mm 0 is fine.
+    assert!(convert::convert(&Job {
+        machine: machine(),
+        items: items("G0 X0 Y0\nG0 X-0.001"),
+        feed_commands: vec![],
+    })
+    .unwrap_err()
+    .to_string()
+    .starts_with("line 2: axis X target -0.0010 mm is below"));
+}

@@ -1,0 +1,945 @@
+//! Fixed-point multi-axis DDA step generator.
+//!
+//! Each segment is a straight line of `d_i` steps per axis lasting `T` *virtual ticks* at its
+//! planned feed. Time is the Bresenham major axis: every virtual tick adds `d_i` to axis `i`'s
+//! error term and steps when it turns non-negative, so a segment emits exactly `d_i` steps per axis
+//! and each step lies within half a step of the ideal line. Speed is a virtual clock: each real
+//! tick advances the segment's phase by `rate` (Q2.30 virtual ticks per tick), and the ramp, the
+//! feed override and the feed hold all act on `rate` alone. Step counts therefore never depend on
+//! speed, and hold/resume continues from the exact state where it stopped.
+//!
+//! The tick path is integer-only: adds, compares and one 32x32->64 multiply when the rate changes.
+//! Everything that divides (rate caps, floors, carries) is done in [`Preparer::prepare`], at the
+//! priority of the task that feeds the DDA.
+
+use crate::config::{ConfigError, MachineConfig, TickTiming, MAX_AXES, TIMING_RING_TICKS};
+use crate::fixed_math::isqrt_u64;
+use crate::segment::{Rate, Segment, SegmentError};
+use heapless::{Deque, Vec};
+
+const ONE: u32 = 1 << Rate::FRAC_NBITS;
+const RATE_FRAC_BITS: u32 = Rate::FRAC_NBITS;
+/// Fastest virtual clock: override 2.0 at nominal feed.
+const MAX_RATE: u32 = 2 * ONE;
+const RING_MASK: u64 = TIMING_RING_TICKS as u64 - 1;
+/// Prepared segments the DDA holds beyond the active one.
+pub const READY_DEPTH: usize = 4;
+/// Tick-stamped commands waiting to take effect.
+pub const MAX_SCHEDULED: usize = 8;
+
+/// What the pins do this tick, in the order the board applies it: falling edges, direction
+/// writes, rising edges. Bit `i` of each mask is axis `i`. Packed in one word so the tick
+/// returns it in a register.
+#[derive(Clone, Copy, Default, PartialEq, Eq)]
+pub struct StepOutput(u32);
+
+impl StepOutput {
+    #[inline(always)]
+    pub const fn new(fall: u8, dir_write: u8, dir: u8, rise: u8) -> Self {
+        StepOutput(fall as u32 | (dir_write as u32) << 8 | (dir as u32) << 16 | (rise as u32) << 24)
+    }
+
+    /// STEP pins to bring low.
+    #[inline(always)]
+    pub const fn fall(self) -> u8 {
+        self.0 as u8
+    }
+
+    /// DIR pins to write this tick (their new levels are in [`StepOutput::dir`]).
+    #[inline(always)]
+    pub const fn dir_write(self) -> u8 {
+        (self.0 >> 8) as u8
+    }
+
+    /// DIR levels after this tick; a set bit means the negative direction.
+    #[inline(always)]
+    pub const fn dir(self) -> u8 {
+        (self.0 >> 16) as u8
+    }
+
+    /// STEP pins to bring high (one step each).
+    #[inline(always)]
+    pub const fn rise(self) -> u8 {
+        (self.0 >> 24) as u8
+    }
+}
+
+impl core::fmt::Debug for StepOutput {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("StepOutput")
+            .field("fall", &self.fall())
+            .field("dir_write", &self.dir_write())
+            .field("dir", &self.dir())
+            .field("rise", &self.rise())
+            .finish()
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for StepOutput {
+    fn format(&self, f: defmt::Formatter) {
+        defmt::write!(
+            f,
+            "fall={=u8:b} dir_write={=u8:b} dir={=u8:b} rise={=u8:b}",
+            self.fall(),
+            self.dir_write(),
+            self.dir(),
+            self.rise()
+        )
+    }
+}
+
+/// The DDA's ready queue has no room (see [`Dda::ready_free`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QueueFull;
+
+/// Feed commands; they act on the tick after they are applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    /// Feed override, 0..=2.0 (larger values are clamped to 2.0).
+    SetOverride(Rate),
+    /// Decelerate at the segment's acceleration and stop on the path.
+    Hold,
+    /// Leave a hold and accelerate back to the commanded feed.
+    Resume,
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for Command {
+    fn format(&self, f: defmt::Formatter) {
+        match self {
+            Command::SetOverride(r) => defmt::write!(f, "SetOverride({=u32}/2^30)", r.to_bits()),
+            Command::Hold => defmt::write!(f, "Hold"),
+            Command::Resume => defmt::write!(f, "Resume"),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MotionState {
+    /// Nothing to do.
+    Idle,
+    Moving,
+    /// Hold requested; still decelerating.
+    Stopping,
+    /// Stopped on the path by a hold; `Resume` continues.
+    Held,
+}
+
+/// Slot masks: bit k set when compacted lane k steps.
+const SLOT_MASKS: usize = 1 << MAX_AXES;
+
+/// A segment converted for the tick path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Prepared {
+    steps: [i32; MAX_AXES],
+    n_active: u8,
+    /// Axis index of each compacted lane.
+    idx: [u8; MAX_AXES],
+    d: [u32; MAX_AXES],
+    /// Axis mask for each mask of stepping lanes.
+    slot_axes: [u8; SLOT_MASKS],
+    /// floor(2^32 / (2 * dr)): lets the tick count cruise ticks without dividing.
+    inv_two_dr: u32,
+    /// DIR levels of the moving axes.
+    dir: u8,
+    active: u8,
+    t: u32,
+    h: u32,
+    cap: u32,
+    floor: u32,
+    dr: u32,
+    exit_sq: u64,
+    /// Scale from the previous segment's rate units to this one's at the junction.
+    carry: u32,
+    exit_rate: u32,
+    id: u32,
+}
+
+/// Turns planned segments into [`Prepared`] ones; owned by the task that feeds the DDA.
+#[derive(Clone, Debug)]
+pub struct Preparer {
+    cfg: MachineConfig,
+    timing: TickTiming,
+    prev_exit: u32,
+}
+
+impl Preparer {
+    pub fn new(cfg: &MachineConfig) -> Result<Self, ConfigError> {
+        Ok(Preparer { cfg: *cfg, timing: cfg.validate()?, prev_exit: 0 })
+    }
+
+    /// The next segment starts from rest (after an abort or an underrun).
+    pub fn reset_junction(&mut self) {
+        self.prev_exit = 0;
+    }
+
+    pub fn prepare(&mut self, seg: &Segment) -> Result<Prepared, SegmentError> {
+        seg.check(&self.cfg)?;
+        let t = seg.duration_ticks;
+        let mut p = Prepared {
+            steps: seg.steps,
+            n_active: 0,
+            idx: [0; MAX_AXES],
+            d: [0; MAX_AXES],
+            slot_axes: [0; SLOT_MASKS],
+            inv_two_dr: 0,
+            dir: 0,
+            active: 0,
+            t,
+            h: t / 2,
+            cap: MAX_RATE,
+            floor: 0,
+            dr: 0,
+            exit_sq: 0,
+            carry: 0,
+            exit_rate: seg.exit_rate.to_bits(),
+            id: seg.id,
+        };
+        let mut d_max = 0u32;
+        for (i, &s) in seg.steps.iter().enumerate() {
+            let d = s.unsigned_abs();
+            if d == 0 {
+                continue;
+            }
+            let k = p.n_active as usize;
+            p.idx[k] = i as u8;
+            p.d[k] = d;
+            p.n_active += 1;
+            p.active |= 1 << i;
+            if s < 0 {
+                p.dir |= 1 << i;
+            }
+            d_max = d_max.max(d);
+            // Axis rate at virtual rate r: r * d / t * tick_hz <= max_rate_hz.
+            let cap = (self.cfg.axes[i].max_rate_hz as u128 * t as u128) << RATE_FRAC_BITS;
+            let cap = cap / (d as u128 * self.cfg.tick_hz as u128);
+            p.cap = p.cap.min(cap.min(MAX_RATE as u128) as u32);
+        }
+        // Steps of one axis are at least floor(t / d_max) virtual ticks apart; at rate r they are
+        // then more than that / r - 1 ticks apart, which must cover high + low time.
+        let spacing_vticks = (t / d_max) as u64;
+        let cap = (spacing_vticks << RATE_FRAC_BITS) / self.timing.min_spacing_ticks as u64;
+        p.cap = p.cap.min(cap.min(MAX_RATE as u64) as u32);
+        p.dr = seg.accel_per_tick.to_bits().clamp(1, ONE);
+        p.inv_two_dr = ((1u64 << 32) / (2 * p.dr as u64)).min(u32::MAX as u64) as u32;
+        for (mask, axes) in p.slot_axes.iter_mut().enumerate() {
+            for k in 0..p.n_active as usize {
+                if mask & (1 << k) != 0 {
+                    *axes |= 1 << p.idx[k];
+                }
+            }
+        }
+        // Rate reached after one virtual tick of acceleration from rest: moves start there
+        // instead of creeping, and decelerations never stall short of the segment end.
+        p.floor = (isqrt_u64(2 * p.dr as u64 * ONE as u64) as u32).max(p.dr).min(p.cap);
+        let exit = p.exit_rate.min(p.cap) as u64;
+        p.exit_sq = (exit * exit) >> RATE_FRAC_BITS;
+        p.carry = if self.prev_exit == 0 {
+            0
+        } else {
+            let c = ((seg.entry_rate.to_bits() as u64) << RATE_FRAC_BITS) / self.prev_exit as u64;
+            c.min(MAX_RATE as u64) as u32
+        };
+        self.prev_exit = p.exit_rate;
+        Ok(p)
+    }
+}
+
+/// One moving axis of the active segment: Bresenham error and step count, side by side so the
+/// tick loads both at once.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Lane {
+    err: i32,
+    d: i32,
+}
+
+/// Per-axis state while a DIR change or deferred steps hold the axis back.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Gate {
+    dir_pending: bool,
+    dir_at: u64,
+    open_at: u64,
+}
+
+pub struct Dda {
+    timing: TickTiming,
+    now: u64,
+
+    // Active segment (`remaining == 0`: none).
+    remaining: u32,
+    t: u32,
+    h: u32,
+    n_active: u8,
+    idx: [u8; MAX_AXES],
+    lanes: [Lane; MAX_AXES],
+    slot_axes: [u8; SLOT_MASKS],
+    seg_dir: u8,
+    seg_steps: [i32; MAX_AXES],
+    seg_exit: u32,
+    seg_id: u32,
+    cap: u32,
+    floor: u32,
+    dr: u32,
+    two_dr: u64,
+    /// Decelerate when `rate_sq >= budget` (both in rate^2 / ONE units).
+    budget: u64,
+    inv_two_dr: u32,
+
+    // Fast paths. Cruise: ticks left (0: off), ticks it was entered for, and the phase then;
+    // `remaining` and the deceleration budget are brought up to date from these on leaving.
+    // Idle: ticks left (0: off).
+    cruise_ticks: u32,
+    cruise_len: u32,
+    cruise_phase: u32,
+    idle_ticks: u32,
+    cruise_enabled: bool,
+
+    rate: u32,
+    rate_sq: u64,
+    phase: u32,
+    ovr: u32,
+    holding: bool,
+
+    dir: u8,
+    /// Rising edges of the last `TIMING_RING_TICKS` ticks, indexed by tick.
+    ring: [u8; TIMING_RING_TICKS as usize],
+    /// Axes held back by a gate.
+    gated: u8,
+    gate: [Gate; MAX_AXES],
+    /// Steps counted by the DDA but not yet put on the pins, signed like the axis moves.
+    pending: [i32; MAX_AXES],
+    origin: [i64; MAX_AXES],
+
+    ready: Deque<Prepared, READY_DEPTH>,
+    scheduled: Vec<(u64, Command), MAX_SCHEDULED>,
+    next_due: u64,
+
+    segments_done: u32,
+    last_done_id: Option<u32>,
+    underruns: u32,
+    deferred_steps: u32,
+}
+
+impl Dda {
+    pub fn new(cfg: &MachineConfig) -> Result<Self, ConfigError> {
+        Ok(Dda {
+            timing: cfg.validate()?,
+            now: 0,
+            remaining: 0,
+            t: 0,
+            h: 0,
+            n_active: 0,
+            idx: [0; MAX_AXES],
+            lanes: [Lane::default(); MAX_AXES],
+            slot_axes: [0; SLOT_MASKS],
+            seg_dir: 0,
+            seg_steps: [0; MAX_AXES],
+            seg_exit: 0,
+            seg_id: 0,
+            cap: 0,
+            floor: 0,
+            dr: 0,
+            two_dr: 0,
+            budget: 0,
+            inv_two_dr: 0,
+            cruise_ticks: 0,
+            cruise_len: 0,
+            cruise_phase: 0,
+            idle_ticks: 0,
+            cruise_enabled: true,
+            rate: 0,
+            rate_sq: 0,
+            phase: 0,
+            ovr: ONE,
+            holding: false,
+            dir: 0,
+            ring: [0; TIMING_RING_TICKS as usize],
+            gated: 0,
+            gate: [Gate::default(); MAX_AXES],
+            pending: [0; MAX_AXES],
+            origin: [0; MAX_AXES],
+            ready: Deque::new(),
+            scheduled: Vec::new(),
+            next_due: u64::MAX,
+            segments_done: 0,
+            last_done_id: None,
+            underruns: 0,
+            deferred_steps: 0,
+        })
+    }
+
+    /// One DDA tick: call at exactly `tick_hz`, apply the result to the pins.
+    #[inline]
+    pub fn tick(&mut self) -> StepOutput {
+        self.now += 1;
+        if self.cruise_ticks != 0 {
+            self.cruise_ticks -= 1;
+            return self.cruise_tick();
+        }
+        if self.idle_ticks != 0 {
+            self.idle_ticks -= 1;
+            return StepOutput::new(0, 0, self.dir, 0);
+        }
+        self.full_tick()
+    }
+
+    /// A tick at a settled rate (<= 1.0) with one-tick pulses, no gate and no command due, at
+    /// least a virtual tick before the segment ends or deceleration could begin: exactly what
+    /// [`Dda::full_tick`] would do there, without re-deriving the rate. `remaining` is not
+    /// counted here (see [`Dda::cruise_vticks`]). Out of line: the idle path stays free of
+    /// the register saves the lane kernel needs.
+    #[inline(never)]
+    fn cruise_tick(&mut self) -> StepOutput {
+        let now = self.now;
+        let slot = (now & RING_MASK) as usize;
+        let fall = self.ring[(now.wrapping_sub(1) & RING_MASK) as usize];
+        let p = self.phase + self.rate;
+        if p < ONE {
+            self.phase = p;
+            self.ring[slot] = 0;
+            return StepOutput::new(fall, 0, self.dir, 0);
+        }
+        self.phase = p - ONE;
+        let rise = self.slot_axes[self.bresenham() as usize & (SLOT_MASKS - 1)];
+        self.ring[slot] = rise;
+        if rise & fall != 0 {
+            return self.cruise_too_soon(slot, fall, rise);
+        }
+        StepOutput::new(fall, 0, self.dir, rise)
+    }
+
+    /// Virtual ticks the cruise path has run: its phase advanced by `rate` every tick.
+    fn cruise_vticks(&self) -> u32 {
+        let ticks = (self.cruise_len - self.cruise_ticks) as u64;
+        ((self.cruise_phase as u64 + ticks * self.rate as u64) >> RATE_FRAC_BITS) as u32
+    }
+
+    /// A step due while the axis's last pulse is still too close: finished as the full tick
+    /// would (held back, released when allowed).
+    #[cold]
+    #[inline(never)]
+    fn cruise_too_soon(&mut self, slot: usize, fall: u8, mut rise: u8) -> StepOutput {
+        self.leave_fast();
+        let too_soon = rise & fall;
+        rise &= !too_soon;
+        self.defer(too_soon);
+        let mut dir_write = 0;
+        if self.gated != 0 {
+            (rise, dir_write) = self.gate_pass(rise);
+        }
+        self.ring[slot] = rise;
+        StepOutput::new(fall, dir_write, self.dir, rise)
+    }
+
+    /// Leaves a fast path; after cruising, brings `remaining` and the budget up to date.
+    #[inline]
+    fn leave_fast(&mut self) {
+        if self.cruise_len != 0 {
+            let vticks = self.cruise_vticks();
+            self.remaining -= vticks;
+            self.budget -= vticks as u64 * self.two_dr;
+            self.cruise_len = 0;
+            self.cruise_ticks = 0;
+        }
+        self.idle_ticks = 0;
+    }
+
+    fn ticks_until_command(&self) -> u32 {
+        self.next_due.saturating_sub(self.now + 1).min(u32::MAX as u64) as u32
+    }
+
+    /// After an idle full tick: idle ticks output nothing at all until a command is due or a
+    /// segment is pushed, once no pulse is still in flight.
+    #[cold]
+    #[inline(never)]
+    fn try_idle(&mut self) {
+        let until_command = self.ticks_until_command();
+        if self.cruise_enabled && until_command != 0 && self.ring.iter().all(|&r| r == 0) {
+            self.idle_ticks = until_command;
+        }
+    }
+
+    /// After a moving full tick: cruise while nothing can change for a known number of ticks.
+    #[cold]
+    #[inline(never)]
+    fn try_cruise(&mut self) {
+        if !self.cruise_enabled || self.remaining == 0 {
+            return;
+        }
+        let until_command = self.ticks_until_command();
+        let settled = self.rate == self.ovr.min(self.cap) && self.rate_sq < self.budget;
+        if !settled || self.rate > ONE || self.gated != 0 || self.holding {
+            return;
+        }
+        if self.timing.pulse_ticks != 1 {
+            return;
+        }
+        // Virtual ticks before rate_sq >= budget could hold: floor((budget - rate_sq) / 2dr),
+        // from below through the reciprocal. At most one virtual tick passes per tick, so n - 1
+        // ticks stay short of both that point and the segment's last virtual tick, which the
+        // full tick handles.
+        let diff = self.budget - self.rate_sq;
+        let inv = self.inv_two_dr as u64;
+        let n = (diff >> 32) * inv + (((diff & 0xffff_ffff) * inv) >> 32);
+        let n = n.min(self.remaining as u64) as u32;
+        let ticks = n.saturating_sub(1).min(until_command);
+        if ticks == 0 {
+            return;
+        }
+        self.cruise_len = ticks;
+        self.cruise_ticks = ticks;
+        self.cruise_phase = self.phase;
+    }
+
+    /// The complete tick: commands, segment changes, ramps, gates. Kept out of line so the
+    /// fast paths in [`Dda::tick`] need few registers.
+    #[inline(never)]
+    fn full_tick(&mut self) -> StepOutput {
+        self.leave_fast();
+        let now = self.now;
+        let slot = (now & RING_MASK) as usize;
+        let fall =
+            self.ring[(now.wrapping_sub(self.timing.pulse_ticks as u64) & RING_MASK) as usize];
+        self.ring[slot] = 0;
+        if now >= self.next_due {
+            self.run_due_commands();
+        }
+        if self.remaining == 0 && self.gated == 0 && self.ready.is_empty() {
+            self.rate = 0;
+            self.rate_sq = 0;
+            self.phase = 0;
+            self.try_idle();
+            return StepOutput::new(fall, 0, self.dir, 0);
+        }
+        let mut rise = 0;
+        if self.remaining != 0 || self.load_next() {
+            let r = self.update_rate();
+            let p = self.phase + r;
+            if p >= ONE {
+                rise = self.vtick(slot);
+                let p = p - ONE;
+                if p >= ONE {
+                    self.phase = p - ONE;
+                    if self.remaining != 0 || self.load_next() {
+                        let again = self.vtick(slot);
+                        let twice = rise & again;
+                        rise |= again;
+                        if twice != 0 {
+                            self.defer(twice);
+                        }
+                    }
+                } else {
+                    self.phase = p;
+                }
+            } else {
+                self.phase = p;
+            }
+        }
+        let too_soon = rise & self.recent_rises();
+        if too_soon != 0 {
+            rise &= !too_soon;
+            self.defer(too_soon);
+        }
+        let mut dir_write = 0;
+        if self.gated != 0 {
+            (rise, dir_write) = self.gate_pass(rise);
+        }
+        self.ring[slot] = rise;
+        self.try_cruise();
+        StepOutput::new(fall, dir_write, self.dir, rise)
+    }
+
+    /// One Bresenham step over the active lanes; bit k of the result: lane k steps. One dispatch
+    /// on the lane count, then straight-line code.
+    #[inline(always)]
+    fn bresenham(&mut self) -> u8 {
+        let t = self.t as i32;
+        let mut slots = 0u8;
+        macro_rules! lanes {
+            ($($k:literal)*) => {{
+                $(
+                    let l = &mut self.lanes[$k];
+                    let e = l.err.wrapping_add(l.d);
+                    let step = e >= 0;
+                    l.err = if step { e.wrapping_sub(t) } else { e };
+                    slots |= (step as u8) << $k;
+                )*
+            }};
+        }
+        match self.n_active {
+            1 => lanes!(0),
+            2 => lanes!(0 1),
+            3 => lanes!(0 1 2),
+            4 => lanes!(0 1 2 3),
+            5 => lanes!(0 1 2 3 4),
+            6 => lanes!(0 1 2 3 4 5),
+            _ => {}
+        }
+        slots
+    }
+
+    #[inline(always)]
+    fn update_rate(&mut self) -> u32 {
+        let r = self.rate;
+        let mut target = if self.ovr < self.cap { self.ovr } else { self.cap };
+        if self.rate_sq >= self.budget {
+            let slower = r.saturating_sub(self.dr).max(self.floor);
+            target = target.min(slower);
+        }
+        if self.holding {
+            target = 0;
+        }
+        let mut nr = if r < target {
+            (r + self.dr).min(target)
+        } else {
+            r.saturating_sub(self.dr).max(target)
+        };
+        if nr < self.floor && target >= self.floor {
+            nr = self.floor;
+        }
+        if nr != r {
+            self.rate = nr;
+            self.rate_sq = (nr as u64 * nr as u64) >> RATE_FRAC_BITS;
+        }
+        nr
+    }
+
+    /// One virtual tick of the active segment: the Bresenham step over all moving axes. Steps of
+    /// gated axes wait in `pending`; the rest are recorded in this tick's ring slot at once, so a
+    /// segment loaded later in the same tick sees them when it times its DIR changes.
+    #[inline(always)]
+    fn vtick(&mut self, slot: usize) -> u8 {
+        self.remaining -= 1;
+        self.budget = self.budget.saturating_sub(self.two_dr);
+        let mut rise = self.slot_axes[self.bresenham() as usize & (SLOT_MASKS - 1)];
+        if rise & self.gated != 0 {
+            rise = self.absorb(rise);
+        }
+        self.ring[slot] |= rise;
+        if self.remaining == 0 {
+            self.finish_segment();
+        }
+        rise
+    }
+
+    /// Steps of gated axes join their queue, signed by the segment that produced them.
+    #[cold]
+    #[inline(never)]
+    fn absorb(&mut self, rise: u8) -> u8 {
+        let held = rise & self.gated;
+        for i in 0..MAX_AXES {
+            if held & (1 << i) != 0 {
+                self.pending[i] += if self.seg_dir & (1 << i) != 0 { -1 } else { 1 };
+            }
+        }
+        rise & !held
+    }
+
+    /// Axes whose last rising edge is too recent for another one this tick.
+    #[inline(always)]
+    fn recent_rises(&self) -> u8 {
+        let mut m = 0;
+        for back in 1..self.timing.min_spacing_ticks as u64 {
+            m |= self.ring[(self.now.wrapping_sub(back) & RING_MASK) as usize];
+        }
+        m
+    }
+
+    /// Holds steps of ungated axes back for a later tick instead of losing them. Their DIR pins
+    /// already show the direction they were produced in.
+    #[cold]
+    #[inline(never)]
+    fn defer(&mut self, axes: u8) {
+        for i in 0..MAX_AXES {
+            let bit = 1u8 << i;
+            if axes & bit == 0 {
+                continue;
+            }
+            self.pending[i] += if self.dir & bit != 0 { -1 } else { 1 };
+            self.deferred_steps += 1;
+            if self.gated & bit == 0 {
+                self.gated |= bit;
+                self.gate[i] = Gate { dir_pending: false, dir_at: self.now, open_at: self.now };
+            }
+        }
+    }
+
+    /// Gated axes: write DIR once hold time allows, then release waiting steps one per tick as
+    /// setup time and pulse spacing allow; the gate opens when nothing waits.
+    #[cold]
+    #[inline(never)]
+    fn gate_pass(&mut self, mut rise: u8) -> (u8, u8) {
+        let mut dir_write = 0;
+        let now = self.now;
+        let busy = rise | self.recent_rises();
+        for i in 0..MAX_AXES {
+            let bit = 1u8 << i;
+            if self.gated & bit == 0 {
+                continue;
+            }
+            let g = &mut self.gate[i];
+            if g.dir_pending && now >= g.dir_at {
+                g.dir_pending = false;
+                self.dir = (self.dir & !bit) | (self.seg_dir & bit);
+                dir_write |= bit;
+            }
+            let open = !g.dir_pending && now >= g.open_at;
+            if open && self.pending[i] != 0 && busy & bit == 0 {
+                rise |= bit;
+                self.pending[i] -= self.pending[i].signum();
+            }
+            if open && self.pending[i] == 0 {
+                self.gated &= !bit;
+            }
+        }
+        (rise, dir_write)
+    }
+
+    /// Starts the next ready segment; false when there is none (or it must wait for a gate).
+    #[cold]
+    #[inline(never)]
+    fn load_next(&mut self) -> bool {
+        let Some(next) = self.ready.front() else {
+            self.rate = 0;
+            self.rate_sq = 0;
+            self.phase = 0;
+            return false;
+        };
+        let reversing = (next.dir ^ self.dir) & next.active;
+        // An axis still releasing steps in its old direction must finish before DIR flips.
+        if reversing & self.gated & self.axes_with_pending() != 0 {
+            return false;
+        }
+        let Some(p) = self.ready.pop_front() else {
+            return false;
+        };
+        let now = self.now;
+        for i in 0..MAX_AXES {
+            let bit = 1u8 << i;
+            if reversing & bit == 0 {
+                continue;
+            }
+            // DIR may change `hold_ticks` after this axis' last rising edge.
+            let mut dir_at = now;
+            for back in 0..self.timing.hold_ticks as u64 {
+                if self.ring[(now.wrapping_sub(back) & RING_MASK) as usize] & bit != 0 {
+                    dir_at = now.saturating_sub(back) + self.timing.hold_ticks as u64;
+                    break;
+                }
+            }
+            // A rising edge this tick leaves after the DIR write: DIR must wait a tick.
+            if dir_at == now && self.ring[(now & RING_MASK) as usize] & bit != 0 {
+                dir_at = now + 1;
+            }
+            self.gated |= bit;
+            self.gate[i] = Gate {
+                dir_pending: true,
+                dir_at,
+                open_at: dir_at + self.timing.setup_ticks as u64,
+            };
+        }
+        self.t = p.t;
+        self.h = p.h;
+        self.remaining = p.t;
+        self.n_active = p.n_active;
+        self.idx = p.idx;
+        self.slot_axes = p.slot_axes;
+        for (lane, &d) in self.lanes.iter_mut().zip(&p.d) {
+            // err = k*d + h - t*(s + 1) with k = s = 0; d <= t < 2^31.
+            *lane = Lane { err: p.h as i32 - p.t as i32, d: d as i32 };
+        }
+        self.seg_dir = p.dir;
+        self.seg_steps = p.steps;
+        self.seg_exit = p.exit_rate;
+        self.seg_id = p.id;
+        self.cap = p.cap;
+        self.floor = p.floor;
+        self.dr = p.dr;
+        self.two_dr = 2 * p.dr as u64;
+        self.inv_two_dr = p.inv_two_dr;
+        self.budget = p.exit_sq + self.two_dr * p.t as u64;
+        let carried = ((self.rate as u64 * p.carry as u64) >> RATE_FRAC_BITS).min(MAX_RATE as u64);
+        self.rate = carried as u32;
+        self.rate_sq = (carried * carried) >> RATE_FRAC_BITS;
+        true
+    }
+
+    fn axes_with_pending(&self) -> u8 {
+        let mut m = 0;
+        for i in 0..MAX_AXES {
+            if self.pending[i] != 0 {
+                m |= 1 << i;
+            }
+        }
+        m
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn finish_segment(&mut self) {
+        for i in 0..MAX_AXES {
+            self.origin[i] += self.seg_steps[i] as i64;
+        }
+        self.n_active = 0;
+        self.segments_done += 1;
+        self.last_done_id = Some(self.seg_id);
+        if self.ready.is_empty() && self.seg_exit != 0 {
+            self.underruns += 1;
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn run_due_commands(&mut self) {
+        let now = self.now;
+        let mut next = u64::MAX;
+        let mut k = 0;
+        while k < self.scheduled.len() {
+            let (at, cmd) = self.scheduled[k];
+            if at <= now {
+                self.apply(cmd);
+                self.scheduled.remove(k);
+            } else {
+                next = next.min(at);
+                k += 1;
+            }
+        }
+        self.next_due = next;
+    }
+
+    /// Applies a feed command; it acts on the next tick.
+    pub fn apply(&mut self, cmd: Command) {
+        self.leave_fast();
+        match cmd {
+            Command::SetOverride(r) => self.ovr = r.to_bits().min(MAX_RATE),
+            Command::Hold => self.holding = true,
+            Command::Resume => self.holding = false,
+        }
+    }
+
+    /// Applies `cmd` on tick `at` (on the next tick if `at` has passed). Commands scheduled for the
+    /// same tick apply in the order they were scheduled.
+    pub fn schedule(&mut self, at: u64, cmd: Command) -> Result<(), Command> {
+        self.leave_fast();
+        self.scheduled.push((at, cmd)).map_err(|(_, c)| c)?;
+        self.next_due = self.next_due.min(at);
+        Ok(())
+    }
+
+    /// Room for prepared segments.
+    pub fn ready_free(&self) -> usize {
+        READY_DEPTH - self.ready.len()
+    }
+
+    /// Queues a copy of a prepared segment; when full, the caller still holds it.
+    pub fn push(&mut self, seg: &Prepared) -> Result<(), QueueFull> {
+        self.idle_ticks = 0;
+        self.ready.push_back(*seg).map_err(|_| QueueFull)
+    }
+
+    /// Stops at once (no deceleration) and drops every queued segment. Steps not yet on the pins
+    /// are discarded, so the positions stay exactly what was stepped.
+    pub fn abort(&mut self) {
+        self.leave_fast();
+        self.origin = self.positions();
+        self.pending = [0; MAX_AXES];
+        self.gated = 0;
+        self.remaining = 0;
+        self.n_active = 0;
+        self.ready.clear();
+        self.scheduled.clear();
+        self.next_due = u64::MAX;
+        self.rate = 0;
+        self.rate_sq = 0;
+        self.phase = 0;
+        self.holding = false;
+    }
+
+    /// Position of every axis in steps, counting only steps that reached the pins. Take it in
+    /// the same critical section as [`Dda::now`] for a consistent snapshot.
+    pub fn positions(&self) -> [i64; MAX_AXES] {
+        let mut pos = self.origin;
+        let remaining = if self.cruise_len != 0 {
+            self.remaining - self.cruise_vticks()
+        } else {
+            self.remaining
+        };
+        if remaining != 0 {
+            let done = (self.t - remaining) as u64;
+            for k in 0..(self.n_active as usize).min(MAX_AXES) {
+                let i = self.idx[k] as usize;
+                let d = self.lanes[k].d as u64;
+                let s = ((done * d + self.h as u64) / self.t as u64) as i64;
+                pos[i] += if self.seg_dir & (1 << i) != 0 { -s } else { s };
+            }
+        }
+        for (p, pending) in pos.iter_mut().zip(self.pending) {
+            *p -= pending as i64;
+        }
+        pos
+    }
+
+    pub fn now(&self) -> u64 {
+        self.now
+    }
+
+    pub fn state(&self) -> MotionState {
+        let busy = self.remaining != 0 || !self.ready.is_empty() || self.gated != 0;
+        match (busy, self.holding, self.rate) {
+            (false, _, _) => MotionState::Idle,
+            (true, true, 0) => MotionState::Held,
+            (true, true, _) => MotionState::Stopping,
+            (true, false, _) => MotionState::Moving,
+        }
+    }
+
+    pub fn is_idle(&self) -> bool {
+        self.state() == MotionState::Idle
+    }
+
+    /// Current virtual-clock rate in the active segment's units (1.0 = planned feed).
+    pub fn rate(&self) -> Rate {
+        Rate::from_bits(self.rate)
+    }
+
+    pub fn feed_override(&self) -> Rate {
+        Rate::from_bits(self.ovr)
+    }
+
+    pub fn segments_done(&self) -> u32 {
+        self.segments_done
+    }
+
+    pub fn last_done_id(&self) -> Option<u32> {
+        self.last_done_id
+    }
+
+    /// Segments that ended at speed with nothing queued behind them (an abrupt stop).
+    pub fn underruns(&self) -> u32 {
+        self.underruns
+    }
+
+    /// Steps held back by DIR timing or pulse spacing and released later (never lost).
+    pub fn deferred_steps(&self) -> u32 {
+        self.deferred_steps
+    }
+
+    /// True while ticks take the cruise fast path.
+    pub fn in_cruise(&self) -> bool {
+        self.cruise_ticks != 0
+    }
+
+    /// Runs every tick through the full path. The cruise fast path must be indistinguishable
+    /// from it; tests compare the two.
+    pub fn disable_cruise_path(&mut self) {
+        self.leave_fast();
+        self.cruise_enabled = false;
+    }
+
+    pub fn timing(&self) -> &TickTiming {
+        &self.timing
+    }
+}

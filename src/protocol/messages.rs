@@ -1,0 +1,292 @@
+//! The messages. Wire form: postcard (varints for integers, enum variants as varint indices in
+//! declaration order). Compatibility rule: new variants and fields go at the end, and anything
+//! that changes the meaning of existing bytes bumps [`PROTOCOL_VERSION`].
+
+use serde::{Deserialize, Serialize};
+
+use super::bounded::{FixedStr, SegmentBatch};
+use super::errors::{ErrorCode, FaultCode, SegmentReason};
+use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTiming, MAX_AXES};
+use crate::dda::MotionState;
+use crate::segment::Rate;
+
+pub const PROTOCOL_VERSION: u16 = 1;
+/// Sensor channels reported in [`Status`].
+pub const SENSOR_CHANNELS: usize = 4;
+/// Longest firmware name in [`HelloInfo`].
+pub const FIRMWARE_NAME_LEN: usize = 24;
+/// Longest config field name in an `InvalidConfig` NAK.
+pub const FIELD_NAME_LEN: usize = 24;
+/// Largest feed override, as `Rate` bits (2.0).
+pub const MAX_OVERRIDE_BITS: u32 = 2 << Rate::FRAC_NBITS;
+/// Fastest periodic status stream.
+pub const MIN_STATUS_PERIOD_MS: u16 = 10;
+
+/// Capability bits in [`HelloInfo::capabilities`].
+pub const CAP_DDA: u32 = 1 << 0;
+/// `SetStatusPeriod` streams unsolicited `Status` frames.
+pub const CAP_STATUS_STREAM: u32 = 1 << 1;
+/// `SetOverride` is honoured.
+pub const CAP_OVERRIDE: u32 = 1 << 2;
+/// `Hold` / `Resume` are honoured.
+pub const CAP_HOLD_RESUME: u32 = 1 << 3;
+/// Soft limits in [`WireConfig`] are enforced when segments are queued.
+pub const CAP_SOFT_LIMITS: u32 = 1 << 4;
+/// `Status::sensors` carries real readings.
+pub const CAP_SENSORS: u32 = 1 << 5;
+
+/// Host -> board.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Request {
+    /// Consecutive per session, starting at the Hello's seq; see `session` for the rules.
+    pub seq: u32,
+    pub body: RequestBody,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+// Fixed capacity is the point (no allocation on the board); boxing is not an option.
+#[allow(clippy::large_enum_variant)]
+pub enum RequestBody {
+    /// Opens a session (seq numbering restarts at this request's seq). `nonce` tells a
+    /// retransmitted Hello (same seq and nonce: answered again, nothing reset) from a new host.
+    Hello {
+        version: u16,
+        nonce: u32,
+    },
+    GetConfig,
+    /// Only while idle with an empty queue.
+    SetConfig(WireConfig),
+    /// All-or-nothing: every segment is checked (and credits counted) before any is queued.
+    QueueSegments(SegmentBatch),
+    Start,
+    Hold,
+    Resume,
+    Abort,
+    /// Feed override, `Rate` bits, 0..=2.0.
+    SetOverride {
+        rate_bits: u32,
+    },
+    GetStatus,
+    /// Unsolicited `Status` every `ms` (0 = off, else >= MIN_STATUS_PERIOD_MS).
+    SetStatusPeriod {
+        ms: u16,
+    },
+    ClearFault,
+}
+
+impl RequestBody {
+    /// Stable small number per variant (its postcard index).
+    pub const fn kind(&self) -> u8 {
+        match self {
+            RequestBody::Hello { .. } => 0,
+            RequestBody::GetConfig => 1,
+            RequestBody::SetConfig(_) => 2,
+            RequestBody::QueueSegments(_) => 3,
+            RequestBody::Start => 4,
+            RequestBody::Hold => 5,
+            RequestBody::Resume => 6,
+            RequestBody::Abort => 7,
+            RequestBody::SetOverride { .. } => 8,
+            RequestBody::GetStatus => 9,
+            RequestBody::SetStatusPeriod { .. } => 10,
+            RequestBody::ClearFault => 11,
+        }
+    }
+
+    /// Segments this request queues if it succeeds.
+    pub fn segment_count(&self) -> u16 {
+        match self {
+            RequestBody::QueueSegments(b) => b.len() as u16,
+            _ => 0,
+        }
+    }
+}
+
+/// Board -> host. Every request gets exactly one `Ack` or `Nak` carrying its seq; `Status` and
+/// `Fault` frames are unsolicited.
+///
+/// `credits` = free slots in the board's segment queue right after it executed every request up
+/// to a point `T`: for an `Ack`/`Nak` of a request, `T = seq` (a retransmitted request is answered
+/// with the credits remembered from its execution); for a NAK with `NakDetail::Expected`,
+/// `T = expected - 1`; for a `Status`, `T = next_seq - 1`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[allow(clippy::large_enum_variant)]
+pub enum Response {
+    Ack { seq: u32, credits: u16, reply: Reply },
+    Nak { seq: u32, credits: u16, code: ErrorCode, detail: NakDetail },
+    Status(Status),
+    Fault { code: FaultCode, tick: u64 },
+}
+
+/// Data returned with an `Ack`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[allow(clippy::large_enum_variant)]
+pub enum Reply {
+    None,
+    Hello(HelloInfo),
+    Config(WireConfig),
+    Status(Status),
+}
+
+/// More about a NAK.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum NakDetail {
+    None,
+    /// Link-level NAK (Crc, Framing, Overflow, unreadable Malformed) or `Sequence`: no request
+    /// was executed, and the board's next expected seq is `expected` (`seq` repeats it).
+    Expected {
+        expected: u32,
+    },
+    /// `InvalidSegment`: the `index`th segment of the batch failed `reason`.
+    Segment {
+        index: u8,
+        reason: SegmentReason,
+        axis: Option<u8>,
+    },
+    /// `InvalidConfig`: the offending field (names as in `ConfigError::field`).
+    Config {
+        field: FixedStr<FIELD_NAME_LEN>,
+        axis: Option<u8>,
+    },
+    /// `OutOfState`: the state the board is in.
+    State(WireState),
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HelloInfo {
+    pub version: u16,
+    pub firmware: FixedStr<FIRMWARE_NAME_LEN>,
+    /// `CAP_*` bits.
+    pub capabilities: u32,
+    /// Axes in the current config.
+    pub axes: u8,
+    /// Segment queue size (credits when empty).
+    pub queue_capacity: u16,
+    pub tick_hz: u32,
+    /// Requests the board remembers for retransmission: the host's window must not exceed it.
+    pub max_window: u16,
+    pub max_segments_per_frame: u8,
+}
+
+/// Motion state on the wire.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WireState {
+    #[default]
+    Idle,
+    Moving,
+    /// Hold requested, decelerating.
+    Stopping,
+    Held,
+    /// A fault is latched: motion stopped; `ClearFault` (or `Abort`) needed.
+    Faulted,
+}
+
+impl From<MotionState> for WireState {
+    fn from(s: MotionState) -> Self {
+        match s {
+            MotionState::Idle => WireState::Idle,
+            MotionState::Moving => WireState::Moving,
+            MotionState::Stopping => WireState::Stopping,
+            MotionState::Held => WireState::Held,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Status {
+    /// DDA tick count.
+    pub tick: u64,
+    /// Steps, per axis.
+    pub positions: [i64; MAX_AXES],
+    pub state: WireState,
+    /// Feed override, `Rate` bits.
+    pub override_bits: u32,
+    /// Segments queued, not yet finished.
+    pub queue_depth: u16,
+    /// Free queue slots (filled in by `BoardLink`).
+    pub credits: u16,
+    pub segments_done: u32,
+    pub last_done_id: Option<u32>,
+    /// Latched faults: bit n set = `FaultCode` n.
+    pub faults: u32,
+    pub sensors: [i32; SENSOR_CHANNELS],
+    /// Board's next expected seq (filled in by `BoardLink`); `credits` hold after `next_seq - 1`.
+    pub next_seq: u32,
+}
+
+/// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AxisScale {
+    /// Steps per user unit (mm or degree) times 1000, e.g. 80 steps/mm = 80_000.
+    pub steps_per_unit_milli: u32,
+    /// Soft limits in steps (inclusive); `i64::MIN` / `i64::MAX` = none.
+    pub soft_min: i64,
+    pub soft_max: i64,
+}
+
+impl AxisScale {
+    pub const UNUSED: AxisScale =
+        AxisScale { steps_per_unit_milli: 0, soft_min: i64::MIN, soft_max: i64::MAX };
+}
+
+/// The configuration as set and read over the link.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WireConfig {
+    pub machine: MachineConfig,
+    pub scale: [AxisScale; MAX_AXES],
+}
+
+impl WireConfig {
+    /// A placeholder that fails validation (tick_hz 0): the board's state before any SetConfig.
+    pub const UNSET: WireConfig = WireConfig {
+        machine: MachineConfig {
+            tick_hz: 0,
+            timing: StepTiming { pulse_ns: 0, dir_setup_ns: 0, dir_hold_ns: 0 },
+            axis_count: 0,
+            axes: [AxisLimits::UNUSED; MAX_AXES],
+        },
+        scale: [AxisScale::UNUSED; MAX_AXES],
+    };
+
+    /// `MachineConfig::validate` plus the scale checks; the same code runs on both ends, so the
+    /// host can call it for the full reason behind an `InvalidConfig` NAK.
+    pub fn validate(&self) -> Result<TickTiming, ConfigError> {
+        let timing = self.machine.validate()?;
+        let used = (self.machine.axis_count as usize).min(MAX_AXES);
+        for (i, s) in self.scale.iter().enumerate().take(used) {
+            let bad = |field, reason| Err(ConfigError { field, axis: Some(i as u8), reason });
+            if s.steps_per_unit_milli == 0 {
+                return bad("steps_per_unit_milli", "must be > 0");
+            }
+            if s.soft_min > s.soft_max {
+                return bad("soft_min", "must be <= soft_max");
+            }
+        }
+        Ok(timing)
+    }
+}
+
+/// A request that passed its CRC but did not decode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Malformed {
+    /// The leading seq, if at least that could be read.
+    pub seq: Option<u32>,
+}
+
+/// Decodes a request from verified frame bytes; trailing bytes are an error.
+pub fn decode_request(msg: &[u8]) -> Result<Request, Malformed> {
+    match postcard::take_from_bytes::<Request>(msg) {
+        Ok((req, [])) => Ok(req),
+        _ => Err(Malformed { seq: postcard::take_from_bytes::<u32>(msg).ok().map(|(s, _)| s) }),
+    }
+}
+
+/// Decodes a response from verified frame bytes; trailing bytes are an error.
+pub fn decode_response(msg: &[u8]) -> Option<Response> {
+    match postcard::take_from_bytes::<Response>(msg) {
+        Ok((resp, [])) => Some(resp),
+        _ => None,
+    }
+}

@@ -1,0 +1,417 @@
+//! Board side of the link: a pure state machine from requests to responses.
+//!
+//! [`BoardLink`] never touches hardware; it acts through a [`LinkTarget`] (the firmware's DDA
+//! feeder, or [`SimTarget`](super::SimTarget) in tests).
+//!
+//! # Sequence rules ("nothing lost, nothing repeated")
+//!
+//! A session starts with `Hello` at any seq `s0`; the board then expects `s0 + 1`.
+//! For a request with seq `s`, the board's next expected seq being `n`:
+//! * `s == n`: executed, answered (Ack or Nak), its outcome remembered; `n` becomes `n + 1`.
+//!   A NAK here still consumes the seq: the request was processed and refused.
+//! * `s < n`: a retransmission. Not executed again: the remembered outcome is sent again
+//!   (queries such as GetStatus return fresh data). Outcomes are remembered for the last
+//!   [`RESULT_MEMORY`] seqs; older ones get `Stale`.
+//! * `s > n`: a gap (something was lost): `Nak Sequence` with `Expected { expected: n }`, not
+//!   executed, nothing remembered.
+//!
+//! `Hello` with the current session's seq and nonce is a retransmission; any other valid
+//! Hello starts a new session. Hello never touches the machine.
+//!
+//! # States in which each request is accepted (else `OutOfState`)
+//!
+//! | Request | Accepted when |
+//! |---|---|
+//! | Hello, GetConfig, GetStatus, SetStatusPeriod, SetOverride, Abort | always |
+//! | SetConfig | Idle with an empty queue |
+//! | QueueSegments | not Faulted (and the config valid, else `InvalidConfig`) |
+//! | Start | Idle (and the config valid, else `InvalidConfig`) |
+//! | Hold | Moving |
+//! | Resume | Stopping or Held |
+//! | ClearFault | Faulted |
+
+use super::bounded::FixedStr;
+use super::errors::{ErrorCode, SegmentReason};
+use super::frame::FrameError;
+use super::messages::*;
+use crate::config::{ConfigError, MAX_AXES};
+use crate::segment::{Rate, Segment};
+
+/// Outcomes remembered for retransmissions; the host's window must not exceed it.
+pub const RESULT_MEMORY: usize = 32;
+
+/// What the board's link drives. Every method that returns `Err` must have changed nothing.
+pub trait LinkTarget {
+    fn state(&self) -> WireState;
+    /// Free slots in the segment queue.
+    fn credits(&self) -> u16;
+    fn queue_capacity(&self) -> u16;
+    fn config(&self) -> WireConfig;
+    /// Position (steps) after every queued segment, for the soft-limit check.
+    fn planned_position(&self) -> [i64; MAX_AXES];
+    /// Current status; `BoardLink` fills in `credits` and `next_seq`.
+    fn status(&self) -> Status;
+    /// Called with a validated config, only while Idle with an empty queue.
+    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode>;
+    /// Called with checked segments, never more than `credits()`.
+    fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode>;
+    fn start(&mut self) -> Result<(), ErrorCode>;
+    fn hold(&mut self) -> Result<(), ErrorCode>;
+    fn resume(&mut self) -> Result<(), ErrorCode>;
+    /// Stops at once and empties the queue (allowed in every state).
+    fn abort(&mut self) -> Result<(), ErrorCode>;
+    /// `rate` is within 0..=2.0.
+    fn set_override(&mut self, rate: Rate) -> Result<(), ErrorCode>;
+    fn clear_fault(&mut self) -> Result<(), ErrorCode>;
+}
+
+type Outcome = Result<(), (ErrorCode, NakDetail)>;
+
+/// `kind` recorded for a request that passed its CRC but did not decode.
+const MALFORMED_KIND: u8 = 0xFF;
+const KIND_HELLO: u8 = RequestBody::Hello { version: 0, nonce: 0 }.kind();
+const KIND_GET_CONFIG: u8 = RequestBody::GetConfig.kind();
+const KIND_GET_STATUS: u8 = RequestBody::GetStatus.kind();
+
+#[derive(Clone, Debug)]
+struct Memo {
+    seq: u32,
+    kind: u8,
+    credits: u16,
+    outcome: Outcome,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Session {
+    next_seq: u32,
+    hello_seq: u32,
+    nonce: u32,
+}
+
+/// The board's end of the link.
+#[derive(Clone, Debug)]
+pub struct BoardLink {
+    firmware: FixedStr<FIRMWARE_NAME_LEN>,
+    capabilities: u32,
+    session: Option<Session>,
+    memo: [Option<Memo>; RESULT_MEMORY],
+    status_period_ms: u16,
+    status_due_ms: Option<u64>,
+}
+
+fn is_before(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) < 0
+}
+
+impl BoardLink {
+    /// `firmware` (cut to 24 bytes) and `capabilities` (`CAP_*`) are reported in `HelloInfo`.
+    pub fn new(firmware: &str, capabilities: u32) -> Self {
+        BoardLink {
+            firmware: FixedStr::truncated(firmware),
+            capabilities,
+            session: None,
+            memo: [const { None }; RESULT_MEMORY],
+            status_period_ms: 0,
+            status_due_ms: None,
+        }
+    }
+
+    /// The next seq the board will execute, if a session is open.
+    pub fn next_seq(&self) -> Option<u32> {
+        self.session.map(|s| s.next_seq)
+    }
+
+    /// Handles one frame from [`FrameDecoder::push`](super::FrameDecoder::push); always answers.
+    pub fn on_frame(
+        &mut self,
+        frame: Result<&[u8], FrameError>,
+        t: &mut impl LinkTarget,
+    ) -> Response {
+        match frame {
+            Ok(msg) => self.handle_message(msg, t),
+            Err(e) => self.link_nak(e.error_code(), t),
+        }
+    }
+
+    /// Handles CRC-checked message bytes.
+    pub fn handle_message(&mut self, msg: &[u8], t: &mut impl LinkTarget) -> Response {
+        match decode_request(msg) {
+            Ok(req) => self.handle(&req, t),
+            Err(Malformed { seq: None }) => self.link_nak(ErrorCode::Malformed, t),
+            Err(Malformed { seq: Some(seq) }) => self.sequenced(seq, MALFORMED_KIND, t, |_, _| {
+                Err((ErrorCode::Malformed, NakDetail::None))
+            }),
+        }
+    }
+
+    /// Handles a decoded request.
+    pub fn handle(&mut self, req: &Request, t: &mut impl LinkTarget) -> Response {
+        if let RequestBody::Hello { version, nonce } = req.body {
+            return self.hello(req, version, nonce, t);
+        }
+        let kind = req.body.kind();
+        self.sequenced(req.seq, kind, t, |link, t| link.execute(req, t))
+    }
+
+    /// NAK for a frame that carried no readable request.
+    pub fn link_nak(&self, code: ErrorCode, t: &impl LinkTarget) -> Response {
+        let (seq, detail) = match self.session {
+            Some(s) => (s.next_seq, NakDetail::Expected { expected: s.next_seq }),
+            None => (0, NakDetail::None),
+        };
+        Response::Nak { seq, credits: t.credits(), code, detail }
+    }
+
+    /// A periodic `Status` when one is due (after `SetStatusPeriod`); call often.
+    pub fn poll(&mut self, now_ms: u64, t: &impl LinkTarget) -> Option<Response> {
+        if self.status_period_ms == 0 || self.session.is_none() {
+            return None;
+        }
+        let due = *self.status_due_ms.get_or_insert(now_ms);
+        if now_ms < due {
+            return None;
+        }
+        self.status_due_ms = Some(now_ms.saturating_add(self.status_period_ms as u64));
+        Some(Response::Status(self.status(t)))
+    }
+
+    /// The target's status with the link fields filled in.
+    pub fn status(&self, t: &impl LinkTarget) -> Status {
+        let mut s = t.status();
+        s.credits = t.credits();
+        s.next_seq = self.next_seq().unwrap_or(0);
+        s
+    }
+
+    /// `HelloInfo` for the current target.
+    pub fn hello_info(&self, t: &impl LinkTarget) -> HelloInfo {
+        let cfg = t.config();
+        HelloInfo {
+            version: PROTOCOL_VERSION,
+            firmware: self.firmware.clone(),
+            capabilities: self.capabilities,
+            axes: cfg.machine.axis_count,
+            queue_capacity: t.queue_capacity(),
+            tick_hz: cfg.machine.tick_hz,
+            max_window: RESULT_MEMORY as u16,
+            max_segments_per_frame: super::MAX_SEGMENTS_PER_FRAME as u8,
+        }
+    }
+
+    fn hello(
+        &mut self,
+        req: &Request,
+        version: u16,
+        nonce: u32,
+        t: &mut impl LinkTarget,
+    ) -> Response {
+        if version != PROTOCOL_VERSION {
+            return Response::Nak {
+                seq: req.seq,
+                credits: t.credits(),
+                code: ErrorCode::Version,
+                detail: NakDetail::None,
+            };
+        }
+        if let Some(s) = self.session {
+            if s.hello_seq == req.seq && s.nonce == nonce && is_before(req.seq, s.next_seq) {
+                return self.replay(req.seq, req.body.kind(), t);
+            }
+        }
+        self.session =
+            Some(Session { next_seq: req.seq.wrapping_add(1), hello_seq: req.seq, nonce });
+        self.memo = [const { None }; RESULT_MEMORY];
+        self.status_period_ms = 0;
+        self.status_due_ms = None;
+        let credits = t.credits();
+        self.remember(req.seq, req.body.kind(), credits, Ok(()));
+        Response::Ack { seq: req.seq, credits, reply: Reply::Hello(self.hello_info(t)) }
+    }
+
+    fn sequenced<T: LinkTarget>(
+        &mut self,
+        seq: u32,
+        kind: u8,
+        t: &mut T,
+        exec: impl FnOnce(&mut Self, &mut T) -> Result<Reply, (ErrorCode, NakDetail)>,
+    ) -> Response {
+        let Some(s) = self.session else {
+            return Response::Nak {
+                seq,
+                credits: t.credits(),
+                code: ErrorCode::NoSession,
+                detail: NakDetail::None,
+            };
+        };
+        if seq != s.next_seq {
+            if is_before(seq, s.next_seq) {
+                return self.replay(seq, kind, t);
+            }
+            let expected = s.next_seq;
+            return Response::Nak {
+                seq,
+                credits: t.credits(),
+                code: ErrorCode::Sequence,
+                detail: NakDetail::Expected { expected },
+            };
+        }
+        let result = exec(self, t);
+        let credits = t.credits();
+        if let Some(s) = self.session.as_mut() {
+            s.next_seq = seq.wrapping_add(1);
+        }
+        match result {
+            Ok(reply) => {
+                self.remember(seq, kind, credits, Ok(()));
+                Response::Ack { seq, credits, reply }
+            }
+            Err((code, detail)) => {
+                self.remember(seq, kind, credits, Err((code, detail.clone())));
+                Response::Nak { seq, credits, code, detail }
+            }
+        }
+    }
+
+    fn remember(&mut self, seq: u32, kind: u8, credits: u16, outcome: Outcome) {
+        self.memo[seq as usize % RESULT_MEMORY] = Some(Memo { seq, kind, credits, outcome });
+    }
+
+    /// Answers a retransmission from memory, executing nothing.
+    fn replay(&self, seq: u32, kind: u8, t: &impl LinkTarget) -> Response {
+        match &self.memo[seq as usize % RESULT_MEMORY] {
+            Some(m) if m.seq == seq && m.kind == kind => match &m.outcome {
+                Ok(()) => {
+                    // Queries answer with fresh data; nothing is executed again.
+                    let reply = match kind {
+                        KIND_HELLO => Reply::Hello(self.hello_info(t)),
+                        KIND_GET_CONFIG => Reply::Config(t.config()),
+                        KIND_GET_STATUS => Reply::Status(self.status(t)),
+                        _ => Reply::None,
+                    };
+                    Response::Ack { seq, credits: m.credits, reply }
+                }
+                Err((code, detail)) => {
+                    Response::Nak { seq, credits: m.credits, code: *code, detail: detail.clone() }
+                }
+            },
+            _ => Response::Nak {
+                seq,
+                credits: t.credits(),
+                code: ErrorCode::Stale,
+                detail: NakDetail::None,
+            },
+        }
+    }
+
+    fn execute(
+        &mut self,
+        req: &Request,
+        t: &mut impl LinkTarget,
+    ) -> Result<Reply, (ErrorCode, NakDetail)> {
+        let state = t.state();
+        let out_of_state = Err((ErrorCode::OutOfState, NakDetail::State(state)));
+        let plain = |code: ErrorCode| (code, NakDetail::None);
+        match &req.body {
+            // Handled before sequencing; never reaches here.
+            RequestBody::Hello { .. } => Err(plain(ErrorCode::Internal)),
+            RequestBody::GetConfig => Ok(Reply::Config(t.config())),
+            RequestBody::GetStatus => Ok(Reply::Status(self.status(t))),
+            RequestBody::SetConfig(cfg) => {
+                if state != WireState::Idle || t.credits() != t.queue_capacity() {
+                    return out_of_state;
+                }
+                cfg.validate().map_err(config_nak)?;
+                t.set_config(cfg).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::QueueSegments(batch) => {
+                if state == WireState::Faulted {
+                    return out_of_state;
+                }
+                if batch.len() > t.credits() as usize {
+                    return Err(plain(ErrorCode::QueueFull));
+                }
+                let cfg = t.config();
+                cfg.validate().map_err(config_nak)?;
+                let mut pos = t.planned_position();
+                for (index, seg) in batch.iter().enumerate() {
+                    let index = index as u8;
+                    let seg_nak = |(reason, axis)| {
+                        (ErrorCode::InvalidSegment, NakDetail::Segment { index, reason, axis })
+                    };
+                    seg.check(&cfg.machine).map_err(|e| seg_nak(SegmentReason::from_error(e)))?;
+                    for (axis, p) in pos.iter_mut().enumerate() {
+                        let s = &cfg.scale[axis];
+                        if seg.steps[axis] == 0 {
+                            continue;
+                        }
+                        match p.checked_add(seg.steps[axis] as i64) {
+                            Some(np) if np >= s.soft_min && np <= s.soft_max => *p = np,
+                            _ => return Err(seg_nak((SegmentReason::SoftLimit, Some(axis as u8)))),
+                        }
+                    }
+                }
+                for seg in batch.iter() {
+                    // Checked above; a failure here is a target bug, reported as Internal.
+                    t.queue_segment(seg).map_err(|_| plain(ErrorCode::Internal))?;
+                }
+                Ok(Reply::None)
+            }
+            RequestBody::Start => {
+                if state != WireState::Idle {
+                    return out_of_state;
+                }
+                t.config().validate().map_err(config_nak)?;
+                t.start().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::Hold => {
+                if state != WireState::Moving {
+                    return out_of_state;
+                }
+                t.hold().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::Resume => {
+                if !matches!(state, WireState::Stopping | WireState::Held) {
+                    return out_of_state;
+                }
+                t.resume().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::Abort => {
+                t.abort().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::SetOverride { rate_bits } => {
+                if *rate_bits > MAX_OVERRIDE_BITS {
+                    return Err(plain(ErrorCode::OutOfRange));
+                }
+                t.set_override(Rate::from_bits(*rate_bits)).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::SetStatusPeriod { ms } => {
+                if *ms != 0 && *ms < MIN_STATUS_PERIOD_MS {
+                    return Err(plain(ErrorCode::OutOfRange));
+                }
+                self.status_period_ms = *ms;
+                self.status_due_ms = None;
+                Ok(Reply::None)
+            }
+            RequestBody::ClearFault => {
+                if state != WireState::Faulted {
+                    return out_of_state;
+                }
+                t.clear_fault().map_err(plain)?;
+                Ok(Reply::None)
+            }
+        }
+    }
+}
+
+fn config_nak(e: ConfigError) -> (ErrorCode, NakDetail) {
+    (
+        ErrorCode::InvalidConfig,
+        NakDetail::Config { field: FixedStr::truncated(e.field), axis: e.axis },
+    )
+}

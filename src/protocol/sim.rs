@@ -1,0 +1,205 @@
+//! A hardware-free [`LinkTarget`]: a segment queue and a motion state, enough to exercise the link
+//! in tests, in the fuzzers and in `motionctl`'s loopback mode. No allocation.
+
+use heapless::Deque;
+
+use super::errors::{ErrorCode, FaultCode};
+use super::messages::{Status, WireConfig, WireState};
+use super::session::LinkTarget;
+use crate::config::MAX_AXES;
+use crate::segment::{Rate, Segment};
+
+/// Largest queue a `SimTarget` can have.
+pub const SIM_QUEUE_MAX: usize = 64;
+
+/// Fake machine: queued segments complete when the test calls [`SimTarget::complete_one`].
+#[derive(Clone, Debug)]
+pub struct SimTarget {
+    pub config: WireConfig,
+    queue: Deque<Segment, SIM_QUEUE_MAX>,
+    capacity: u16,
+    pub running: bool,
+    pub held: bool,
+    pub override_bits: u32,
+    pub faults: u32,
+    pub positions: [i64; MAX_AXES],
+    planned: [i64; MAX_AXES],
+    pub tick: u64,
+    pub segments_done: u32,
+    pub last_done_id: Option<u32>,
+    /// Segments ever queued, and the deepest the queue got.
+    pub queued_total: u64,
+    pub max_depth: u16,
+    /// Calls that changed something (every successful mutating call), for "nothing changed"
+    /// assertions.
+    pub mutations: u64,
+}
+
+impl PartialEq for SimTarget {
+    fn eq(&self, o: &Self) -> bool {
+        self.config == o.config
+            && self.queue.iter().eq(o.queue.iter())
+            && (self.capacity, self.running, self.held) == (o.capacity, o.running, o.held)
+            && (self.override_bits, self.faults, self.tick) == (o.override_bits, o.faults, o.tick)
+            && (self.positions, self.planned) == (o.positions, o.planned)
+            && (self.segments_done, self.last_done_id) == (o.segments_done, o.last_done_id)
+            && (self.queued_total, self.max_depth, self.mutations)
+                == (o.queued_total, o.max_depth, o.mutations)
+    }
+}
+
+impl SimTarget {
+    /// `capacity` is clamped to [`SIM_QUEUE_MAX`].
+    pub fn new(config: WireConfig, capacity: u16) -> Self {
+        SimTarget {
+            config,
+            queue: Deque::new(),
+            capacity: capacity.min(SIM_QUEUE_MAX as u16),
+            running: false,
+            held: false,
+            override_bits: Rate::ONE.to_bits(),
+            faults: 0,
+            positions: [0; MAX_AXES],
+            planned: [0; MAX_AXES],
+            tick: 0,
+            segments_done: 0,
+            last_done_id: None,
+            queued_total: 0,
+            max_depth: 0,
+            mutations: 0,
+        }
+    }
+
+    pub fn queue_len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// Finishes the oldest queued segment if the machine is running (not held, no fault).
+    pub fn complete_one(&mut self) -> Option<Segment> {
+        if !self.running || self.held || self.faults != 0 {
+            return None;
+        }
+        let seg = self.queue.pop_front()?;
+        for (p, s) in self.positions.iter_mut().zip(seg.steps) {
+            *p += s as i64;
+        }
+        self.segments_done += 1;
+        self.last_done_id = Some(seg.id);
+        self.tick += seg.duration_ticks as u64;
+        Some(seg)
+    }
+
+    /// Latches a fault: motion stops, the queue is dropped.
+    pub fn raise_fault(&mut self, code: FaultCode) {
+        self.faults |= code.bit();
+        self.queue.clear();
+        self.planned = self.positions;
+        self.running = false;
+        self.held = false;
+    }
+}
+
+impl LinkTarget for SimTarget {
+    fn state(&self) -> WireState {
+        if self.faults != 0 {
+            WireState::Faulted
+        } else if self.held {
+            WireState::Held
+        } else if self.running && !self.queue.is_empty() {
+            WireState::Moving
+        } else {
+            WireState::Idle
+        }
+    }
+
+    fn credits(&self) -> u16 {
+        self.capacity.saturating_sub(self.queue.len() as u16)
+    }
+
+    fn queue_capacity(&self) -> u16 {
+        self.capacity
+    }
+
+    fn config(&self) -> WireConfig {
+        self.config
+    }
+
+    fn planned_position(&self) -> [i64; MAX_AXES] {
+        self.planned
+    }
+
+    fn status(&self) -> Status {
+        Status {
+            tick: self.tick,
+            positions: self.positions,
+            state: self.state(),
+            override_bits: self.override_bits,
+            queue_depth: self.queue.len() as u16,
+            credits: 0,
+            segments_done: self.segments_done,
+            last_done_id: self.last_done_id,
+            faults: self.faults,
+            sensors: [0; 4],
+            next_seq: 0,
+        }
+    }
+
+    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+        self.config = *cfg;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
+        if self.queue.len() >= self.capacity as usize {
+            return Err(ErrorCode::QueueFull);
+        }
+        self.queue.push_back(*seg).map_err(|_| ErrorCode::QueueFull)?;
+        for (p, s) in self.planned.iter_mut().zip(seg.steps) {
+            *p += s as i64;
+        }
+        self.queued_total += 1;
+        self.max_depth = self.max_depth.max(self.queue.len() as u16);
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn start(&mut self) -> Result<(), ErrorCode> {
+        self.running = true;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn hold(&mut self) -> Result<(), ErrorCode> {
+        self.held = true;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn resume(&mut self) -> Result<(), ErrorCode> {
+        self.held = false;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn abort(&mut self) -> Result<(), ErrorCode> {
+        self.queue.clear();
+        self.planned = self.positions;
+        self.running = false;
+        self.held = false;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn set_override(&mut self, rate: Rate) -> Result<(), ErrorCode> {
+        self.override_bits = rate.to_bits();
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn clear_fault(&mut self) -> Result<(), ErrorCode> {
+        self.faults = 0;
+        self.mutations += 1;
+        Ok(())
+    }
+}

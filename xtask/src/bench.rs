@@ -1,0 +1,240 @@
+//! `cargo xtask bench`: DDA micro-benchmarks in QEMU, firmware sizes, and the derived figures,
+//! written to `target/bench.json` (one flat object, merged with what is there) and to the
+//! generated section of BENCHMARKS.md.
+
+use crate::firmware::{self, Board};
+use crate::{divcheck, golden};
+use anyhow::{bail, Context, Result};
+use object::{Object, ObjectSection};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+const BEGIN: &str = "<!-- bench:begin -->";
+const END: &str = "<!-- bench:end -->";
+/// 10 % of a 168 MHz Cortex-M4 core, in cycles per second.
+const BUDGET_CYCLES_PER_S: f64 = 16_800_000.0;
+
+enum Target {
+    AtMost(f64),
+    AtLeast(f64),
+}
+
+const TARGETS: [(&str, Target); 3] = [
+    ("dda_tick_instr_idle", Target::AtMost(30.0)),
+    ("dda_tick_instr_4axes", Target::AtMost(60.0)),
+    ("max_tick_hz_at_10pct", Target::AtLeast(250_000.0)),
+];
+
+pub fn run(root: &Path) -> Result<()> {
+    let bench_elf = firmware::build(root, Board::Netduinoplus2, &["bench"])?;
+    let demo_elf = firmware::build(root, Board::Netduinoplus2, &[])?;
+    divcheck::check_elf(&demo_elf)?;
+
+    println!("running the benchmarks in QEMU ({})", bench_elf.display());
+    let run = firmware::run_qemu(&bench_elf)?;
+    run.print("  fw| ");
+    let mut figures = parse_bench_lines(run.texts())?;
+    for key in [
+        "dda_tick_instr_idle",
+        "dda_tick_instr_moving",
+        "dda_tick_instr_1axis",
+        "dda_tick_instr_4axes",
+    ] {
+        if !figures.contains_key(key) {
+            bail!("the benchmark firmware did not report `{key}`");
+        }
+    }
+    let four = figures["dda_tick_instr_4axes"];
+    figures.insert("max_tick_hz_at_10pct".into(), (BUDGET_CYCLES_PER_S / four.max(1.0)).floor());
+
+    let (flash, ram) = sizes(&demo_elf)?;
+    figures.insert("flash_bytes".into(), flash as f64);
+    figures.insert("ram_bytes".into(), ram as f64);
+
+    println!("timing the demo run in QEMU");
+    let demo = firmware::run_qemu(&demo_elf)?;
+    golden::parse(&demo)?;
+    figures.insert("demo_qemu_seconds".into(), (demo.wall.as_secs_f64() * 100.0).round() / 100.0);
+
+    let json_path = root.join("target/bench.json");
+    write_json(&json_path, &figures)?;
+    let md_path = root.join("BENCHMARKS.md");
+    write_markdown(&md_path, &figures)?;
+    println!();
+    print!("{}", table(&figures));
+    println!("\nwrote {} and {}", json_path.display(), md_path.display());
+    Ok(())
+}
+
+/// `bench key=value` lines -> figures.
+pub fn parse_bench_lines<'a>(
+    lines: impl Iterator<Item = &'a str>,
+) -> Result<BTreeMap<String, f64>> {
+    let mut m = BTreeMap::new();
+    let mut done = false;
+    for line in lines {
+        let Some(rest) = line.trim().strip_prefix("bench ") else {
+            continue;
+        };
+        if rest == "done" {
+            done = true;
+            continue;
+        }
+        let (k, v) = rest.split_once('=').with_context(|| format!("bad bench line: {line}"))?;
+        let v: f64 = v.parse().with_context(|| format!("bad bench value: {line}"))?;
+        m.insert(k.to_string(), v);
+    }
+    if !done {
+        bail!("the benchmark firmware did not finish (no `bench done` line)");
+    }
+    Ok(m)
+}
+
+/// Flash: every section loaded into flash (.vector_table, .text, .rodata and the .data image).
+/// RAM: statically allocated RAM (.data, .bss, .uninit); the stack takes the rest of the 128 KiB.
+fn sizes(elf: &Path) -> Result<(u64, u64)> {
+    let bytes = std::fs::read(elf)?;
+    let file = object::File::parse(&*bytes)?;
+    let size = |name: &str| file.section_by_name(name).map(|s| s.size()).unwrap_or(0);
+    let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
+    let ram = size(".data") + size(".bss") + size(".uninit");
+    Ok((flash, ram))
+}
+
+fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
+    let mut obj = match std::fs::read_to_string(path) {
+        Ok(s) => match serde_json::from_str::<serde_json::Value>(&s) {
+            Ok(serde_json::Value::Object(o)) => o,
+            _ => {
+                println!("note: {} was not a JSON object; rewriting it", path.display());
+                serde_json::Map::new()
+            }
+        },
+        Err(_) => serde_json::Map::new(),
+    };
+    for (k, &v) in figures {
+        let n = if v.fract() == 0.0 && v.abs() < 9e15 {
+            serde_json::Value::from(v as i64)
+        } else {
+            serde_json::Value::from(v)
+        };
+        obj.insert(k.clone(), n);
+    }
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(path, serde_json::to_string_pretty(&serde_json::Value::Object(obj))? + "\n")?;
+    Ok(())
+}
+
+fn fmt_num(v: f64) -> String {
+    if v.fract() == 0.0 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+fn table(figures: &BTreeMap<String, f64>) -> String {
+    let mut t =
+        String::from("| figure | value | target | met? (margin) |\n| --- | ---: | --- | --- |\n");
+    let mut rows: Vec<(&str, String, String, String)> = Vec::new();
+    for (k, target) in &TARGETS {
+        let Some(&v) = figures.get(*k) else { continue };
+        let (goal, met) = match target {
+            Target::AtMost(g) => (format!("<= {}", fmt_num(*g)), v <= *g),
+            Target::AtLeast(g) => (format!(">= {}", fmt_num(*g)), v >= *g),
+        };
+        let g = match target {
+            Target::AtMost(g) | Target::AtLeast(g) => *g,
+        };
+        let margin = match target {
+            Target::AtMost(_) => (g - v) / g * 100.0,
+            Target::AtLeast(_) => (v - g) / g * 100.0,
+        };
+        let verdict = format!("{} ({margin:+.0} %)", if met { "yes" } else { "NO" });
+        rows.push((k, fmt_num(v), goal, verdict));
+    }
+    for (k, &v) in figures {
+        if TARGETS.iter().any(|(t, _)| t == k) {
+            continue;
+        }
+        rows.push((k, fmt_num(v), "-".into(), "-".into()));
+    }
+    for (k, v, g, m) in rows {
+        t.push_str(&format!("| `{k}` | {v} | {g} | {m} |\n"));
+    }
+    t
+}
+
+const INTRO: &str = "# Benchmarks
+
+Generated by `cargo xtask bench`; the section between the markers is rewritten on every run, and
+the same figures (plus any other capability's) are in `target/bench.json`.
+
+";
+
+const NOTES: &str = "
+How these are measured:
+
+- `dda_tick_instr_*`: instructions for one `Dda::tick()` in the QEMU netduinoplus2 firmware,
+  counted with TIM5 at QEMU's 1 GHz timer clock under `-icount shift=0` (one instruction = 1 ns),
+  minus the cost of an empty measurement. Classes: `idle` (no segment), `moving` (in a segment,
+  no step this tick), `1axis` / `4axes` / `6axes` (that many rising edges), `segment_change`
+  (the tick that finishes or starts a segment), `first_tick` (a fresh DDA's first tick). Plain
+  keys are the maximum over all samples of the class, `_mean` keys the mean.
+  `tick_apply_instr_*` adds the board's step-port `apply` (on QEMU: the `StepRecorder` that
+  stands in for the GPIO pins).
+- `max_tick_hz_at_10pct` = 16 800 000 / `dda_tick_instr_4axes`: the tick rate at which the
+  4-axis worst case uses 10 % of a 168 MHz core, treating one instruction as one cycle (an
+  approximation: flash wait states and pipeline refills make real cycles somewhat higher).
+- `flash_bytes`: `.vector_table + .text + .rodata + .data` of the release demo firmware.
+  `ram_bytes`: static RAM, `.data + .bss + .uninit` (the stack uses the rest of the 128 KiB).
+- `demo_qemu_seconds`: wall time of one QEMU run of the demo job.
+";
+
+fn write_markdown(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
+    let section = format!("{BEGIN}\n{}{NOTES}{END}", table(figures));
+    let text = match std::fs::read_to_string(path) {
+        Ok(s) => match (s.find(BEGIN), s.find(END)) {
+            (Some(b), Some(e)) if b < e => format!("{}{section}{}", &s[..b], &s[e + END.len()..]),
+            _ => format!("{}\n{section}\n", s.trim_end()),
+        },
+        Err(_) => format!("{INTRO}{section}\n"),
+    };
+    std::fs::write(path, text)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_bench_lines_and_rewrites_only_the_section() {
+        let lines = ["motion-board", "bench a=1", "bench b_mean=2.5", "bench done"];
+        let m = parse_bench_lines(lines.into_iter()).unwrap();
+        assert_eq!(m["a"], 1.0);
+        assert_eq!(m["b_mean"], 2.5);
+        assert!(parse_bench_lines(["bench a=1"].into_iter()).is_err());
+
+        let dir = std::env::temp_dir().join(format!("xtask-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let md = dir.join("B.md");
+        std::fs::write(&md, format!("# T\nkeep me\n{BEGIN}\nold\n{END}\ntail\n")).unwrap();
+        write_markdown(&md, &m).unwrap();
+        let s = std::fs::read_to_string(&md).unwrap();
+        assert!(s.starts_with("# T\nkeep me\n<!-- bench:begin -->\n| figure"));
+        assert!(s.ends_with("<!-- bench:end -->\ntail\n") && !s.contains("old"));
+
+        let json = dir.join("bench.json");
+        std::fs::write(&json, r#"{"other_capability": 7, "a": 0}"#).unwrap();
+        write_json(&json, &m).unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["other_capability"], 7);
+        assert_eq!(v["a"], 1);
+        assert_eq!(v["b_mean"], 2.5);
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}

@@ -1,0 +1,194 @@
+//! Building the firmware, running it in QEMU and decoding its defmt log.
+
+use anyhow::{anyhow, bail, Context, Result};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+/// A QEMU run that takes longer than this has hung.
+pub const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Board {
+    Netduinoplus2,
+    F405Motion,
+}
+
+impl Board {
+    pub fn parse(s: &str) -> Result<Board> {
+        match s {
+            "netduinoplus2" => Ok(Board::Netduinoplus2),
+            "f405-motion" | "f405_motion" => Ok(Board::F405Motion),
+            _ => bail!("unknown board `{s}` (expected netduinoplus2 or f405-motion)"),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Board::Netduinoplus2 => "netduinoplus2",
+            Board::F405Motion => "f405-motion",
+        }
+    }
+}
+
+/// Builds the release firmware for `board` with `extra` features and returns the ELF, copied to
+/// `target/fw-<board>[-<feature>...]/firmware` so each feature set keeps its own ELF. All feature
+/// sets share one cargo target directory (`target/thumb`): cargo keys artifacts by feature set,
+/// so switching boards or features never rebuilds the dependencies, only the copied-out ELF
+/// would be overwritten.
+pub fn build(root: &Path, board: Board, extra: &[&str]) -> Result<PathBuf> {
+    let mut dir = format!("target/fw-{}", board.name());
+    let mut features = format!("board-{}", board.name());
+    for f in extra {
+        dir.push('-');
+        dir.push_str(f);
+        features.push(',');
+        features.push_str(f);
+    }
+    crate::run_status(
+        &format!("firmware build ({features})"),
+        crate::cargo(root)
+            .args(["build", "--release", "--target", TARGET, "--bin", "firmware"])
+            .args(["--features", &features, "--target-dir", "target/thumb"]),
+    )?;
+    let built = root.join("target/thumb").join(TARGET).join("release/firmware");
+    let dir = root.join(dir);
+    std::fs::create_dir_all(&dir)?;
+    let elf = dir.join("firmware");
+    std::fs::copy(&built, &elf)
+        .with_context(|| format!("copying {} to {}", built.display(), elf.display()))?;
+    Ok(elf)
+}
+
+/// What one QEMU run printed, decoded.
+pub struct Run {
+    pub lines: Vec<LogLine>,
+    pub wall: Duration,
+}
+
+pub struct LogLine {
+    /// `None` for `println!`.
+    pub level: Option<String>,
+    pub text: String,
+}
+
+impl Run {
+    pub fn texts(&self) -> impl Iterator<Item = &str> {
+        self.lines.iter().map(|l| l.text.as_str())
+    }
+
+    pub fn print(&self, prefix: &str) {
+        for l in &self.lines {
+            match &l.level {
+                Some(level) => println!("{prefix}{level:<5} {}", l.text),
+                None => println!("{prefix}{}", l.text),
+            }
+        }
+    }
+}
+
+/// Runs `elf` on QEMU's netduinoplus2 with `-icount shift=0` (one instruction = 1 ns of virtual
+/// time, so runs are deterministic and TIM5 counts instructions), captures the semihosting
+/// output and decodes it. Fails if QEMU exits non-zero or runs past [`QEMU_TIMEOUT`].
+pub fn run_qemu(elf: &Path) -> Result<Run> {
+    let start = Instant::now();
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-display", "none", "-serial", "null", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        // sleep=off: idle time (wfi) is skipped instead of waited out in real time.
+        .args(["-icount", "shift=0,sleep=off"])
+        .arg("-kernel")
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .context("could not start qemu-system-arm")?;
+    let mut stdout = child.stdout.take().context("qemu stdout")?;
+    let mut stderr = child.stderr.take().context("qemu stderr")?;
+    let out_reader = std::thread::spawn(move || {
+        let mut buf = Vec::new();
+        stdout.read_to_end(&mut buf).map(|_| buf)
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut buf = String::new();
+        let _ = stderr.read_to_string(&mut buf);
+        buf
+    });
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break Some(status);
+        }
+        if start.elapsed() > QEMU_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let wall = start.elapsed();
+    let bytes = out_reader.join().map_err(|_| anyhow!("stdout reader panicked"))??;
+    let stderr = err_reader.join().unwrap_or_default();
+    let decoded = decode(elf, &bytes);
+    let run = Run { lines: decoded.as_ref().map(|r| r.lines.clone()).unwrap_or_default(), wall };
+    let fail = |why: String| -> Result<Run> {
+        run.print("  fw| ");
+        if !stderr.trim().is_empty() {
+            eprintln!("qemu stderr:\n{}", stderr.trim());
+        }
+        bail!(why)
+    };
+    match status {
+        None => fail(format!(
+            "QEMU did not finish within {} s (firmware hung?); killed it",
+            QEMU_TIMEOUT.as_secs()
+        )),
+        Some(s) if !s.success() => fail(format!("the firmware failed: QEMU exited with {s}")),
+        Some(_) => {
+            let d = decoded?;
+            if d.malformed {
+                return fail("the defmt stream had malformed frames".into());
+            }
+            Ok(run)
+        }
+    }
+}
+
+struct Decoded {
+    lines: Vec<LogLine>,
+    malformed: bool,
+}
+
+impl Clone for LogLine {
+    fn clone(&self) -> Self {
+        LogLine { level: self.level.clone(), text: self.text.clone() }
+    }
+}
+
+fn decode(elf: &Path, bytes: &[u8]) -> Result<Decoded> {
+    let elf_bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
+    let table = defmt_decoder::Table::parse(&elf_bytes)?
+        .ok_or_else(|| anyhow!("{} has no defmt table", elf.display()))?;
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = Vec::new();
+    let mut malformed = false;
+    loop {
+        match decoder.decode() {
+            Ok(frame) => lines.push(LogLine {
+                level: frame.level().map(|l| l.as_str().to_uppercase()),
+                text: frame.display_message().to_string(),
+            }),
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(defmt_decoder::DecodeError::Malformed) => {
+                malformed = true;
+                if !table.encoding().can_recover() {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(Decoded { lines, malformed })
+}

@@ -1,0 +1,268 @@
+//! Project automation: `cargo xtask <command>`.
+//!
+//! | command | what it does |
+//! | --- | --- |
+//! | `build [--board B] [--bench]` | release firmware for a board (`netduinoplus2` default, `f405-motion`) |
+//! | `demo` | runs the demo firmware in QEMU, decodes its log, summarises the report, compares with the host model |
+//! | `test` | everything CI checks, in order, failing fast |
+//! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
+//! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` |
+//!
+//! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
+//! `qemu-system-arm` are installed.
+
+mod bench;
+mod divcheck;
+mod firmware;
+mod golden;
+mod setup;
+
+use anyhow::{bail, Context, Result};
+use firmware::Board;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+const USAGE: &str = "usage: cargo xtask <command>
+
+commands:
+  build [--board netduinoplus2|f405-motion] [--bench]   build release firmware
+  demo                                                  run the demo job in QEMU and compare with the host model
+  test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
+  bench                                                 run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
+  flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs";
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(cmd) = args.first() else {
+        println!("{USAGE}");
+        return Ok(());
+    };
+    let rest = &args[1..];
+    if matches!(cmd.as_str(), "help" | "-h" | "--help") {
+        println!("{USAGE}");
+        return Ok(());
+    }
+    let root = root();
+    match cmd.as_str() {
+        "build" => {
+            let (board, bench) = parse_build_args(rest)?;
+            setup::ensure(&root)?;
+            let extra: &[&str] = if bench { &["bench"] } else { &[] };
+            let elf = firmware::build(&root, board, extra)?;
+            println!("built {}", elf.display());
+            Ok(())
+        }
+        "demo" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            golden::demo(&root)
+        }
+        "test" => {
+            // `--skip WORD` (repeatable): skip steps whose name contains WORD, for local use.
+            let mut skip = Vec::new();
+            let mut it = rest.iter();
+            while let Some(a) = it.next() {
+                match a.as_str() {
+                    "--skip" => skip.push(it.next().context("--skip needs a value")?.clone()),
+                    other => bail!("unknown test option `{other}`"),
+                }
+            }
+            setup::ensure(&root)?;
+            test(&root, &skip)
+        }
+        "bench" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            bench::run(&root)
+        }
+        "flash" => {
+            let [board] = rest else {
+                bail!("usage: cargo xtask flash <netduinoplus2|f405-motion>")
+            };
+            let board = Board::parse(board)?;
+            setup::ensure(&root)?;
+            flash(&root, board)
+        }
+        other => bail!("unknown command `{other}`\n\n{USAGE}"),
+    }
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace root")
+        .to_path_buf()
+}
+
+fn no_args(cmd: &str, rest: &[String]) -> Result<()> {
+    if !rest.is_empty() {
+        bail!("`{cmd}` takes no arguments (got {rest:?})");
+    }
+    Ok(())
+}
+
+fn parse_build_args(rest: &[String]) -> Result<(Board, bool)> {
+    let mut board = Board::Netduinoplus2;
+    let mut bench = false;
+    let mut it = rest.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--board" => {
+                board = Board::parse(it.next().context("--board needs a value")?)?;
+            }
+            "--bench" => bench = true,
+            other => match other.strip_prefix("--board=") {
+                Some(b) => board = Board::parse(b)?,
+                None => bail!("unknown build option `{other}`"),
+            },
+        }
+    }
+    Ok((board, bench))
+}
+
+/// `cargo` as the one running xtask, with the workspace as working directory.
+pub fn cargo(root: &Path) -> Command {
+    let mut c = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    c.current_dir(root);
+    c
+}
+
+/// Runs a command to completion with inherited output; an error names `what` failed.
+pub fn run_status(what: &str, cmd: &mut Command) -> Result<()> {
+    let status = cmd.status().with_context(|| format!("{what}: could not start {cmd:?}"))?;
+    if !status.success() {
+        bail!("{what} failed ({status})");
+    }
+    Ok(())
+}
+
+fn test(root: &Path, skip: &[String]) -> Result<()> {
+    type Step<'a> = (&'a str, Box<dyn Fn() -> Result<()> + 'a>);
+    let clippy_thumb = |features: &'static str| -> Box<dyn Fn() -> Result<()>> {
+        Box::new(move || {
+            run_status(
+                "clippy",
+                cargo(root).args(["clippy", "--release", "--target", firmware::TARGET]).args([
+                    "--bin",
+                    "firmware",
+                    "--features",
+                    features,
+                    "--target-dir",
+                    "target/clippy-thumb",
+                    "--",
+                    "-D",
+                    "warnings",
+                ]),
+            )
+        })
+    };
+    let build = |board: Board, extra: &'static [&'static str]| -> Box<dyn Fn() -> Result<()>> {
+        Box::new(move || firmware::build(root, board, extra).map(drop))
+    };
+    let steps: Vec<Step> = vec![
+        (
+            "cargo fmt --check",
+            Box::new(|| {
+                run_status("cargo fmt", cargo(root).args(["fmt", "--all", "--", "--check"]))
+            }),
+        ),
+        (
+            "clippy (host)",
+            Box::new(|| {
+                run_status(
+                    "clippy",
+                    cargo(root).args([
+                        "clippy",
+                        "--workspace",
+                        "--all-targets",
+                        "--",
+                        "-D",
+                        "warnings",
+                    ]),
+                )
+            }),
+        ),
+        ("clippy (firmware, netduinoplus2)", clippy_thumb("board-netduinoplus2")),
+        ("clippy (firmware, netduinoplus2 bench)", clippy_thumb("board-netduinoplus2,bench")),
+        ("clippy (firmware, netduinoplus2 tamper)", clippy_thumb("board-netduinoplus2,tamper")),
+        ("clippy (firmware, f405-motion)", clippy_thumb("board-f405-motion")),
+        (
+            "host tests",
+            // Optimised with overflow checks and debug assertions kept (see Cargo.toml).
+            Box::new(|| {
+                run_status(
+                    "cargo test",
+                    cargo(root).args(["test", "--workspace", "--profile", "test-fast"]),
+                )
+            }),
+        ),
+        ("firmware build (netduinoplus2)", build(Board::Netduinoplus2, &[])),
+        ("firmware build (f405-motion)", build(Board::F405Motion, &[])),
+        ("firmware build (netduinoplus2 bench)", build(Board::Netduinoplus2, &["bench"])),
+        (
+            "no software divide reachable from TIM2",
+            Box::new(|| {
+                let elf = firmware::build(root, Board::Netduinoplus2, &[])?;
+                divcheck::check_elf(&elf)
+            }),
+        ),
+        ("QEMU golden scenario (firmware == host model)", Box::new(|| golden::golden(root))),
+        ("tamper build is caught by the golden comparison", Box::new(|| golden::tamper(root))),
+    ];
+    let total = steps.len();
+    let mut passed = 0;
+    let mut skipped = 0;
+    for (i, (name, step)) in steps.iter().enumerate() {
+        if skip.iter().any(|w| name.contains(w.as_str())) {
+            println!("\n==> [{}/{total}] {name}: SKIPPED", i + 1);
+            skipped += 1;
+            continue;
+        }
+        println!("\n==> [{}/{total}] {name}", i + 1);
+        let t = std::time::Instant::now();
+        if let Err(e) = step() {
+            println!("\n{passed} passed, 1 failed");
+            bail!("step `{name}` failed: {e:#}");
+        }
+        println!("==> ok: {name} ({:.1} s)", t.elapsed().as_secs_f64());
+        passed += 1;
+    }
+    if skipped == 0 {
+        println!("\n{passed} passed, 0 failed");
+    } else {
+        println!("\n{passed} passed, 0 failed, {skipped} skipped");
+    }
+    Ok(())
+}
+
+fn flash(root: &Path, board: Board) -> Result<()> {
+    if setup::which("probe-rs").is_none() {
+        bail!(
+            "probe-rs is not on PATH; install it with:\n    cargo install probe-rs-tools --locked"
+        );
+    }
+    let elf = firmware::build(root, board, &[])?;
+    let status = Command::new("probe-rs")
+        .args(["run", "--chip", "STM32F405RGTx"])
+        .arg(&elf)
+        .current_dir(root)
+        .status()
+        .context("could not start probe-rs")?;
+    if !status.success() {
+        bail!(
+            "probe-rs run failed ({status}): no debug probe was found or it could not reach the \
+             STM32F405 (check the probe's USB connection and the board's SWD wiring and power)"
+        );
+    }
+    Ok(())
+}
