@@ -14,7 +14,7 @@
 
 use crate::config::{ConfigError, MachineConfig, TickTiming, MAX_AXES, TIMING_RING_TICKS};
 use crate::fixed_math::isqrt_u64;
-use crate::segment::{Rate, Segment, SegmentError};
+use crate::segment::{order_hash, Rate, Segment, SegmentError, ORDER_HASH_START};
 use heapless::{Deque, Vec};
 
 const ONE: u32 = 1 << Rate::FRAC_NBITS;
@@ -319,6 +319,7 @@ pub struct Dda {
 
     segments_done: u32,
     last_done_id: Option<u32>,
+    done_hash: u32,
     underruns: u32,
     deferred_steps: u32,
 }
@@ -366,6 +367,7 @@ impl Dda {
             next_due: u64::MAX,
             segments_done: 0,
             last_done_id: None,
+            done_hash: ORDER_HASH_START,
             underruns: 0,
             deferred_steps: 0,
         })
@@ -786,6 +788,7 @@ impl Dda {
         self.n_active = 0;
         self.segments_done += 1;
         self.last_done_id = Some(self.seg_id);
+        self.done_hash = order_hash(self.done_hash, self.seg_id);
         if self.ready.is_empty() && self.seg_exit != 0 {
             self.underruns += 1;
         }
@@ -915,6 +918,11 @@ impl Dda {
 
     pub fn last_done_id(&self) -> Option<u32> {
         self.last_done_id
+    }
+
+    /// [`order_hash`] over the ids of every completed segment, in order.
+    pub fn done_hash(&self) -> u32 {
+        self.done_hash
     }
 
     /// Segments that ended at speed with nothing queued behind them (an abrupt stop).

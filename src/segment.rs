@@ -24,6 +24,21 @@ pub struct Segment {
     pub id: u32,
 }
 
+/// Order hash of completed segments: FNV-1a over each id (LE bytes) in completion order. The
+/// board reports it and the host recomputes it, so a lost, repeated or reordered segment shows.
+pub const ORDER_HASH_START: u32 = 0x811c_9dc5;
+
+pub const fn order_hash(prev: u32, id: u32) -> u32 {
+    let b = id.to_le_bytes();
+    let mut h = prev;
+    let mut i = 0;
+    while i < 4 {
+        h = (h ^ b[i] as u32).wrapping_mul(0x0100_0193);
+        i += 1;
+    }
+    h
+}
+
 /// Why a segment was refused; nothing was queued.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

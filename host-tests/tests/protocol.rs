@@ -140,6 +140,7 @@ fn all_responses() -> Vec<Response> {
         credits: 13,
         segments_done: 99,
         last_done_id: Some(7),
+        done_hash: 0xdead_beef,
         faults: FaultCode::EStop.bit() | FaultCode::SensorFault.bit(),
         sensors: [i32::MIN, 0, 5, i32::MAX],
         next_seq: 1234,

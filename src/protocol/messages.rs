@@ -208,6 +208,8 @@ pub struct Status {
     pub credits: u16,
     pub segments_done: u32,
     pub last_done_id: Option<u32>,
+    /// `segment::order_hash` over every completed segment id, in completion order.
+    pub done_hash: u32,
     /// Latched faults: bit n set = `FaultCode` n.
     pub faults: u32,
     pub sensors: [i32; SENSOR_CHANNELS],

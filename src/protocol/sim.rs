@@ -27,6 +27,7 @@ pub struct SimTarget {
     pub tick: u64,
     pub segments_done: u32,
     pub last_done_id: Option<u32>,
+    pub done_hash: u32,
     /// Segments ever queued, and the deepest the queue got.
     pub queued_total: u64,
     pub max_depth: u16,
@@ -64,6 +65,7 @@ impl SimTarget {
             tick: 0,
             segments_done: 0,
             last_done_id: None,
+            done_hash: crate::segment::ORDER_HASH_START,
             queued_total: 0,
             max_depth: 0,
             mutations: 0,
@@ -85,6 +87,7 @@ impl SimTarget {
         }
         self.segments_done += 1;
         self.last_done_id = Some(seg.id);
+        self.done_hash = crate::segment::order_hash(self.done_hash, seg.id);
         self.tick += seg.duration_ticks as u64;
         Some(seg)
     }
@@ -138,6 +141,7 @@ impl LinkTarget for SimTarget {
             credits: 0,
             segments_done: self.segments_done,
             last_done_id: self.last_done_id,
+            done_hash: self.done_hash,
             faults: self.faults,
             sensors: [0; 4],
             next_seq: 0,

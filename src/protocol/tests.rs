@@ -69,6 +69,7 @@ fn extreme_status() -> Status {
         credits: u16::MAX,
         segments_done: u32::MAX,
         last_done_id: Some(u32::MAX),
+        done_hash: u32::MAX,
         faults: u32::MAX,
         sensors: [i32::MIN; SENSOR_CHANNELS],
         next_seq: u32::MAX,
