@@ -423,11 +423,19 @@ impl Dda {
     /// would (held back, released when allowed).
     #[cold]
     #[inline(never)]
-    fn cruise_too_soon(&mut self, slot: usize, fall: u8, mut rise: u8) -> StepOutput {
+    fn cruise_too_soon(&mut self, slot: usize, fall: u8, rise: u8) -> StepOutput {
         self.leave_fast();
-        let too_soon = rise & fall;
-        rise &= !too_soon;
-        self.defer(too_soon);
+        self.settle_edges(slot, fall, rise, rise & fall)
+    }
+
+    /// The end of every tick that left the fast paths: steps due too soon are held back, gates
+    /// write DIR and release held steps, and the tick's rising edges are recorded.
+    #[inline]
+    fn settle_edges(&mut self, slot: usize, fall: u8, mut rise: u8, too_soon: u8) -> StepOutput {
+        if too_soon != 0 {
+            rise &= !too_soon;
+            self.defer(too_soon);
+        }
         let mut dir_write = 0;
         if self.gated != 0 {
             (rise, dir_write) = self.gate_pass(rise);
@@ -540,18 +548,9 @@ impl Dda {
                 self.phase = p;
             }
         }
-        let too_soon = rise & self.recent_rises();
-        if too_soon != 0 {
-            rise &= !too_soon;
-            self.defer(too_soon);
-        }
-        let mut dir_write = 0;
-        if self.gated != 0 {
-            (rise, dir_write) = self.gate_pass(rise);
-        }
-        self.ring[slot] = rise;
+        let out = self.settle_edges(slot, fall, rise, rise & self.recent_rises());
         self.try_cruise();
-        StepOutput::new(fall, dir_write, self.dir, rise)
+        out
     }
 
     /// One Bresenham step over the active lanes; bit k of the result: lane k steps. One dispatch
