@@ -7,7 +7,9 @@
 
 pub mod cli;
 pub mod convert;
+pub mod fourier;
 pub mod gcode;
 pub mod job;
 pub mod plan;
 pub mod transport;
+pub mod wire;
