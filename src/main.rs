@@ -1,10 +1,14 @@
 //! The motion board firmware: an RTIC 2 app that runs the built-in demo job through the same
 //! planner, preparer and DDA as the host model, and prints position snapshots and the end-of-job
-//! report over defmt.
+//! report over defmt. With the `link` feature it serves the host link on USART1 instead
+//! (`src/protocol/PROTOCOL.md`, `firmware/link.rs`) and runs the jobs the host sends.
 //!
 //! Priorities: `tick` (TIM2, 3) steps the DDA and drives the step port; `feeder` (2) prepares
 //! queued segments (the divisions live here, never in the tick) and pushes them into the DDA;
 //! `job` (1) plans segments into the queue, prints snapshots and finally the report.
+//! Link builds: `usart1` (USART1, 2) turns received bytes into frames, runs them through
+//! `BoardLink` and queues the answers for transmission; `link_status` (1) replaces `job` and
+//! sends the periodic Status, woken by the tick every millisecond of DDA time.
 #![no_std]
 #![no_main]
 
@@ -17,9 +21,16 @@ compile_error!("select a board: --features board-netduinoplus2 or --features boa
 #[cfg_attr(feature = "board-f405-motion", path = "../boards/f405_motion/mod.rs")]
 mod board;
 
+#[cfg(all(feature = "bench", feature = "link"))]
+compile_error!("`bench` and `link` both replace the demo job: pick one");
+
 #[cfg(feature = "bench")]
 #[path = "../firmware/bench.rs"]
 mod bench;
+
+#[cfg(feature = "link")]
+#[path = "../firmware/link.rs"]
+mod link;
 
 use core::sync::atomic::AtomicBool;
 
@@ -34,27 +45,76 @@ static FINISHED: AtomicBool = AtomicBool::new(false);
 
 #[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2, SPI3])]
 mod app {
+    // RTIC names the resource types of every task, even one a feature leaves out: `Producer`,
+    // `DemoJob`, `FrameDecoder` and `MAX_FRAME` stay imported in every build.
+    #[cfg(feature = "link")]
+    use super::link;
     use super::{board, ALL_FED, FEEDER_BLOCKED, FINISHED, JOB_DONE};
     use core::sync::atomic::Ordering::{Acquire, Relaxed, Release};
-    use heapless::spsc::{Consumer, Producer, Queue};
-    use motion::dda::Preparer;
-    use motion::demo_job::{self, DemoJob, SNAPSHOT_PERIOD_TICKS};
-    #[cfg(not(feature = "bench"))]
+    use heapless::spsc::Producer;
+    #[cfg(not(feature = "link"))]
+    use heapless::spsc::{Consumer, Queue};
+    #[cfg(not(feature = "link"))]
+    use motion::dda::{Prepared, Preparer};
+    #[cfg(not(feature = "link"))]
+    use motion::demo_job;
+    use motion::demo_job::DemoJob;
+    use motion::demo_job::SNAPSHOT_PERIOD_TICKS;
+    #[cfg(feature = "link")]
+    use motion::protocol::MAX_FRAME_WIRE;
+    use motion::protocol::{FrameDecoder, MAX_FRAME};
+    #[cfg(not(any(feature = "bench", feature = "link")))]
     use motion::report::{Report, Snapshot};
+    #[cfg(not(feature = "link"))]
+    use motion::segment::SegmentError;
     use motion::{Dda, Segment};
+    #[cfg(not(feature = "link"))]
     use rtic::mutex_prelude::*;
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
 
-    /// Planned segments waiting to be prepared.
+    /// Planned segments waiting to be prepared (demo job).
+    #[cfg(not(feature = "link"))]
     const QUEUE: usize = 16;
     type Wake = SignalWriter<'static, ()>;
     type Waiter = SignalReader<'static, ()>;
+
+    /// Where the feeder takes its segments from: the demo job's queue, or the host's.
+    #[cfg(not(feature = "link"))]
+    type Feed = DemoFeed;
+    #[cfg(feature = "link")]
+    type Feed = link::Link;
+    /// The host link's serial port; nothing in demo builds (RTIC cannot `cfg` shared resources).
+    #[cfg(not(feature = "link"))]
+    type HostPort = ();
+    #[cfg(feature = "link")]
+    type HostPort = link::HostPort;
+
+    /// The demo job's side of the queue, with the preparer.
+    #[cfg(not(feature = "link"))]
+    pub struct DemoFeed {
+        consumer: Consumer<'static, Segment>,
+        preparer: Preparer,
+    }
+
+    #[cfg(not(feature = "link"))]
+    impl DemoFeed {
+        fn next_prepared(&mut self) -> Option<Result<Prepared, (u32, SegmentError)>> {
+            let seg = self.consumer.dequeue()?;
+            Some(self.preparer.prepare(&seg).map_err(|e| (seg.id, e)))
+        }
+
+        fn is_empty(&self) -> bool {
+            self.consumer.is_empty()
+        }
+    }
 
     #[shared]
     struct Shared {
         dda: Dda,
         step_port: board::StepPort,
+        feed: Feed,
+        host_port: HostPort,
     }
 
     #[local]
@@ -63,21 +123,38 @@ mod app {
         tick_wakes_feeder: Wake,
         tick_wakes_job: Wake,
         estop: board::EStop,
-        consumer: Consumer<'static, Segment>,
-        preparer: Preparer,
         feeder_waits: Waiter,
         feeder_wakes_job: Wake,
+        #[cfg(not(feature = "link"))]
         producer: Producer<'static, Segment>,
+        #[cfg(not(feature = "link"))]
         demo: DemoJob,
+        #[cfg(not(feature = "link"))]
         job_waits: Waiter,
+        #[cfg(not(feature = "link"))]
         job_wakes_feeder: Wake,
+        #[cfg(not(feature = "link"))]
         cycles: board::CycleCounter,
+        #[cfg(feature = "link")]
+        usart_wakes_feeder: Wake,
+        #[cfg(feature = "link")]
+        status_waits: Waiter,
     }
 
-    #[init(local = [queue: Queue<Segment, QUEUE> = Queue::new()])]
-    fn init(mut cx: init::Context) -> (Shared, Local) {
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        #[cfg(not(feature = "link"))]
+        let resources = init_demo(cx);
+        #[cfg(feature = "link")]
+        let resources = init_link(cx);
+        resources
+    }
+
+    /// Demo (and bench) build: the DDA filled with the start of the demo job.
+    #[cfg(not(feature = "link"))]
+    fn init_demo(mut cx: init::Context) -> (Shared, Local) {
         let cfg = demo_job::config();
-        let board::Board { mut tick_timer, mut step_port, cycles, estop } =
+        let board::Board { mut tick_timer, mut step_port, cycles, estop, host: _ } =
             board::init(cx.device, &mut cx.core, cfg.tick_hz);
         defmt::println!(
             "motion-board {=str} board={=str} tick_hz={=u32} axes={=u8}",
@@ -101,7 +178,8 @@ mod app {
             defmt::unwrap!(dda.push(&defmt::unwrap!(preparer.prepare(&seg).ok())).ok());
         }
 
-        let (producer, consumer) = cx.local.queue.split();
+        let queue = defmt::unwrap!(cortex_m::singleton!(: Queue<Segment, QUEUE> = Queue::new()));
+        let (producer, consumer) = queue.split();
         let (feeder_wake, feeder_waits) = make_signal!(());
         let (job_wake, job_waits) = make_signal!(());
         defmt::unwrap!(feeder::spawn().ok());
@@ -112,14 +190,12 @@ mod app {
         }
 
         (
-            Shared { dda, step_port },
+            Shared { dda, step_port, feed: DemoFeed { consumer, preparer }, host_port: () },
             Local {
                 tick_timer,
                 tick_wakes_feeder: feeder_wake.clone(),
                 tick_wakes_job: job_wake.clone(),
                 estop,
-                consumer,
-                preparer,
                 feeder_waits,
                 feeder_wakes_job: job_wake,
                 producer,
@@ -127,6 +203,51 @@ mod app {
                 job_waits,
                 job_wakes_feeder: feeder_wake,
                 cycles,
+            },
+        )
+    }
+
+    /// Link build: an idle machine with the demo configuration, waiting for the host.
+    #[cfg(feature = "link")]
+    fn init_link(mut cx: init::Context) -> (Shared, Local) {
+        let cfg = link::initial_config();
+        let tick_hz = cfg.machine.tick_hz;
+        let board::Board { mut tick_timer, mut step_port, cycles: _, estop, host } =
+            board::init(cx.device, &mut cx.core, tick_hz);
+        defmt::println!(
+            "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud",
+            env!("CARGO_PKG_VERSION"),
+            board::NAME,
+            tick_hz,
+            board::HOST_BAUD
+        );
+        let mut name = heapless::String::<32>::new();
+        // Fits: both board names are short (the link cuts it to 24 bytes anyway).
+        let _ = core::fmt::write(
+            &mut name,
+            format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
+        );
+        let link = defmt::unwrap!(link::Link::new(&name, cfg, tick_timer.rate_control()));
+        let dda = defmt::unwrap!(Dda::new(&cfg.machine).ok());
+
+        let (feeder_wake, feeder_waits) = make_signal!(());
+        let (status_wake, status_waits) = make_signal!(());
+        defmt::unwrap!(feeder::spawn().ok());
+        defmt::unwrap!(link_status::spawn().ok());
+        step_port.enable();
+        tick_timer.start();
+
+        (
+            Shared { dda, step_port, feed: link, host_port: link::HostPort::new(host) },
+            Local {
+                tick_timer,
+                tick_wakes_feeder: feeder_wake.clone(),
+                tick_wakes_job: status_wake.clone(),
+                estop,
+                feeder_waits,
+                feeder_wakes_job: status_wake,
+                usart_wakes_feeder: feeder_wake,
+                status_waits,
             },
         )
     }
@@ -139,8 +260,12 @@ mod app {
     }
 
     /// One DDA tick at `tick_hz`: step, drive the pins, wake whoever has work.
+    ///
+    /// `wake`: the demo job wakes at tick `wake` (every snapshot period); the link's status task
+    /// when the countdown `wake` runs out (every `link::WAKE_TICKS`, i.e. 1 ms: a countdown
+    /// because SetConfig restarts the DDA clock).
     #[task(binds = TIM2, priority = 3, shared = [dda, step_port],
-        local = [tick_timer, tick_wakes_feeder, tick_wakes_job, next_snapshot: u64 = SNAPSHOT_PERIOD_TICKS])]
+        local = [tick_timer, tick_wakes_feeder, tick_wakes_job, wake: u64 = SNAPSHOT_PERIOD_TICKS])]
     fn tick(cx: tick::Context) {
         let l = cx.local;
         l.tick_timer.clear_update();
@@ -157,9 +282,17 @@ mod app {
                 FEEDER_BLOCKED.store(false, Relaxed);
                 l.tick_wakes_feeder.write(());
             }
-            if now >= *l.next_snapshot {
-                *l.next_snapshot = now + SNAPSHOT_PERIOD_TICKS;
+            #[cfg(not(feature = "link"))]
+            if now >= *l.wake {
+                *l.wake = now + SNAPSHOT_PERIOD_TICKS;
                 l.tick_wakes_job.write(());
+            }
+            #[cfg(feature = "link")]
+            if *l.wake <= 1 {
+                *l.wake = super::link::WAKE_TICKS.load(Relaxed) as u64;
+                l.tick_wakes_job.write(());
+            } else {
+                *l.wake -= 1;
             }
             if ALL_FED.load(Acquire) && dda.is_idle() {
                 l.tick_timer.stop();
@@ -182,7 +315,7 @@ mod app {
     }
 
     /// Prepares queued segments and pushes them into the DDA while it has room.
-    #[task(priority = 2, shared = [dda], local = [consumer, preparer, feeder_waits, feeder_wakes_job])]
+    #[task(priority = 2, shared = [dda, feed], local = [feeder_waits, feeder_wakes_job])]
     async fn feeder(mut cx: feeder::Context) {
         let l = cx.local;
         loop {
@@ -197,22 +330,21 @@ mod app {
                 if full {
                     break;
                 }
-                let Some(seg) = l.consumer.dequeue() else {
+                let Some(next) = cx.shared.feed.lock(|f| f.next_prepared()) else {
                     break;
                 };
                 took = true;
-                let prepared = match l.preparer.prepare(&seg) {
+                // Segments were checked against this config when queued: a refusal is a bug.
+                let prepared = match next {
                     Ok(p) => p,
-                    Err(e) => defmt::panic!(
-                        "segment {=u32} rejected: {}",
-                        seg.id,
-                        defmt::Debug2Format(&e)
-                    ),
+                    Err((id, e)) => {
+                        defmt::panic!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e))
+                    }
                 };
                 // Only this task pushes, and there was room.
                 defmt::unwrap!(cx.shared.dda.lock(|dda| dda.push(&prepared)).ok());
             }
-            if JOB_DONE.load(Acquire) && l.consumer.is_empty() {
+            if JOB_DONE.load(Acquire) && cx.shared.feed.lock(|f| f.is_empty()) {
                 ALL_FED.store(true, Release);
             }
             if took {
@@ -223,6 +355,7 @@ mod app {
 
     /// Plans the demo job into the queue, prints snapshots, and the report at the end. In a
     /// `bench` build it runs the DDA micro-benchmarks instead.
+    #[cfg(not(feature = "link"))]
     #[task(priority = 1, shared = [dda, step_port],
         local = [producer, demo, job_waits, job_wakes_feeder, cycles])]
     async fn job(cx: job::Context) {
@@ -232,14 +365,14 @@ mod app {
         run_demo(cx).await;
     }
 
-    #[cfg(feature = "bench")]
+    #[cfg(all(feature = "bench", not(feature = "link")))]
     fn run_bench(mut cx: job::Context) -> ! {
         let cycles = &*cx.local.cycles;
         cx.shared.step_port.lock(|port| super::bench::run(cycles, port));
         board::exit(true)
     }
 
-    #[cfg(not(feature = "bench"))]
+    #[cfg(not(any(feature = "bench", feature = "link")))]
     async fn run_demo(mut cx: job::Context<'_>) -> ! {
         let cfg = demo_job::config();
         let l = cx.local;
@@ -277,6 +410,47 @@ mod app {
                 defmt::println!("{=str}", snap.write_line(cfg.axis_count).as_str());
             }
             l.job_waits.wait().await;
+        }
+    }
+
+    /// Host link: received bytes into frames, frames through `BoardLink`, answers into the
+    /// transmit queue (dropped if it cannot hold them whole: the host retransmits); transmit
+    /// bytes out while the USART takes them.
+    #[cfg(feature = "link")]
+    #[task(binds = USART1, priority = 2, shared = [dda, feed, host_port],
+        local = [usart_wakes_feeder, decoder: FrameDecoder<MAX_FRAME> = FrameDecoder::new()])]
+    fn usart1(cx: usart1::Context) {
+        let l = cx.local;
+        let usart1::SharedResources { mut dda, feed, host_port, .. } = cx.shared;
+        (feed, host_port).lock(|link, port| {
+            while let Some(byte) = port.serial.read_byte() {
+                let Some(frame) = l.decoder.push(byte) else {
+                    continue;
+                };
+                let (response, wake_feeder) = link.on_frame(frame, &mut dda);
+                if wake_feeder {
+                    l.usart_wakes_feeder.write(());
+                }
+                port.send(&response);
+            }
+            port.pump();
+        });
+    }
+
+    /// Host link, every millisecond of DDA time: latch faults and send the periodic Status.
+    #[cfg(feature = "link")]
+    #[task(priority = 1, shared = [dda, feed, host_port], local = [status_waits])]
+    async fn link_status(cx: link_status::Context) {
+        let link_status::SharedResources { mut dda, mut feed, mut host_port, .. } = cx.shared;
+        loop {
+            cx.local.status_waits.wait().await;
+            for response in feed.lock(|link| link.poll(&mut dda)).iter().flatten() {
+                // Encoded outside the locks: the USART task keeps running meanwhile.
+                let mut buf = [0u8; MAX_FRAME_WIRE];
+                if let Some(frame) = link::encode(response, &mut buf) {
+                    host_port.lock(|port| port.queue_frame(frame));
+                }
+            }
         }
     }
 }

@@ -5,6 +5,7 @@ use stm32f4::stm32f405 as pac;
 
 pub struct TickTimer {
     tim: pac::TIM2,
+    timer_clock_hz: u32,
 }
 
 impl TickTimer {
@@ -25,7 +26,14 @@ impl TickTimer {
         tim.cr1().write(|w| w.urs().counter_only().arpe().enabled());
         tim.egr().write(|w| w.ug().set_bit());
         tim.sr().write(|w| w.uif().clear());
-        TickTimer { tim }
+        TickTimer { tim, timer_clock_hz }
+    }
+
+    /// A handle that changes the tick rate while the timer runs (the host link's SetConfig).
+    /// Take at most one.
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub fn rate_control(&self) -> TickRate {
+        TickRate { timer_clock_hz: self.timer_clock_hz }
     }
 
     pub fn start(&mut self) {
@@ -45,5 +53,35 @@ impl TickTimer {
         self.tim.cr1().modify(|_, w| w.cen().disabled());
         self.tim.dier().write(|w| w.uie().disabled());
         self.tim.sr().write(|w| w.uif().clear());
+    }
+}
+
+/// Changes TIM2's period from outside the tick task. ARR is preloaded (ARPE), so a new period
+/// takes effect at the next update: the tick in progress keeps its length.
+// Only the `link` firmware changes the tick rate.
+#[cfg_attr(not(feature = "link"), allow(dead_code))]
+pub struct TickRate {
+    timer_clock_hz: u32,
+}
+
+#[cfg_attr(not(feature = "link"), allow(dead_code))]
+impl TickRate {
+    /// True if `tick_hz` divides the timer clock exactly (see [`TickTimer::new`]).
+    pub fn supports(&self, tick_hz: u32) -> bool {
+        tick_hz != 0
+            && self.timer_clock_hz.is_multiple_of(tick_hz)
+            && self.timer_clock_hz / tick_hz >= 2
+    }
+
+    /// Sets the tick rate; false (nothing changed) if [`TickRate::supports`] says no.
+    pub fn set(&mut self, tick_hz: u32) -> bool {
+        if !self.supports(tick_hz) {
+            return false;
+        }
+        // SAFETY: a single write of the (preloaded) auto-reload register; the tick task owns the
+        // rest of TIM2 and never writes ARR after init.
+        let tim = unsafe { &*pac::TIM2::ptr() };
+        tim.arr().write(|w| w.arr().set(self.timer_clock_hz / tick_hz - 1));
+        true
     }
 }

@@ -1,5 +1,6 @@
 //! The board's other I/O, configured at init so later features find it ready: e-stop (EXTI),
-//! spindle encoder (TIM4), force sensors (ADC1) and the host link (USART1).
+//! spindle encoder (TIM4) and force sensors (ADC1). The host link (USART1) is
+//! `../common/host_serial.rs`.
 
 use super::pins::{ESTOP, FORCE_CHANNELS};
 use stm32f4::stm32f405 as pac;
@@ -53,12 +54,4 @@ pub fn init_force_adc(adc: &pac::ADC1, common: &pac::ADC_COMMON) {
         adc.smpr2().modify(|r, w| unsafe { w.bits((r.bits() & !(0b111 << s)) | (0b100 << s)) });
     }
     adc.cr2().modify(|_, w| w.adon().set_bit());
-}
-
-/// USART1, 115200 8N1, TX and RX enabled.
-pub fn init_host_link(usart: &pac::USART1, pclk2_hz: u32) {
-    let brr = ((pclk2_hz + 115_200 / 2) / 115_200) as u16;
-    // SAFETY: BRR holds mantissa and fraction of USARTDIV in 16x oversampling.
-    usart.brr().write(|w| unsafe { w.bits(brr) });
-    usart.cr1().write(|w| w.ue().set_bit().te().set_bit().re().set_bit());
 }

@@ -8,13 +8,15 @@
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`) |
 //! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2) |
 //! | ADC1 | force sensors |
-//! | USART1 | host link, 115200 8N1 |
+//! | USART1 | host link (`link` feature), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
 //! | EXTI12 | e-stop (EXTI15_10 interrupt) |
 //! | DWT.CYCCNT | cycle counter for benchmarks |
 //! | RTT | defmt log frames (probe-rs) |
 
 mod clocks;
 mod cycles;
+#[path = "../common/host_serial.rs"]
+mod host_serial;
 mod io;
 mod log;
 mod pins;
@@ -23,20 +25,29 @@ mod step_port;
 mod tick_timer;
 
 pub use cycles::CycleCounter;
+pub use host_serial::HostSerial;
 pub use io::EStop;
 pub use step_port::StepPort;
+#[cfg(feature = "link")]
+pub use tick_timer::TickRate;
 pub use tick_timer::TickTimer;
 
 use stm32f4::stm32f405 as pac;
 
 pub const NAME: &str = "f405-motion";
+/// Host link baud rate: 84 MHz / 460800 -> BRR 182 (USARTDIV 11.375), 461538 baud, +0.16 %.
+pub const HOST_BAUD: u32 = 460_800;
 
 /// Everything the app needs from the board, configured and idle (drivers disabled).
 pub struct Board {
     pub tick_timer: TickTimer,
     pub step_port: StepPort,
+    #[cfg_attr(feature = "link", allow(dead_code))]
     pub cycles: CycleCounter,
     pub estop: EStop,
+    /// USART1, configured, interrupts off (only `link` builds use it).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub host: HostSerial,
 }
 
 pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -45,12 +56,12 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
     io::init_spindle_encoder(&dp.TIM4);
     io::init_force_adc(&dp.ADC1, &dp.ADC_COMMON);
-    io::init_host_link(&dp.USART1, clocks.pclk2_hz);
     Board {
         tick_timer: TickTimer::new(dp.TIM2, clocks.apb1_timer_hz, tick_hz),
         step_port: StepPort::new(dp.GPIOC, dp.GPIOB),
         cycles: CycleCounter::new(core),
         estop: EStop::new(dp.EXTI, &dp.SYSCFG),
+        host: HostSerial::new(dp.USART1, clocks.pclk2_hz, HOST_BAUD),
     }
 }
 

@@ -1,5 +1,7 @@
 //! TIM5 free-running at the 1 GHz QEMU timer clock. Under `-icount shift=0` one instruction
 //! takes exactly 1 ns of virtual time, so the counter counts executed instructions.
+// Only the bench firmware reads the counter.
+#![cfg_attr(feature = "link", allow(dead_code))]
 
 use stm32f4::stm32f405 as pac;
 

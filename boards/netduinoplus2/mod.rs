@@ -6,29 +6,41 @@
 //! | --- | --- |
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
+//! | USART1 | host link (`link` feature), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
 mod clocks;
 mod cycles;
+#[path = "../common/host_serial.rs"]
+mod host_serial;
 mod log;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
 
 pub use cycles::CycleCounter;
+pub use host_serial::HostSerial;
 pub use step_port::StepPort;
+#[cfg(feature = "link")]
+pub use tick_timer::TickRate;
 pub use tick_timer::TickTimer;
 
 use stm32f4::stm32f405 as pac;
 
 pub const NAME: &str = "netduinoplus2";
+/// Host link baud rate (QEMU moves bytes at its own pace whatever BRR says).
+pub const HOST_BAUD: u32 = 115_200;
 
 /// Everything the app needs from the board, configured and idle.
 pub struct Board {
     pub tick_timer: TickTimer,
     pub step_port: StepPort,
+    #[cfg_attr(feature = "link", allow(dead_code))]
     pub cycles: CycleCounter,
     pub estop: EStop,
+    /// USART1, configured, interrupts off (only `link` builds use it).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub host: HostSerial,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -38,6 +50,7 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         step_port: StepPort::new(),
         cycles: CycleCounter::new(dp.TIM5),
         estop: EStop,
+        host: HostSerial::new(dp.USART1, clocks.pclk2_hz, HOST_BAUD),
     }
 }
 

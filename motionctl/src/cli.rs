@@ -3,12 +3,20 @@
 use crate::convert::{self, Program};
 use crate::gcode;
 use crate::job::{self, Job};
+use crate::link::{describe_rejection, Session};
+use crate::noise::Noisy;
 use crate::plan::{self, Summary};
-use crate::transport::{self, LinkTarget};
+use crate::qemu::{self, Qemu};
+use crate::runner::{self, RunOptions};
+use crate::transport::{self, LinkTarget, Transport};
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use motion::protocol::{HostConfig, Reply, RequestBody, MAX_OVERRIDE_BITS};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 #[derive(Parser, Debug)]
 #[command(name = "motionctl", version, about = "Plan and run motion-board jobs")]
@@ -25,9 +33,15 @@ pub enum Cmd {
         job: JobArgs,
         #[command(flatten)]
         link: LinkArgs,
-        /// Write the board's position reports to this CSV file.
+        /// Write every board status report to this CSV file.
         #[arg(long, value_name = "FILE")]
         log_csv: Option<PathBuf>,
+        /// Never wait for the operator: a program pause (M0) continues at once.
+        #[arg(long, short = 'y')]
+        yes: bool,
+        /// Board status report period, ms (0 = off; else >= 10).
+        #[arg(long, value_name = "MS", default_value_t = runner::DEFAULT_STATUS_PERIOD_MS)]
+        status_ms: u16,
     },
     /// Parse and plan a job offline and run it through the host model of the firmware.
     Plan {
@@ -78,14 +92,40 @@ pub struct JobArgs {
 
 #[derive(Args, Debug)]
 pub struct LinkArgs {
-    /// Serial port of the board (or, with --qemu, the UART socket path).
-    #[arg(long, value_name = "PATH")]
+    /// Serial port of the board.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["qemu", "tcp"])]
     pub port: Option<String>,
-    #[arg(long, value_name = "N", default_value_t = 115_200)]
+    /// Serial speed (8N1).
+    #[arg(long, value_name = "N", default_value_t = transport::DEFAULT_BAUD)]
     pub baud: u32,
-    /// Talk to the QEMU board instead of a serial port.
-    #[arg(long)]
+    /// Start the link firmware in QEMU (netduinoplus2) and talk to it (`run` only).
+    #[arg(long, conflicts_with = "tcp")]
     pub qemu: bool,
+    /// With --qemu: the firmware ELF [default: target/fw-netduinoplus2-link/firmware, built
+    /// with `cargo xtask build --board netduinoplus2 --link` when missing].
+    #[arg(long, value_name = "PATH", requires = "qemu")]
+    pub firmware: Option<PathBuf>,
+    /// A board UART bridged to TCP, e.g. a QEMU started by hand.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tcp: Option<String>,
+    /// The in-process simulated board (for trying motionctl without hardware).
+    #[arg(long, hide = true, conflicts_with_all = ["qemu", "tcp", "port"])]
+    pub sim: bool,
+    /// Test only: corrupt or drop this fraction of bytes both ways (0..=1).
+    #[arg(long, hide = true, value_name = "RATE", value_parser = parse_rate, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Test only: seed of the --noise generator.
+    #[arg(long, hide = true, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+    /// Retransmission timeout, ms [default: 100 for serial, 50 otherwise].
+    #[arg(long, hide = true, value_name = "MS")]
+    pub rto_ms: Option<u64>,
+    /// Most unanswered requests.
+    #[arg(long, hide = true, value_name = "N", default_value_t = 8)]
+    pub window: usize,
+    /// Most segments per QueueSegments request (1..=4).
+    #[arg(long, hide = true, value_name = "N", default_value_t = 4)]
+    pub batch: usize,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -102,15 +142,67 @@ fn parse_override(s: &str) -> Result<f64, String> {
     Ok(f)
 }
 
+fn parse_rate(s: &str) -> Result<f64, String> {
+    let f: f64 = s.parse().map_err(|_| format!("expected a number, found {s:?}"))?;
+    if !(0.0..=1.0).contains(&f) {
+        return Err(format!("must be within 0..=1, got {f}"));
+    }
+    Ok(f)
+}
+
 impl LinkArgs {
     pub fn target(&self) -> Result<LinkTarget> {
         if self.qemu {
-            return Ok(LinkTarget::Qemu { socket: self.port.clone() });
+            return Ok(LinkTarget::Qemu { firmware: self.firmware.clone() });
+        }
+        if self.sim {
+            return Ok(LinkTarget::Sim);
+        }
+        if let Some(addr) = &self.tcp {
+            return Ok(LinkTarget::Tcp { addr: addr.clone() });
         }
         match &self.port {
             Some(port) => Ok(LinkTarget::Serial { port: port.clone(), baud: self.baud }),
-            None => bail!("no link given: pass --port PATH or --qemu"),
+            None => bail!("no link given: pass --port PATH, --tcp HOST:PORT or --qemu"),
         }
+    }
+
+    pub fn host_config(&self, target: &LinkTarget) -> HostConfig {
+        let rto = match target {
+            LinkTarget::Serial { .. } => 100,
+            _ => 50,
+        };
+        HostConfig { rto_ms: self.rto_ms.unwrap_or(rto).max(1), window: self.window.clamp(1, 32) }
+    }
+
+    /// Opens the link (starting QEMU for --qemu; the guard kills it when dropped), with the
+    /// noise proxy in between when asked for.
+    pub fn open(&self) -> Result<(Box<dyn Transport>, Option<Qemu>)> {
+        let target = self.target()?;
+        let (t, guard): (Box<dyn Transport>, Option<Qemu>) = match &target {
+            LinkTarget::Qemu { firmware } => {
+                let say = |m: &str| eprintln!("motionctl: {m}");
+                let elf = qemu::find_firmware(firmware.as_deref(), &say)?;
+                let (q, tcp) = Qemu::start(&elf)?;
+                eprintln!(
+                    "motionctl: QEMU netduinoplus2 running {} (UART on 127.0.0.1:{}, log {})",
+                    elf.display(),
+                    q.port,
+                    q.log.display()
+                );
+                (Box::new(tcp), Some(q))
+            }
+            other => (transport::open(other)?, None),
+        };
+        if self.noise > 0.0 {
+            eprintln!(
+                "motionctl: noise proxy: {:.2} % of bytes corrupted or dropped, seed {}",
+                self.noise * 100.0,
+                self.seed
+            );
+            return Ok((Box::new(Noisy::new(t, self.noise, self.seed)), guard));
+        }
+        Ok((t, guard))
     }
 }
 
@@ -267,24 +359,135 @@ pub fn execute(cli: Cli) -> Result<()> {
             print!("{}", summary_text(&job.job, &parsed, &program, &summary));
             Ok(())
         }
-        Cmd::Run { job, link, log_csv } => {
-            // Check the whole job before touching the link.
-            let (_, program) = load_program(&job)?;
-            plan::plan(&program).with_context(|| job.job.display().to_string())?;
-            let _ = log_csv;
-            let _link = transport::connect(&link.target()?)?;
-            bail!("streaming a job is not implemented yet")
+        Cmd::Run { job, link, log_csv, yes, status_ms } => {
+            run_job(&job, &link, log_csv.as_deref(), yes, status_ms)
         }
-        Cmd::Status { link } | Cmd::Hold { link } | Cmd::Resume { link } | Cmd::Abort { link } => {
-            let _link = transport::connect(&link.target()?)?;
-            bail!("link commands are not implemented yet")
-        }
+        Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),
+        Cmd::Hold { link } => one_request(&link, RequestBody::Hold, "hold"),
+        Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),
+        Cmd::Abort { link } => one_request(&link, RequestBody::Abort, "abort"),
         Cmd::Override { factor, link } => {
-            let _ = factor;
-            let _link = transport::connect(&link.target()?)?;
-            bail!("link commands are not implemented yet")
+            let rate_bits = ((factor * (1u64 << 30) as f64).round() as u32).min(MAX_OVERRIDE_BITS);
+            one_request(&link, RequestBody::SetOverride { rate_bits }, "override")
         }
     }
+}
+
+/// `run`: plan (and check on the host model), then stream and verify.
+fn run_job(
+    job: &JobArgs,
+    link: &LinkArgs,
+    log_csv: Option<&Path>,
+    yes: bool,
+    status_ms: u16,
+) -> Result<()> {
+    if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
+        bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
+    }
+    // Check the whole job, and learn where it must end, before touching the link.
+    let (parsed, program, summary) = plan_job(job)?;
+    let outputs: Vec<plan::Output> = plan::Stream::new(&program)
+        .collect::<Result<_, _>>()
+        .with_context(|| job.job.display().to_string())?;
+    let target = link.target()?;
+    let host = link.host_config(&target);
+    let axes = runner::axes_of(&parsed);
+    let csv = match log_csv {
+        Some(p) => Some(crate::csv_log::CsvLog::create(p, axes.clone())?),
+        None => None,
+    };
+    let interactive = !yes && std::io::stdin().is_terminal();
+    let interrupt = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupt.clone();
+        // Fails only if a handler is already set (tests calling this twice): keep the first.
+        let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::SeqCst));
+    }
+    let (mut t, qemu_guard) = link.open()?;
+    let opts = RunOptions {
+        interactive,
+        status_period_ms: status_ms,
+        host,
+        max_batch: link.batch,
+        csv,
+        progress: true,
+        interrupt: Some(interrupt),
+    };
+    let mut expected = [0i64; motion::MAX_AXES];
+    expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
+    println!(
+        "job        {} ({} segments) on {target}",
+        job.job.display(),
+        summary.plan.segments.len()
+    );
+    let result = runner::run(&mut t, &parsed, &program, &outputs, &expected, opts);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let report = match result {
+        Ok(r) => r,
+        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    print!("{}", report.text(&axes));
+    println!("{}", report.machine_line());
+    if !report.ok() {
+        bail!("verification failed: {}", report.problems.join("; "));
+    }
+    println!(
+        "result     OK: every segment executed once, in order; positions match the host model"
+    );
+    Ok(())
+}
+
+/// `status`, `hold`, `resume`, `abort`, `override`: one request, its answer printed.
+fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
+    if link.qemu {
+        bail!(
+            "--qemu starts a fresh board for `run` only; for a QEMU already running use \
+             --tcp HOST:PORT"
+        );
+    }
+    let target = link.target()?;
+    let (mut t, _guard) = link.open()?;
+    let mut s = Session::new(&mut t, link.host_config(&target));
+    let info = s.connect()?;
+    let scale = match s.request(RequestBody::GetConfig)? {
+        Ok(Reply::Config(c)) => Some(c),
+        _ => None,
+    };
+    match s.request(body)? {
+        Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
+        Ok(Reply::Status(st)) => {
+            println!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
+            println!("state      {:?}, tick {}", st.state, st.tick);
+            for i in 0..info.axes as usize {
+                let spm = scale
+                    .map(|c| c.scale[i].steps_per_unit_milli as f64 / 1000.0)
+                    .filter(|&v| v > 0.0);
+                match spm {
+                    Some(spm) => println!(
+                        "axis {i}     {} steps ({:.4} mm)",
+                        st.positions[i],
+                        st.positions[i] as f64 / spm
+                    ),
+                    None => println!("axis {i}     {} steps", st.positions[i]),
+                }
+            }
+            let ovr = motion::Rate::from_bits(st.override_bits).to_num::<f64>();
+            println!("override   {ovr:.3}");
+            println!("queue      {} queued, {} free", st.queue_depth, st.credits);
+            println!("segments   {} done, last id {:?}", st.segments_done, st.last_done_id);
+            if st.faults != 0 {
+                let names: Vec<&str> = motion::protocol::FaultCode::ALL
+                    .iter()
+                    .filter(|f| st.faults & f.bit() != 0)
+                    .map(|f| f.name())
+                    .collect();
+                println!("faults     {}", names.join(", "));
+            }
+        }
+        Ok(_) => println!("{what}: ok"),
+    }
+    Ok(())
 }
 
 /// The binary's entry: one line on stderr and a non-zero exit code for any error.

@@ -2,14 +2,21 @@
 //! through the host model of the firmware, and the command-line tool's pieces.
 //!
 //! Pipeline: [`job::parse_toml`] or [`gcode::parse`] -> [`job::Job`] -> [`convert::convert`] ->
-//! [`convert::Program`] -> [`plan::Stream`] (segments and events) -> a link ([`transport`]) or the
-//! host model ([`plan::simulate`]).
+//! [`convert::Program`] -> [`plan::Stream`] (segments and events) -> a link ([`transport`],
+//! [`link`], [`runner`]) or the host model ([`plan::simulate`]).
 
 pub mod cli;
 pub mod convert;
+pub mod csv_log;
 pub mod fourier;
 pub mod gcode;
 pub mod job;
+pub mod link;
+pub mod noise;
 pub mod plan;
+pub mod progress;
+pub mod qemu;
+pub mod runner;
+pub mod sim_board;
 pub mod transport;
 pub mod wire;

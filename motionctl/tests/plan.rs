@@ -149,14 +149,15 @@ fn binary_plans_examples_and_reports_errors_in_one_line() {
         (&["plan", "JOB_FORMAT.md"][..], 1, "unknown job format"),
         (&["plan", "examples/part.gcode", "--format", "toml"][..], 1, "examples/part.gcode: "),
         (&["override", "2.5", "--qemu"][..], 2, "must be within 0..=2"),
-        (&["hold", "--qemu"][..], 1, "link transport not available yet"),
-        (&["status", "--port", "/dev/ttyACM0"][..], 1, "link transport not available yet"),
-        (&["abort"][..], 1, "no link given: pass --port PATH or --qemu"),
+        (&["hold", "--qemu"][..], 1, "--qemu starts a fresh board for `run` only"),
+        (&["status", "--port", "/dev/ttyNOPE7"][..], 1, "port /dev/ttyNOPE7 not found: "),
+        (&["abort"][..], 1, "no link given: pass --port PATH, --tcp HOST:PORT or --qemu"),
         (
-            &["run", "examples/square.toml", "--port", "/dev/ttyACM0", "--baud", "230400"][..],
+            &["run", "examples/square.toml", "--port", "/dev/ttyNOPE7", "--baud", "230400"][..],
             1,
-            "at 230400 baud",
+            "port /dev/ttyNOPE7 not found: ",
         ),
+        (&["run", "examples/square.toml", "--tcp", "127.0.0.1:1"][..], 1, "cannot connect to"),
         (&["frobnicate"][..], 2, "unrecognized subcommand"),
     ] {
         let (code, out, err) = motionctl(args);

@@ -2,17 +2,18 @@
 //!
 //! | command | what it does |
 //! | --- | --- |
-//! | `build [--board B] [--bench]` | release firmware for a board (`netduinoplus2` default, `f405-motion`) |
+//! | `build [--board B] [--bench] [--link]` | release firmware for a board (`netduinoplus2` default, `f405-motion`); `--link` serves the host link instead of the demo job |
 //! | `demo` | runs the demo firmware in QEMU, decodes its log, summarises the report, compares with the host model |
 //! | `test` | everything CI checks, in order, failing fast |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
-//! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` |
+//! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
 //! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
 //! `qemu-system-arm` are installed.
 
 mod bench;
 mod divcheck;
+mod e2e;
 mod firmware;
 mod golden;
 mod setup;
@@ -25,11 +26,14 @@ use std::process::{Command, ExitCode};
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  build [--board netduinoplus2|f405-motion] [--bench]   build release firmware
+  build [--board netduinoplus2|f405-motion] [--bench] [--link]
+                                                        build release firmware (--link: host link
+                                                        instead of the demo job; ELF in target/fw-<board>-link/)
   demo                                                  run the demo job in QEMU and compare with the host model
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
   bench                                                 run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
-  flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs";
+  flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
+                                                        (f405-motion: the host-link firmware)";
 
 fn main() -> ExitCode {
     match run() {
@@ -55,10 +59,9 @@ fn run() -> Result<()> {
     let root = root();
     match cmd.as_str() {
         "build" => {
-            let (board, bench) = parse_build_args(rest)?;
+            let (board, extra) = parse_build_args(rest)?;
             setup::ensure(&root)?;
-            let extra: &[&str] = if bench { &["bench"] } else { &[] };
-            let elf = firmware::build(&root, board, extra)?;
+            let elf = firmware::build(&root, board, &extra)?;
             println!("built {}", elf.display());
             Ok(())
         }
@@ -111,9 +114,11 @@ fn no_args(cmd: &str, rest: &[String]) -> Result<()> {
     Ok(())
 }
 
-fn parse_build_args(rest: &[String]) -> Result<(Board, bool)> {
+/// The board and the extra firmware features (`bench`, `link`) of `cargo xtask build`.
+fn parse_build_args(rest: &[String]) -> Result<(Board, Vec<&'static str>)> {
     let mut board = Board::Netduinoplus2;
     let mut bench = false;
+    let mut link = false;
     let mut it = rest.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -121,13 +126,24 @@ fn parse_build_args(rest: &[String]) -> Result<(Board, bool)> {
                 board = Board::parse(it.next().context("--board needs a value")?)?;
             }
             "--bench" => bench = true,
+            "--link" => link = true,
             other => match other.strip_prefix("--board=") {
                 Some(b) => board = Board::parse(b)?,
                 None => bail!("unknown build option `{other}`"),
             },
         }
     }
-    Ok((board, bench))
+    if bench && link {
+        bail!("--bench and --link both replace the demo job: pick one");
+    }
+    let mut extra = Vec::new();
+    if bench {
+        extra.push("bench");
+    }
+    if link {
+        extra.push("link");
+    }
+    Ok((board, extra))
 }
 
 /// `cargo` as the one running xtask, with the workspace as working directory.
@@ -196,6 +212,8 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ("clippy (firmware, netduinoplus2 bench)", clippy_thumb("board-netduinoplus2,bench")),
         ("clippy (firmware, netduinoplus2 tamper)", clippy_thumb("board-netduinoplus2,tamper")),
         ("clippy (firmware, f405-motion)", clippy_thumb("board-f405-motion")),
+        ("clippy (firmware, netduinoplus2 link)", clippy_thumb("board-netduinoplus2,link")),
+        ("clippy (firmware, f405-motion link)", clippy_thumb("board-f405-motion,link")),
         (
             "host tests",
             // Optimised with overflow checks and debug assertions kept (see Cargo.toml).
@@ -208,16 +226,28 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ),
         ("firmware build (netduinoplus2)", build(Board::Netduinoplus2, &[])),
         ("firmware build (f405-motion)", build(Board::F405Motion, &[])),
+        ("firmware build (f405-motion link)", build(Board::F405Motion, &["link"])),
         ("firmware build (netduinoplus2 bench)", build(Board::Netduinoplus2, &["bench"])),
         (
-            "no software divide reachable from TIM2",
+            "no software divide reachable from TIM2 (demo, link, real board)",
             Box::new(|| {
-                let elf = firmware::build(root, Board::Netduinoplus2, &[])?;
-                divcheck::check_elf(&elf)
+                for (board, features) in [
+                    (Board::Netduinoplus2, &[][..]),
+                    (Board::Netduinoplus2, &["link"][..]),
+                    (Board::F405Motion, &["link"][..]),
+                ] {
+                    let elf = firmware::build(root, board, features)?;
+                    divcheck::check_elf(&elf)?;
+                }
+                Ok(())
             }),
         ),
         ("QEMU golden scenario (firmware == host model)", Box::new(|| golden::golden(root))),
         ("tamper build is caught by the golden comparison", Box::new(|| golden::tamper(root))),
+        (
+            "end to end: motionctl streams 2000 segments to QEMU through 1 % noise",
+            Box::new(|| e2e::test(root)),
+        ),
     ];
     let total = steps.len();
     let mut passed = 0;
@@ -251,7 +281,12 @@ fn flash(root: &Path, board: Board) -> Result<()> {
             "probe-rs is not on PATH; install it with:\n    cargo install probe-rs-tools --locked"
         );
     }
-    let elf = firmware::build(root, board, &[])?;
+    // The real board runs what a user wants from it: the host link (the demo job needs no board).
+    let extra: &[&str] = match board {
+        Board::F405Motion => &["link"],
+        Board::Netduinoplus2 => &[],
+    };
+    let elf = firmware::build(root, board, extra)?;
     let status = Command::new("probe-rs")
         .args(["run", "--chip", "STM32F405RGTx"])
         .arg(&elf)

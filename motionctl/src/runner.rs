@@ -1,0 +1,709 @@
+//! `motionctl run`: streams a planned job to the board and checks what it did.
+//!
+//! Hello (protocol version) -> the board must be idle with an empty queue -> `SetConfig` from the
+//! job's `[machine]` (skipped when the board already has it) -> `SetStatusPeriod` -> the
+//! segments of [`crate::plan::Stream`] in `QueueSegments` batches as credits allow, `Start` once
+//! the queue is full (or everything before the next event is queued), spindle events printed,
+//! program pauses (M0) held until the operator presses Enter -> wait until every segment is done
+//! and the board is idle -> verify: segments done == sent, the board's order hash == the hash of
+//! the ids sent (every segment exactly once, in order), final positions == the host model's.
+
+use crate::convert::Program;
+use crate::csv_log::CsvLog;
+use crate::job::Job;
+use crate::link::{describe_rejection, LinkFailure, Session};
+use crate::noise::NoiseStats;
+use crate::plan::Output;
+use crate::progress::Progress;
+use crate::transport::Transport;
+use motion::dda::Command;
+use motion::protocol::{
+    AxisScale, ErrorCode, FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
+    Status, WireConfig, WireState, MAX_SEGMENTS_PER_FRAME,
+};
+use motion::segment::{order_hash, Segment};
+use motion::MAX_AXES;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::{Duration, Instant};
+
+/// Default status period: 20 Hz.
+pub const DEFAULT_STATUS_PERIOD_MS: u16 = 50;
+
+pub struct RunOptions {
+    /// Wait for Enter at a program pause; otherwise continue at once (and say so).
+    pub interactive: bool,
+    pub status_period_ms: u16,
+    pub host: HostConfig,
+    /// Most segments per `QueueSegments` (1..=4); fewer while the link is noisy.
+    pub max_batch: usize,
+    pub csv: Option<CsvLog>,
+    pub progress: bool,
+    /// Set by Ctrl-C: abort the board and stop.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            interactive: false,
+            status_period_ms: DEFAULT_STATUS_PERIOD_MS,
+            host: HostConfig { rto_ms: 100, window: 8 },
+            max_batch: MAX_SEGMENTS_PER_FRAME,
+            csv: None,
+            progress: false,
+            interrupt: None,
+        }
+    }
+}
+
+/// What a run did; `problems` is empty when every check passed.
+#[derive(Clone, Debug, Default)]
+pub struct RunReport {
+    pub segments: u32,
+    pub acked: u32,
+    pub done: u32,
+    pub done_hash: u32,
+    pub expected_hash: u32,
+    pub positions: Vec<i64>,
+    pub expected_positions: Vec<i64>,
+    pub seconds: f64,
+    /// From the first batch sent to the last segment done.
+    pub stream_seconds: f64,
+    pub acked_per_s: f64,
+    pub frames_out: u64,
+    pub retransmissions: u64,
+    pub link_naks: u64,
+    pub bad_frames_in: u64,
+    pub reconnects: u64,
+    pub statuses: u64,
+    pub status_hz_board: f64,
+    pub status_hz_wall: f64,
+    pub capacity: u16,
+    /// Segments queued and not finished (the board's queue plus the DDA's own ready queue).
+    pub max_queue_depth: u16,
+    /// Credits seen in status reports: never above `capacity` (else the queue overflowed).
+    pub min_credits: u16,
+    pub max_credits: u16,
+    pub queue_full_naks: u64,
+    pub noise: Option<(NoiseStats, NoiseStats)>,
+    pub problems: Vec<String>,
+}
+
+impl RunReport {
+    pub fn ok(&self) -> bool {
+        self.problems.is_empty()
+    }
+
+    /// One `key=value` line for scripts (the xtask end-to-end test and bench parse it).
+    pub fn machine_line(&self) -> String {
+        format!(
+            "motionctl-summary ok={} segments={} acked={} done={} hash_ok={} positions_ok={} \
+             seconds={:.3} stream_seconds={:.3} acked_per_s={:.1} frames_out={} \
+             retransmissions={} link_naks={} bad_frames_in={} reconnects={} statuses={} \
+             status_hz_board={:.2} status_hz_wall={:.2} capacity={} max_queue_depth={} \
+             min_credits={} max_credits={} queue_full_naks={}",
+            self.ok() as u8,
+            self.segments,
+            self.acked,
+            self.done,
+            (self.done_hash == self.expected_hash) as u8,
+            (self.positions == self.expected_positions) as u8,
+            self.seconds,
+            self.stream_seconds,
+            self.acked_per_s,
+            self.frames_out,
+            self.retransmissions,
+            self.link_naks,
+            self.bad_frames_in,
+            self.reconnects,
+            self.statuses,
+            self.status_hz_board,
+            self.status_hz_wall,
+            self.capacity,
+            self.max_queue_depth,
+            self.min_credits,
+            self.max_credits,
+            self.queue_full_naks,
+        )
+    }
+
+    /// The human summary.
+    pub fn text(&self, axes: &[(String, f64)]) -> String {
+        let mut t = String::new();
+        let hash = if self.done_hash == self.expected_hash { "==" } else { "!=" };
+        let _ = writeln!(
+            t,
+            "segments   {} sent, {} acknowledged, {} executed; order hash {:#010x} {hash} \
+             expected {:#010x}",
+            self.segments, self.acked, self.done, self.done_hash, self.expected_hash
+        );
+        let mut pos = String::new();
+        for (i, (name, spm)) in axes.iter().enumerate() {
+            let got = self.positions.get(i).copied().unwrap_or(0);
+            let want = self.expected_positions.get(i).copied().unwrap_or(0);
+            let eq = if got == want { "==" } else { "!=" };
+            let _ = write!(pos, "{name} {:.4} mm ({got} steps {eq} {want})  ", got as f64 / spm);
+        }
+        let _ = writeln!(t, "positions  {} (host model)", pos.trim_end());
+        let _ = writeln!(
+            t,
+            "time       {:.2} s total, {:.2} s streaming, {:.1} segments/s acknowledged",
+            self.seconds, self.stream_seconds, self.acked_per_s
+        );
+        let _ = writeln!(
+            t,
+            "link       {} frames out, {} retransmitted, {} NAKs for garbled/missing requests, \
+             {} garbled frames in, {} reconnects",
+            self.frames_out,
+            self.retransmissions,
+            self.link_naks,
+            self.bad_frames_in,
+            self.reconnects
+        );
+        let _ = writeln!(
+            t,
+            "status     {} reports while streaming: {:.1} Hz board time, {:.1} Hz wall time",
+            self.statuses, self.status_hz_board, self.status_hz_wall
+        );
+        let _ = writeln!(
+            t,
+            "queue      capacity {} (credits seen {}..={}), deepest {} incl. the DDA's ready \
+             queue, {} QueueFull NAKs",
+            self.capacity,
+            self.min_credits,
+            self.max_credits,
+            self.max_queue_depth,
+            self.queue_full_naks
+        );
+        if let Some((to, from)) = self.noise {
+            let _ = writeln!(
+                t,
+                "noise      to board {} bytes ({} corrupted, {} dropped); from board {} bytes \
+                 ({} corrupted, {} dropped)",
+                to.bytes, to.corrupted, to.dropped, from.bytes, from.corrupted, from.dropped
+            );
+        }
+        t
+    }
+}
+
+/// Why a run stopped early.
+#[derive(Debug)]
+pub struct RunError {
+    pub message: String,
+    /// What was learnt before it stopped (for the summary).
+    pub report: Option<Box<RunReport>>,
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for RunError {}
+
+fn err(message: impl Into<String>) -> RunError {
+    RunError { message: message.into(), report: None }
+}
+
+/// The job's machine as the board's `WireConfig`: the step-space config plus per-axis scale and
+/// soft limits (rounded to steps the same way move targets are).
+pub fn wire_config(job: &Job, program: &Program) -> WireConfig {
+    let mut scale = [AxisScale::UNUSED; MAX_AXES];
+    for (s, a) in scale.iter_mut().zip(&job.machine.axes) {
+        *s = AxisScale {
+            steps_per_unit_milli: (a.steps_per_mm * 1000.0).round() as u32,
+            soft_min: (a.min_mm * a.steps_per_mm).round() as i64,
+            soft_max: (a.max_mm * a.steps_per_mm).round() as i64,
+        };
+    }
+    WireConfig { machine: program.config, scale }
+}
+
+/// (name, steps per mm) of the job's axes.
+pub fn axes_of(job: &Job) -> Vec<(String, f64)> {
+    job.machine.axes.iter().map(|a| (a.name.clone(), a.steps_per_mm)).collect()
+}
+
+fn fault_names(bits: u32) -> String {
+    let names: Vec<&str> =
+        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
+    names.join(", ")
+}
+
+/// `a` at or after `b` in seq order.
+fn seq_at_or_after(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) >= 0
+}
+
+enum Pending {
+    Batch {
+        n: u32,
+    },
+    Start,
+    Feed(&'static str),
+    /// GetStatus while starved of credits.
+    Poll,
+}
+
+/// Shortest interval between credit polls.
+const POLL_EVERY: Duration = Duration::from_millis(10);
+
+fn status_of(reply: Reply) -> Option<Status> {
+    match reply {
+        Reply::Status(s) => Some(s),
+        _ => None,
+    }
+}
+
+fn link_err(e: LinkFailure) -> RunError {
+    err(e.to_string())
+}
+
+/// Connects, configures and streams `outputs`; `expected_steps` = the host model's final
+/// positions (steps from the job's start).
+pub fn run(
+    transport: &mut dyn Transport,
+    job: &Job,
+    program: &Program,
+    outputs: &[Output],
+    expected_steps: &[i64; MAX_AXES],
+    mut opts: RunOptions,
+) -> Result<RunReport, RunError> {
+    let t0 = Instant::now();
+    let axes = axes_of(job);
+    let n_axes = axes.len();
+    let total: u32 = outputs.iter().filter(|o| matches!(o, Output::Segment(_))).count() as u32;
+    let mut progress = Progress::new(total as u64, axes.clone(), opts.progress);
+    let mut s = Session::new(transport, opts.host);
+    s.interrupt = opts.interrupt.clone();
+    let say = |p: &Progress, m: &str| p.println(&format!("motionctl: {m}"));
+
+    // --- Hello, state check, config, status stream.
+    let info = s.connect().map_err(link_err)?;
+    say(
+        &progress,
+        &format!(
+            "connected to {}: firmware {:?}, protocol v{}, queue {} segments, window {}",
+            s.describe(),
+            info.firmware.as_str(),
+            info.version,
+            info.queue_capacity,
+            info.max_window
+        ),
+    );
+    let query = |s: &mut Session, body: RequestBody, what: &str| -> Result<Reply, RunError> {
+        match s.request(body).map_err(link_err)? {
+            Ok(r) => Ok(r),
+            Err(r) => Err(err(format!("{what} refused: {}", describe_rejection(&r)))),
+        }
+    };
+    let st = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
+        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
+    if st.faults != 0 || st.state == WireState::Faulted {
+        return Err(err(format!(
+            "the board has faults latched ({}): clear them (motionctl abort) first",
+            fault_names(st.faults)
+        )));
+    }
+    if st.state != WireState::Idle || st.queue_depth != 0 {
+        return Err(err(format!(
+            "the board is busy (state {:?}, {} segments queued): run `motionctl abort` first",
+            st.state, st.queue_depth
+        )));
+    }
+    let want = wire_config(job, program);
+    let have = query(&mut s, RequestBody::GetConfig, "GetConfig")?;
+    if have == Reply::Config(want) {
+        say(&progress, "the board already has the job's machine config");
+    } else {
+        match s.request(RequestBody::SetConfig(want)).map_err(link_err)? {
+            Ok(_) => say(&progress, "sent the job's machine config"),
+            Err(r) => {
+                let why = want.validate().err().map(|e| format!(": {e:?}")).unwrap_or_default();
+                return Err(err(format!(
+                    "the board refused the job's machine config: {}{why}",
+                    describe_rejection(&r)
+                )));
+            }
+        }
+    }
+    query(&mut s, RequestBody::SetStatusPeriod { ms: opts.status_period_ms }, "SetStatusPeriod")?;
+    s.streaming = opts.status_period_ms > 0;
+    let base = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
+        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
+    if base.positions[..n_axes].iter().any(|&p| p != 0) {
+        say(
+            &progress,
+            &format!(
+                "note: the board is not at 0 ({:?} steps); the job runs relative to there",
+                &base.positions[..n_axes]
+            ),
+        );
+    }
+    let tick_hz = program.config.tick_hz.max(1) as f64;
+
+    // --- Streaming.
+    let mut report = RunReport {
+        segments: total,
+        capacity: info.queue_capacity,
+        min_credits: u16::MAX,
+        expected_hash: base.done_hash,
+        ..RunReport::default()
+    };
+    let mut pending: HashMap<u32, Pending> = HashMap::new();
+    let mut next_out = 0usize;
+    let mut sent_segs = 0u32;
+    let mut last_batch_seq: Option<u32> = None;
+    let mut start_seq: Option<u32> = None;
+    let mut last_start_seq: Option<u32> = None;
+    let mut ever_started = false;
+    let mut start_tick: Option<u64> = None;
+    let mut feed_cmds: Vec<(u64, Command)> = program.commands.clone();
+    feed_cmds.sort_by_key(|c| c.0);
+    let mut feed_next = 0usize;
+    let mut latest = base.clone();
+    let mut batch_limit = opts.max_batch.clamp(1, MAX_SEGMENTS_PER_FRAME);
+    let mut clean_acks = 0u32;
+    let mut seen_link_naks = 0u64;
+    let mut stream_start: Option<Instant> = None;
+    let mut last_ack_at = Instant::now();
+    // Status-rate window: (first wall, first tick), (last wall, last tick), count.
+    let mut rate_first: Option<(Instant, u64)> = None;
+    let mut rate_last: Option<(Instant, u64)> = None;
+    let mut rate_count = 0u64;
+    let mut pause_wait: Option<mpsc::Receiver<()>> = None;
+    let mut finished_at: Option<Instant> = None;
+    let mut poll_in_flight = false;
+    let mut last_poll = Instant::now();
+    let job_done = |st: &Status| st.segments_done.wrapping_sub(base.segments_done);
+
+    loop {
+        s.pump(Duration::from_millis(5)).map_err(link_err)?;
+        for n in s.notices.drain(..) {
+            say(&progress, &n);
+        }
+        if opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
+            let aborted = matches!(s.request(RequestBody::Abort), Ok(Ok(_)));
+            return Err(err(format!(
+                "interrupted: {} sent to the board; {} of {total} segments were done",
+                if aborted { "Abort" } else { "Abort could not be" },
+                job_done(&latest)
+            )));
+        }
+
+        // Answers.
+        for (seq, result) in s.take_answers() {
+            let Some(p) = pending.remove(&seq) else { continue };
+            match (p, result) {
+                (Pending::Batch { n }, Ok(_)) => {
+                    report.acked += n;
+                    last_ack_at = Instant::now();
+                    clean_acks += 1;
+                }
+                (Pending::Batch { .. }, Err(r)) => {
+                    if r.code == ErrorCode::QueueFull {
+                        report.queue_full_naks += 1;
+                    }
+                    return Err(err(format!(
+                        "the board refused segments after {} acknowledged: {}",
+                        report.acked,
+                        describe_rejection(&r)
+                    )));
+                }
+                (Pending::Start, Ok(_)) => {
+                    start_seq = None;
+                    last_start_seq = Some(seq);
+                    ever_started = true;
+                }
+                (Pending::Start, Err(r)) if r.code == ErrorCode::OutOfState => {
+                    // Already moving: nothing to do.
+                    start_seq = None;
+                    last_start_seq = Some(seq);
+                }
+                (Pending::Start, Err(r)) => {
+                    return Err(err(format!("the board refused Start: {}", describe_rejection(&r))))
+                }
+                (Pending::Feed(what), Err(r)) => say(
+                    &progress,
+                    &format!("feed command {what} refused: {}", describe_rejection(&r)),
+                ),
+                (Pending::Feed(_), Ok(_)) => {}
+                (Pending::Poll, Ok(reply)) => {
+                    poll_in_flight = false;
+                    if let Some(st) = status_of(reply) {
+                        if st.faults == 0 && seq_at_or_after(st.next_seq, latest.next_seq) {
+                            report.max_queue_depth = report.max_queue_depth.max(st.queue_depth);
+                            latest = st;
+                        }
+                    }
+                }
+                (Pending::Poll, Err(_)) => poll_in_flight = false,
+            }
+        }
+
+        // Everything else the board said.
+        while let Some(ev) = s.events.pop_front() {
+            match ev {
+                HostEvent::Status(st) => {
+                    report.max_queue_depth = report.max_queue_depth.max(st.queue_depth);
+                    report.min_credits = report.min_credits.min(st.credits);
+                    report.max_credits = report.max_credits.max(st.credits);
+                    let done = job_done(&st);
+                    if let Some(csv) = opts.csv.as_mut() {
+                        let wall_ms = t0.elapsed().as_millis() as u64;
+                        csv.row(wall_ms, &st, done)
+                            .map_err(|e| err(format!("writing the CSV log: {e}")))?;
+                    }
+                    if ever_started && finished_at.is_none() {
+                        let now = Instant::now();
+                        rate_first.get_or_insert((now, st.tick));
+                        rate_last = Some((now, st.tick));
+                        rate_count += 1;
+                        start_tick.get_or_insert(st.tick);
+                    }
+                    if st.faults != 0 {
+                        return Err(err(format!(
+                            "the board faulted ({}) after {done} of {total} segments",
+                            fault_names(st.faults)
+                        )));
+                    }
+                    latest = st;
+                }
+                HostEvent::Fault { code, tick } => {
+                    return Err(err(format!(
+                        "board fault {} ({}) at tick {tick}, after {} of {total} segments",
+                        code.name(),
+                        code.description(),
+                        job_done(&latest)
+                    )));
+                }
+                HostEvent::SessionLost(code) => {
+                    let why = LinkFailure::SessionLost(code);
+                    return Err(err(format!(
+                        "{why}; the job cannot resume safely ({} of {total} segments were done \
+                         at the last report): home the machine and run the job again",
+                        job_done(&latest)
+                    )));
+                }
+                _ => {}
+            }
+        }
+
+        // Shrink batches while the link is noisy (a garbled batch costs a retransmission of the
+        // whole window), grow them back when it is clean.
+        if s.stats.link_naks > seen_link_naks {
+            seen_link_naks = s.stats.link_naks;
+            batch_limit = (batch_limit / 2).max(1);
+            clean_acks = 0;
+        } else if clean_acks >= 16 {
+            batch_limit = (batch_limit + 1).min(opts.max_batch.clamp(1, MAX_SEGMENTS_PER_FRAME));
+            clean_acks = 0;
+        }
+
+        // Events (spindle, pause) once the motion before them is done.
+        while let Some(out) = outputs.get(next_out) {
+            if matches!(out, Output::Segment(_)) {
+                break;
+            }
+            let before_done = report.acked == sent_segs && job_done(&latest) >= sent_segs;
+            if !before_done {
+                break;
+            }
+            match out {
+                Output::Spindle(on) => {
+                    say(
+                        &progress,
+                        &format!(
+                            "spindle {} (no spindle hardware yet: nothing switched)",
+                            if *on { "on (M3)" } else { "off (M5)" }
+                        ),
+                    );
+                    next_out += 1;
+                }
+                Output::Pause if !opts.interactive => {
+                    say(&progress, "program pause (M0): not interactive, continuing at once");
+                    next_out += 1;
+                }
+                Output::Pause => match &pause_wait {
+                    None => {
+                        say(
+                            &progress,
+                            "program pause (M0): the machine is stopped; press Enter to continue",
+                        );
+                        let (tx, rx) = mpsc::channel();
+                        std::thread::spawn(move || {
+                            let mut line = String::new();
+                            let _ = std::io::stdin().read_line(&mut line);
+                            let _ = tx.send(());
+                        });
+                        pause_wait = Some(rx);
+                        break;
+                    }
+                    Some(rx) => {
+                        if rx.try_recv().is_err() {
+                            break;
+                        }
+                        pause_wait = None;
+                        say(&progress, "continuing");
+                        next_out += 1;
+                    }
+                },
+                Output::Segment(_) => unreachable!("checked above"),
+            }
+        }
+
+        // Segments, as credits and the window allow.
+        while s.host.window_free() > 0 {
+            let mut batch = SegmentBatch::default();
+            let credits = s.host.segment_credits() as usize;
+            let room = batch_limit.min(credits);
+            while batch.len() < room {
+                let Some(Output::Segment(seg)) = outputs.get(next_out) else { break };
+                let seg: Segment = *seg;
+                if batch.push(seg).is_err() {
+                    break;
+                }
+                next_out += 1;
+            }
+            if batch.is_empty() {
+                break;
+            }
+            let n = batch.len() as u32;
+            let ids: Vec<u32> = batch.iter().map(|g| g.id).collect();
+            let seq = s.send(RequestBody::QueueSegments(batch)).map_err(link_err)?;
+            for id in ids {
+                report.expected_hash = order_hash(report.expected_hash, id);
+            }
+            pending.insert(seq, Pending::Batch { n });
+            sent_segs += n;
+            last_batch_seq = Some(seq);
+            stream_start.get_or_insert_with(Instant::now);
+        }
+
+        // Starved of credits with segments to send: ask instead of waiting for the stream.
+        let more = matches!(outputs.get(next_out), Some(Output::Segment(_)));
+        if more
+            && !poll_in_flight
+            && s.host.segment_credits() == 0
+            && s.host.window_free() > 0
+            && last_poll.elapsed() >= POLL_EVERY
+        {
+            let seq = s.send(RequestBody::GetStatus).map_err(link_err)?;
+            pending.insert(seq, Pending::Poll);
+            poll_in_flight = true;
+            last_poll = Instant::now();
+        }
+
+        // Start: first once the queue is full or everything before the next event is queued;
+        // again whenever a fresh status shows the board idle with segments waiting.
+        let waiting = report.acked > job_done(&latest);
+        let fresh = last_start_seq.is_none_or(|ls| seq_at_or_after(latest.next_seq, ls + 1));
+        let nothing_more = !matches!(outputs.get(next_out), Some(Output::Segment(_)));
+        let ready = ever_started
+            || (report.acked == sent_segs && (s.host.segment_credits() == 0 || nothing_more));
+        if start_seq.is_none() && waiting && fresh && latest.state == WireState::Idle && ready {
+            let seq = s.send(RequestBody::Start).map_err(link_err)?;
+            pending.insert(seq, Pending::Start);
+            start_seq = Some(seq);
+        }
+
+        // The job's feed commands, at their machine time (as seen in the status stream).
+        if let Some(t_start) = start_tick {
+            while let Some(&(at, cmd)) = feed_cmds.get(feed_next) {
+                if latest.tick.saturating_sub(t_start) < at {
+                    break;
+                }
+                let (body, what) = match cmd {
+                    Command::SetOverride(r) => {
+                        (RequestBody::SetOverride { rate_bits: r.to_bits() }, "override")
+                    }
+                    Command::Hold => (RequestBody::Hold, "hold"),
+                    Command::Resume => (RequestBody::Resume, "resume"),
+                };
+                let seq = s.send(body).map_err(link_err)?;
+                pending.insert(seq, Pending::Feed(what));
+                feed_next += 1;
+            }
+        }
+
+        progress.update(report.acked as u64, job_done(&latest) as u64, Some(&latest));
+
+        // Done?
+        let all_sent = next_out >= outputs.len()
+            && pending.values().all(|p| matches!(p, Pending::Poll | Pending::Feed(_)));
+        let after_batches = last_batch_seq.is_none_or(|b| seq_at_or_after(latest.next_seq, b + 1));
+        if all_sent
+            && after_batches
+            && job_done(&latest) == total
+            && latest.state == WireState::Idle
+            && latest.queue_depth == 0
+        {
+            finished_at.get_or_insert_with(Instant::now);
+            break;
+        }
+    }
+
+    // --- Verify with a fresh status.
+    let fin = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
+        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
+    let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });
+    progress.finish();
+    if let Some(csv) = opts.csv.as_mut() {
+        csv.flush().map_err(|e| err(format!("writing the CSV log: {e}")))?;
+    }
+    report.done = job_done(&fin);
+    report.done_hash = fin.done_hash;
+    report.positions = fin.positions[..n_axes].to_vec();
+    report.expected_positions =
+        (0..n_axes).map(|i| base.positions[i] + expected_steps[i]).collect();
+    report.seconds = t0.elapsed().as_secs_f64();
+    if let Some(st) = stream_start {
+        report.stream_seconds =
+            finished_at.unwrap_or_else(Instant::now).duration_since(st).as_secs_f64();
+        let ack_span = last_ack_at.duration_since(st).as_secs_f64();
+        report.acked_per_s = if ack_span > 0.0 { report.acked as f64 / ack_span } else { 0.0 };
+    }
+    report.frames_out = s.host.sent_frames;
+    report.retransmissions = s.host.retransmissions;
+    report.link_naks = s.stats.link_naks;
+    report.bad_frames_in = s.stats.bad_frames_in;
+    report.reconnects = s.stats.reconnects;
+    report.noise = s.transport().noise_stats();
+    report.statuses = rate_count;
+    if let (Some((w0, k0)), Some((w1, k1))) = (rate_first, rate_last) {
+        let n = rate_count.saturating_sub(1) as f64;
+        let wall = w1.duration_since(w0).as_secs_f64();
+        let board = k1.saturating_sub(k0) as f64 / tick_hz;
+        report.status_hz_wall = if wall > 0.0 { n / wall } else { 0.0 };
+        report.status_hz_board = if board > 0.0 { n / board } else { 0.0 };
+    }
+    if report.done != total {
+        report.problems.push(format!("{} segments done, {total} sent", report.done));
+    }
+    if report.done_hash != report.expected_hash {
+        report.problems.push(format!(
+            "order hash {:#010x} != expected {:#010x}: a segment was lost, repeated or reordered",
+            report.done_hash, report.expected_hash
+        ));
+    }
+    if report.positions != report.expected_positions {
+        report.problems.push(format!(
+            "final positions {:?} != host model {:?} steps",
+            report.positions, report.expected_positions
+        ));
+    }
+    if report.max_credits > report.capacity || report.queue_full_naks > 0 {
+        report.problems.push(format!(
+            "queue overflow: credits up to {} of capacity {}, {} QueueFull NAKs",
+            report.max_credits, report.capacity, report.queue_full_naks
+        ));
+    }
+    report.min_credits = report.min_credits.min(report.max_credits);
+    opts.csv = None;
+    Ok(report)
+}
