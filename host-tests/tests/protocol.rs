@@ -710,12 +710,14 @@ fn random_request(rng: &mut Rng, next_seq: u32) -> Request {
     Request { seq, body }
 }
 
-/// The board's whole receive path on a million inputs: random bytes, valid frames of random
-/// (often valid) requests, and those frames bit-flipped, truncated and spliced. A panic fails the
-/// test; every answer must frame, and the queue must never be overrun.
+/// The board's whole receive path on a million inputs (`FUZZ_INPUTS` for longer runs, as
+/// `cargo xtask bench` does): random bytes, valid frames of random (often valid) requests, and
+/// those frames bit-flipped, truncated and spliced. A panic fails the test; every answer must
+/// frame, and the queue must never be overrun.
 #[test]
 fn board_survives_a_million_hostile_inputs() {
-    const INPUTS: u64 = 1_000_000;
+    let inputs: u64 =
+        std::env::var("FUZZ_INPUTS").ok().and_then(|v| v.parse().ok()).unwrap_or(1_000_000);
     let t0 = Instant::now();
     let mut rng = Rng::new(0xF022);
     let mut target = SimTarget::new(config(), 16);
@@ -728,7 +730,7 @@ fn board_survives_a_million_hostile_inputs() {
     let mut recent: Vec<Vec<u8>> = vec![frame(&hello(0))];
     let (mut frames_ok, mut frame_errors, mut acks, mut naks) = (0u64, 0u64, 0u64, 0u64);
     let mut input = Vec::with_capacity(1024);
-    for i in 0..INPUTS {
+    for i in 0..inputs {
         input.clear();
         let next = board.next_seq().unwrap_or(0);
         match rng.below(10) {
@@ -820,7 +822,7 @@ fn board_survives_a_million_hostile_inputs() {
         let _ = host.poll_transmit(i);
     }
     println!(
-        "fuzz: {INPUTS} inputs in {:?}: {frames_ok} CRC-valid frames, {frame_errors} bad frames, \
+        "fuzz: {inputs} inputs in {:?}: {frames_ok} CRC-valid frames, {frame_errors} bad frames, \
          {acks} acks, {naks} naks, {} segments queued",
         t0.elapsed(),
         target.queued_total

@@ -1,4 +1,4 @@
-//! motionctl/README.md's error-code tables are the ones `motion::protocol::markdown_table`
+//! The repository README's error-code tables are the ones `motion::protocol::markdown_table`
 //! renders from the code.
 
 const BEGIN: &str = "<!-- codes:begin (generated from motion::protocol::markdown_table) -->\n";
@@ -6,12 +6,12 @@ const END: &str = "<!-- codes:end -->";
 
 #[test]
 fn readme_error_tables_match_the_code() {
-    let readme = include_str!("../README.md");
+    let readme = include_str!("../../README.md");
     let mut rendered = String::new();
     motion::protocol::markdown_table(&mut rendered).unwrap();
     let start = readme.find(BEGIN).expect("README has the codes:begin marker") + BEGIN.len();
     let end = readme.find(END).expect("README has the codes:end marker");
     if readme[start..end].trim() != rendered.trim() {
-        panic!("motionctl/README.md's tables are out of date; put this between the markers:\n{rendered}");
+        panic!("README.md's error-code tables are out of date; put this between the markers:\n{rendered}");
     }
 }

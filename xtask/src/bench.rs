@@ -61,14 +61,47 @@ pub fn run(root: &Path) -> Result<()> {
         figures.insert(k.into(), v);
     }
 
+    println!("fuzzing the board's receive path with 10 million hostile inputs");
+    for (k, v) in fuzz_decoder(root, 10_000_000)? {
+        figures.insert(k.into(), v);
+    }
+
     let json_path = root.join("target/bench.json");
     write_json(&json_path, &figures)?;
     let md_path = root.join("BENCHMARKS.md");
-    write_markdown(&md_path, &figures)?;
+    write_markdown(&md_path, &figures, NOTES)?;
+    // The README carries the same table (its notes point to BENCHMARKS.md).
+    let readme = root.join("README.md");
+    write_markdown(&readme, &figures, "")?;
     println!();
     print!("{}", table(&figures));
-    println!("\nwrote {} and {}", json_path.display(), md_path.display());
+    println!("\nwrote {}, {} and {}", json_path.display(), md_path.display(), readme.display());
     Ok(())
+}
+
+/// The protocol fuzz test (host-tests/tests/protocol.rs) at `inputs` inputs: frame decoder, message
+/// decoder and board session on random, mutated and spliced frames. Any panic fails it.
+fn fuzz_decoder(root: &Path, inputs: u64) -> Result<Vec<(&'static str, f64)>> {
+    let out = crate::cargo(root)
+        .args(["test", "-p", "host-tests", "--profile", "test-fast", "--test", "protocol"])
+        .args(["board_survives_a_million_hostile_inputs", "--", "--nocapture"])
+        .env("FUZZ_INPUTS", inputs.to_string())
+        .output()?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    if !out.status.success() {
+        anyhow::bail!("the fuzz run failed:\n{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    }
+    // "fuzz: N inputs in 11.2s: ..."
+    let line = text.lines().find(|l| l.starts_with("fuzz: ")).context("no fuzz summary line")?;
+    let mut words = line.split_whitespace().skip(1);
+    let n: f64 = words.next().context("fuzz count")?.parse()?;
+    let secs = words.nth(2).context("fuzz time")?.trim_end_matches(':');
+    let secs: f64 = secs.trim_end_matches('s').parse().context("fuzz time")?;
+    Ok(vec![
+        ("fuzz_decoder_inputs", n),
+        ("fuzz_decoder_panics", 0.0),
+        ("fuzz_decoder_seconds", (secs * 10.0).round() / 10.0),
+    ])
 }
 
 /// `bench key=value` lines -> figures.
@@ -199,11 +232,16 @@ How these are measured:
 - `link_segments_per_s`: segments acknowledged per wall second while `motionctl run --qemu`
   streams the 2000-segment end-to-end job (xtask/src/e2e.rs) to the link firmware, no noise,
   from the first batch to the last acknowledgement (bounded by the job once the queue is full).
-  `link_status_hz`: status reports received per second of board time at the default 50 ms period.
+  `link_status_hz`: status reports received per second of board time at the default 40 ms period.
+- `fuzz_decoder_*`: the protocol fuzz test (host-tests/tests/protocol.rs,
+  `board_survives_a_million_hostile_inputs`) run with `FUZZ_INPUTS=10000000`: random bytes,
+  valid frames, bit-flipped, truncated and spliced frames through the board's frame decoder,
+  message decoder and session; any panic would fail the run. CI runs the same test at 1e6.
 ";
 
-fn write_markdown(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
-    let section = format!("{BEGIN}\n{}{NOTES}{END}", table(figures));
+/// Rewrites the marked section of `path` with the figures table followed by `notes`.
+fn write_markdown(path: &Path, figures: &BTreeMap<String, f64>, notes: &str) -> Result<()> {
+    let section = format!("{BEGIN}\n{}{notes}{END}", table(figures));
     let text = match std::fs::read_to_string(path) {
         Ok(s) => match (s.find(BEGIN), s.find(END)) {
             (Some(b), Some(e)) if b < e => format!("{}{section}{}", &s[..b], &s[e + END.len()..]),
@@ -231,7 +269,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let md = dir.join("B.md");
         std::fs::write(&md, format!("# T\nkeep me\n{BEGIN}\nold\n{END}\ntail\n")).unwrap();
-        write_markdown(&md, &m).unwrap();
+        write_markdown(&md, &m, NOTES).unwrap();
         let s = std::fs::read_to_string(&md).unwrap();
         assert!(s.starts_with("# T\nkeep me\n<!-- bench:begin -->\n| figure"));
         assert!(s.ends_with("<!-- bench:end -->\ntail\n") && !s.contains("old"));

@@ -407,7 +407,7 @@ pub fn test(root: &Path) -> Result<()> {
 }
 
 /// `cargo xtask bench` figures: sustained segments/s acknowledged over the QEMU link (no noise)
-/// and the status rate (board time) at the default 50 ms period.
+/// and the status rate (board time) at the default 40 ms period.
 pub fn bench(root: &Path) -> Result<Vec<(&'static str, f64)>> {
     let p = prepare(root)?;
     let (ok, stdout, _) = run_motionctl(root, &p.bin, &base_args(&p))?;
