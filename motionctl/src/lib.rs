@@ -17,6 +17,7 @@ pub mod plan;
 pub mod progress;
 pub mod qemu;
 pub mod runner;
+pub mod sample_job;
 pub mod sim_board;
 pub mod transport;
 pub mod wire;

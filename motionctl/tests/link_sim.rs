@@ -12,53 +12,15 @@ use motionctl::job::{self, Job};
 use motionctl::noise::Noisy;
 use motionctl::plan::{self, Output};
 use motionctl::runner::{self, RunOptions, RunReport};
+use motionctl::sample_job;
 use motionctl::sim_board::{SimBoard, SimTrouble, SIM_CAPACITY};
 use motionctl::transport::Transport;
-use std::fmt::Write;
 use std::time::Duration;
 
-/// A deterministic zig-zag of `n` short moves in X/Y (Z every 7th) with varied feeds, on a
-/// 100 steps/mm machine, coordinates in 0.01 mm so every target is a whole step.
+/// The sample zig-zag job of `n` short moves (`motionctl::sample_job`), as streamed in QEMU by
+/// `cargo xtask test`.
 fn zigzag_job(n: usize) -> String {
-    let mut t = String::from(
-        "format = \"motion-job\"\nversion = 1\n\n[machine]\ntick_hz = 20_000\n\
-         [machine.timing]\npulse_ns = 2_500\ndir_setup_ns = 5_000\ndir_hold_ns = 5_000\n",
-    );
-    for (name, spm, rate, accel, jerk, lim) in [
-        ("X", 100.0, 60.0, 5000.0, 25.0, 100.0),
-        ("Y", 100.0, 60.0, 5000.0, 25.0, 100.0),
-        ("Z", 400.0, 20.0, 400.0, 2.0, 20.0),
-    ] {
-        let _ = write!(
-            t,
-            "[[machine.axes]]\nname = \"{name}\"\nsteps_per_mm = {spm:.1}\nmax_rate_mm_s = \
-             {rate:.1}\naccel_mm_s2 = {accel:.1}\njunction_jerk_mm_s = {jerk:.1}\nmin_mm = \
-             -{lim:.1}\nmax_mm = {lim:.1}\n"
-        );
-    }
-    let (mut x, mut y, mut z) = (0i64, 0i64, 0i64); // 0.01 mm
-    let mut seed = 12345u64;
-    let feeds = [600.0, 900.0, 1200.0, 1500.0, 750.0];
-    for i in 0..n {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        let r = (seed >> 33) as i64;
-        x += if i % 2 == 0 { 20 + r % 30 } else { -(20 + (r >> 8) % 30) };
-        y += if (i / 50) % 2 == 0 { 5 + (r >> 16) % 10 } else { -(5 + (r >> 16) % 10) };
-        if i % 7 == 3 {
-            z = if z == 0 { -(10 + (r >> 24) % 20) } else { 0 };
-        }
-        x = x.clamp(-9000, 9000);
-        y = y.clamp(-9000, 9000);
-        let _ = write!(
-            t,
-            "[[moves]]\nto = {{ X = {:.2}, Y = {:.2}, Z = {:.2} }}\nfeed_mm_min = {:.1}\n",
-            x as f64 / 100.0,
-            y as f64 / 100.0,
-            z as f64 / 100.0,
-            feeds[i % feeds.len()]
-        );
-    }
-    t
+    sample_job::job_toml(&sample_job::targets(n))
 }
 
 struct Prepared {
