@@ -34,7 +34,7 @@ use rtic::Mutex;
 use crate::board;
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
-pub const SEGMENT_QUEUE: usize = 32;
+pub const SEGMENT_QUEUE: usize = 64;
 /// Transmit queue; a response that does not fit whole is dropped (the host retransmits).
 pub const TX_BUFFER: usize = 1024;
 /// How often the status task runs, as a fraction of a second: 1 ms, so a status period of P ms

@@ -23,7 +23,7 @@ pub const SEGMENTS: usize = 2000;
 /// The step fails if motionctl takes longer.
 const RUN_TIMEOUT: Duration = Duration::from_secs(180);
 /// The link firmware's segment queue (credits when empty; firmware/link.rs SEGMENT_QUEUE).
-const QUEUE_CAPACITY: u64 = 32;
+const QUEUE_CAPACITY: u64 = 64;
 /// Status period asked for in the noisy run (see `STATUS_NOTE`).
 const NOISY_STATUS_MS: u16 = 25;
 /// Why the noisy run asks for 25 ms, printed with the result.
