@@ -12,6 +12,7 @@ use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
 use motion::planner::{Move, PlanError, Planner};
 use motion::{AxisLimits, MachineConfig, Segment, StepTiming, MAX_AXES};
+use motionctl::convert::feed_hz;
 use motionctl::sample_job::{job_toml, targets, to_steps, AXES, TICK_HZ};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -58,16 +59,12 @@ pub fn model(moves: &[([i64; 3], f64)]) -> Result<(usize, [i64; 3])> {
     for (p, feed) in moves {
         let s = to_steps(*p);
         let mut steps = [0i32; MAX_AXES];
-        let mut len_mm2 = 0.0;
-        let mut len_steps2 = 0.0;
         for a in 0..3 {
             steps[a] = (s[a] - prev[a]) as i32;
-            len_mm2 += (steps[a] as f64 / AXES[a].1).powi(2);
-            len_steps2 += (steps[a] as f64).powi(2);
         }
         prev = s;
-        let feed_hz = (len_steps2.sqrt() * feed / (60.0 * len_mm2.sqrt())).round().max(1.0);
-        let mv = Move { steps, feed_hz: feed_hz as u32 };
+        let steps_per_mm = AXES.map(|axis| axis.1);
+        let mv = Move { steps, feed_hz: feed_hz(&steps, &steps_per_mm, *feed) };
         loop {
             match planner.push(&mv) {
                 Ok(()) => break,
