@@ -12,6 +12,7 @@ pub mod model;
 pub mod planner;
 pub mod protocol;
 pub mod report;
+pub mod scenario;
 pub mod segment;
 pub mod trace;
 

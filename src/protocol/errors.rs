@@ -140,6 +140,15 @@ coded_enum! {
         LinkLost = 6 => ("LinkLost", "No valid frame from the host within the link timeout."),
         ConfigMissing = 7 => ("ConfigMissing", "Motion requested before a valid configuration was set."),
         SensorFault = 8 => ("SensorFault", "A sensor reading is out of range or missing."),
+        ForceSaturated = 9 => ("ForceSaturated", "A force channel sits at the ADC's end of range."),
+        ForceStuck = 10 => ("ForceStuck", "A force channel has not changed while the tool cuts."),
+        ForceTrip = 11 => ("ForceTrip", "Cutting force above the trip level."),
+        SpindleStopped = 12 => ("SpindleStopped", "The spindle stopped or slowed below its minimum during a cut."),
+        EncoderIndex = 13 => ("EncoderIndex", "Encoder counts between index pulses differ from counts per revolution."),
+        ResolverLoss = 14 => ("ResolverLoss", "Resolver sin/cos amplitude out of range (signal lost)."),
+        ZSlideLimit = 15 => ("ZSlideLimit", "The Z-slide command needs more speed or acceleration than the slide has."),
+        WireStall = 16 => ("WireStall", "The wire stayed stalled through the whole retrace distance."),
+        FollowingError = 17 => ("FollowingError", "Measured position too far from the commanded one."),
     }
 }
 
