@@ -13,6 +13,7 @@ pub mod planner;
 pub mod protocol;
 pub mod report;
 pub mod scenario;
+pub mod scenarios;
 pub mod segment;
 pub mod trace;
 

@@ -22,6 +22,17 @@ pub trait Scenario {
     fn tick(&mut self) -> bool;
     /// The outcome so far (complete once [`Scenario::tick`] returned false).
     fn report(&self) -> ScenarioReport;
+
+    /// True when planning-rate work (anything that divides or takes unbounded time: planning,
+    /// preparing segments) must run before the next tick. The firmware then skips the tick and
+    /// runs [`Scenario::background`] in a low-priority task; the host runs it at once. Either way
+    /// no tick runs while it is wanted, so the outcome never depends on how long it took.
+    fn wants_background(&self) -> bool {
+        false
+    }
+
+    /// The planning-rate work [`Scenario::wants_background`] asked for.
+    fn background(&mut self) {}
 }
 
 /// One named integer outcome (units in the name: `_um`, `_mn`, `_ticks`, ...).
@@ -131,9 +142,17 @@ impl TraceHash {
 }
 
 /// Runs a scenario to completion (or `max_ticks`) and returns its report.
+/// Background work runs whenever the scenario wants it, as in the firmware.
 pub fn run_to_end<S: Scenario>(s: &mut S, max_ticks: u64) -> ScenarioReport {
     let mut n = 0;
-    while n < max_ticks && s.tick() {
+    while n < max_ticks {
+        if s.wants_background() {
+            s.background();
+            continue;
+        }
+        if !s.tick() {
+            break;
+        }
         n += 1;
     }
     s.report()

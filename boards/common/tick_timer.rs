@@ -31,7 +31,6 @@ impl TickTimer {
 
     /// A handle that changes the tick rate while the timer runs (the host link's SetConfig).
     /// Take at most one.
-    #[cfg_attr(not(feature = "link"), allow(dead_code))]
     pub fn rate_control(&self) -> TickRate {
         TickRate { timer_clock_hz: self.timer_clock_hz }
     }
@@ -58,13 +57,13 @@ impl TickTimer {
 
 /// Changes TIM2's period from outside the tick task. ARR is preloaded (ARPE), so a new period
 /// takes effect at the next update: the tick in progress keeps its length.
-// Only the `link` firmware changes the tick rate.
-#[cfg_attr(not(feature = "link"), allow(dead_code))]
+// The link and scenario firmware change the tick rate; the demo firmware does not.
+#[allow(dead_code)]
 pub struct TickRate {
     timer_clock_hz: u32,
 }
 
-#[cfg_attr(not(feature = "link"), allow(dead_code))]
+#[allow(dead_code)]
 impl TickRate {
     /// True if `tick_hz` divides the timer clock exactly (see [`TickTimer::new`]).
     pub fn supports(&self, tick_hz: u32) -> bool {

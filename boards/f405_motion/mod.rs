@@ -28,7 +28,8 @@ pub use cycles::CycleCounter;
 pub use host_serial::HostSerial;
 pub use io::EStop;
 pub use step_port::StepPort;
-#[cfg(feature = "link")]
+// The demo firmware never changes its tick rate.
+#[allow(unused_imports)]
 pub use tick_timer::TickRate;
 pub use tick_timer::TickTimer;
 

@@ -39,6 +39,12 @@ impl Board {
 /// so switching boards or features never rebuilds the dependencies, only the copied-out ELF
 /// would be overwritten.
 pub fn build(root: &Path, board: Board, extra: &[&str]) -> Result<PathBuf> {
+    build_bin(root, "firmware", board, extra)
+}
+
+/// [`build`] for any firmware binary of the package (`firmware`, `scenarios`); the ELF lands in
+/// `target/fw-<board>[-<feature>...]/<bin>`.
+pub fn build_bin(root: &Path, bin: &str, board: Board, extra: &[&str]) -> Result<PathBuf> {
     let mut dir = format!("target/fw-{}", board.name());
     let mut features = format!("board-{}", board.name());
     for f in extra {
@@ -49,14 +55,17 @@ pub fn build(root: &Path, board: Board, extra: &[&str]) -> Result<PathBuf> {
     }
     crate::run_status(
         &format!("firmware build ({features})"),
-        crate::cargo(root)
-            .args(["build", "--release", "--target", TARGET, "--bin", "firmware"])
-            .args(["--features", &features, "--target-dir", "target/thumb"]),
+        crate::cargo(root).args(["build", "--release", "--target", TARGET, "--bin", bin]).args([
+            "--features",
+            &features,
+            "--target-dir",
+            "target/thumb",
+        ]),
     )?;
-    let built = root.join("target/thumb").join(TARGET).join("release/firmware");
+    let built = root.join("target/thumb").join(TARGET).join("release").join(bin);
     let dir = root.join(dir);
     std::fs::create_dir_all(&dir)?;
-    let elf = dir.join("firmware");
+    let elf = dir.join(bin);
     std::fs::copy(&built, &elf)
         .with_context(|| format!("copying {} to {}", built.display(), elf.display()))?;
     Ok(elf)
@@ -93,6 +102,11 @@ impl Run {
 /// time, so runs are deterministic and TIM5 counts instructions), captures the semihosting
 /// output and decodes it. Fails if QEMU exits non-zero or runs past [`QEMU_TIMEOUT`].
 pub fn run_qemu(elf: &Path) -> Result<Run> {
+    run_qemu_for(elf, QEMU_TIMEOUT)
+}
+
+/// [`run_qemu`] with its own time limit, for runs known to be long.
+pub fn run_qemu_for(elf: &Path, timeout: Duration) -> Result<Run> {
     let start = Instant::now();
     let mut child = Command::new("qemu-system-arm")
         .args(["-M", "netduinoplus2", "-display", "none", "-serial", "null", "-monitor", "none"])
@@ -121,7 +135,7 @@ pub fn run_qemu(elf: &Path) -> Result<Run> {
         if let Some(status) = child.try_wait()? {
             break Some(status);
         }
-        if start.elapsed() > QEMU_TIMEOUT {
+        if start.elapsed() > timeout {
             let _ = child.kill();
             let _ = child.wait();
             break None;
@@ -143,7 +157,7 @@ pub fn run_qemu(elf: &Path) -> Result<Run> {
     match status {
         None => fail(format!(
             "QEMU did not finish within {} s (firmware hung?); killed it",
-            QEMU_TIMEOUT.as_secs()
+            timeout.as_secs()
         )),
         Some(s) if !s.success() => fail(format!("the firmware failed: QEMU exited with {s}")),
         Some(_) => {

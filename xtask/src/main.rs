@@ -16,6 +16,7 @@ mod divcheck;
 mod e2e;
 mod firmware;
 mod golden;
+mod scenarios;
 mod setup;
 
 use anyhow::{bail, Context, Result};
@@ -31,6 +32,7 @@ commands:
                                                         instead of the demo job; ELF in target/fw-<board>-link/)
   demo                                                  run the demo job in QEMU and compare with the host model
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
+  scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
   bench                                                 run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
                                                         (f405-motion: the host-link firmware)";
@@ -82,6 +84,11 @@ fn run() -> Result<()> {
             }
             setup::ensure(&root)?;
             test(&root, &skip)
+        }
+        "scenarios" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            scenarios::show(&root)
         }
         "bench" => {
             no_args(cmd, rest)?;
@@ -164,13 +171,13 @@ pub fn run_status(what: &str, cmd: &mut Command) -> Result<()> {
 
 fn test(root: &Path, skip: &[String]) -> Result<()> {
     type Step<'a> = (&'a str, Box<dyn Fn() -> Result<()> + 'a>);
-    let clippy_thumb = |features: &'static str| -> Box<dyn Fn() -> Result<()>> {
+    let clippy_bin = |bin: &'static str, features: &'static str| -> Box<dyn Fn() -> Result<()>> {
         Box::new(move || {
             run_status(
                 "clippy",
                 cargo(root).args(["clippy", "--release", "--target", firmware::TARGET]).args([
                     "--bin",
-                    "firmware",
+                    bin,
                     "--features",
                     features,
                     "--target-dir",
@@ -182,6 +189,7 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             )
         })
     };
+    let clippy_thumb = |features: &'static str| clippy_bin("firmware", features);
     let build = |board: Board, extra: &'static [&'static str]| -> Box<dyn Fn() -> Result<()>> {
         Box::new(move || firmware::build(root, board, extra).map(drop))
     };
@@ -215,6 +223,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ("clippy (firmware, netduinoplus2 link)", clippy_thumb("board-netduinoplus2,link")),
         ("clippy (firmware, f405-motion link)", clippy_thumb("board-f405-motion,link")),
         (
+            "clippy (scenario firmware, netduinoplus2)",
+            clippy_bin("scenarios", "board-netduinoplus2"),
+        ),
+        (
             "host tests",
             // Optimised with overflow checks and debug assertions kept (see Cargo.toml).
             Box::new(|| {
@@ -229,7 +241,7 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ("firmware build (f405-motion link)", build(Board::F405Motion, &["link"])),
         ("firmware build (netduinoplus2 bench)", build(Board::Netduinoplus2, &["bench"])),
         (
-            "no software divide reachable from TIM2 (demo, link, real board)",
+            "no software divide reachable from TIM2 (demo, link, real board, scenarios)",
             Box::new(|| {
                 for (board, features) in [
                     (Board::Netduinoplus2, &[][..]),
@@ -239,11 +251,14 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
                     let elf = firmware::build(root, board, features)?;
                     divcheck::check_elf(&elf)?;
                 }
-                Ok(())
+                // The scenario firmware's tick runs every capability's interrupt-rate code.
+                let elf = firmware::build_bin(root, "scenarios", Board::Netduinoplus2, &[])?;
+                divcheck::check_elf(&elf)
             }),
         ),
         ("QEMU golden scenario (firmware == host model)", Box::new(|| golden::golden(root))),
         ("tamper build is caught by the golden comparison", Box::new(|| golden::tamper(root))),
+        ("QEMU closed-loop scenarios (firmware == host model)", Box::new(|| scenarios::test(root))),
         (
             "end to end: motionctl streams 2000 segments to QEMU through 1 % noise",
             Box::new(|| e2e::test(root)),

@@ -1,0 +1,102 @@
+//! Every closed-loop scenario the firmware's scenario build runs, in order, behind one enum so
+//! the firmware and the host model walk the same list. Each capability keeps its scenario next
+//! to its logic; this module only lists them.
+
+pub mod override_sweep;
+
+use crate::scenario::{Scenario, ScenarioReport};
+
+/// One of the built-in scenarios.
+pub enum AnyScenario {
+    OverrideSweep(override_sweep::OverrideSweep),
+}
+
+/// How many scenarios [`build`] knows.
+pub const COUNT: usize = 1;
+
+/// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
+pub fn build(index: usize) -> Option<AnyScenario> {
+    match index {
+        0 => override_sweep::OverrideSweep::new().map(AnyScenario::OverrideSweep),
+        _ => None,
+    }
+}
+
+macro_rules! dispatch {
+    ($self:ident, $s:ident => $e:expr) => {
+        match $self {
+            AnyScenario::OverrideSweep($s) => $e,
+        }
+    };
+}
+
+impl Scenario for AnyScenario {
+    fn name(&self) -> &'static str {
+        dispatch!(self, s => s.name())
+    }
+
+    fn tick_hz(&self) -> u32 {
+        dispatch!(self, s => s.tick_hz())
+    }
+
+    #[inline]
+    fn tick(&mut self) -> bool {
+        dispatch!(self, s => s.tick())
+    }
+
+    fn report(&self) -> ScenarioReport {
+        dispatch!(self, s => s.report())
+    }
+
+    #[inline]
+    fn wants_background(&self) -> bool {
+        dispatch!(self, s => s.wants_background())
+    }
+
+    fn background(&mut self) {
+        dispatch!(self, s => s.background())
+    }
+}
+
+/// Longest any scenario may run on the host before it is cut off (ticks).
+pub const HOST_MAX_TICKS: u64 = 1 << 32;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{run_to_end, MAX_FIGURES};
+
+    #[test]
+    fn every_scenario_builds_finishes_and_fits_its_report() {
+        for i in 0..COUNT {
+            let mut s = build(i).expect("builds");
+            let r = run_to_end(&mut s, HOST_MAX_TICKS);
+            assert!(!s.tick(), "{} keeps running after its end", r.name);
+            assert!(r.figures.len() < MAX_FIGURES, "{}: figures may have been dropped", r.name);
+            assert!(r
+                .name
+                .bytes()
+                .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_'));
+        }
+        assert!(build(COUNT).is_none());
+    }
+
+    #[test]
+    fn override_sweep_keeps_every_step() {
+        let mut s = override_sweep::OverrideSweep::new().unwrap();
+        let r = run_to_end(&mut s, HOST_MAX_TICKS);
+        assert_eq!(r.fault, 0);
+        let total = |axis: usize| -> i64 {
+            override_sweep_moves().iter().map(|m| m.steps[axis] as i64).sum()
+        };
+        for axis in 0..2 {
+            assert_eq!(r.figure(["pos0_steps", "pos1_steps"][axis]), Some(total(axis)));
+            assert_eq!(r.figure(["net0_steps", "net1_steps"][axis]), Some(total(axis)));
+        }
+        assert_eq!(r.figure("segments").map(|n| n > 0), Some(true));
+    }
+
+    fn override_sweep_moves() -> &'static [crate::planner::Move] {
+        &override_sweep::MOVES
+    }
+}
