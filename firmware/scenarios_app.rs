@@ -99,16 +99,15 @@ mod app {
             None => Some(Event::Finished),
         });
         match event {
-            Some(Event::Background) => {
-                if !l.asked.swap(true, Relaxed) {
-                    l.events.write(Event::Background);
-                }
+            // Asked once; the runner clears `asked` when the work is done.
+            Some(Event::Background) if !l.asked.swap(true, Relaxed) => {
+                l.events.write(Event::Background);
             }
             Some(Event::Finished) => {
                 tick_timer.lock(|t| t.stop());
                 l.events.write(Event::Finished);
             }
-            None => {}
+            _ => {}
         }
     }
 
@@ -134,14 +133,9 @@ mod app {
             }
             active.lock(|a| *a = Some(scenario));
             tick_timer.lock(|t| t.start());
-            loop {
-                match cx.local.wait_event.wait().await {
-                    Event::Background => {
-                        active.lock(|a| a.as_mut().map(|s| s.background()));
-                        ASKED.store(false, Relaxed);
-                    }
-                    Event::Finished => break,
-                }
+            while let Event::Background = cx.local.wait_event.wait().await {
+                active.lock(|a| a.as_mut().map(|s| s.background()));
+                ASKED.store(false, Relaxed);
             }
             active.lock(|a| {
                 if let Some(s) = a.take() {
