@@ -225,9 +225,11 @@ impl Preparer {
         p.cap = p.cap.min(cap.min(MAX_RATE as u64) as u32);
         p.dr = seg.accel_per_tick.to_bits().clamp(1, ONE);
         p.inv_two_dr = ((1u64 << 32) / (2 * p.dr as u64)).min(u32::MAX as u64) as u32;
+        // Lane k is bit n - 1 - k of the Bresenham mask (see `Dda::bresenham`).
+        let n = p.n_active as usize;
         for (mask, axes) in p.slot_axes.iter_mut().enumerate() {
-            for k in 0..p.n_active as usize {
-                if mask & (1 << k) != 0 {
+            for k in 0..n {
+                if mask & (1 << (n - 1 - k)) != 0 {
                     *axes |= 1 << p.idx[k];
                 }
             }
@@ -252,8 +254,9 @@ impl Preparer {
 /// tick loads both at once.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Lane {
-    err: i32,
-    d: i32,
+    /// Bresenham error `e` in `[-t, 0)`, stored as the u32 `2^32 + e`.
+    err: u32,
+    d: u32,
 }
 
 /// Per-axis state while a DIR change or deferred steps hold the axis back.
@@ -553,20 +556,25 @@ impl Dda {
         out
     }
 
-    /// One Bresenham step over the active lanes; bit k of the result: lane k steps. One dispatch
-    /// on the lane count, then straight-line code.
+    /// One Bresenham step over the active lanes. Bit `n - 1 - k` of the result (n lanes): lane k
+    /// steps; [`Preparer::prepare`] builds `slot_axes` for that order. One dispatch on the lane
+    /// count, then straight-line code.
+    ///
+    /// The error `e` lives in `[-t, 0)` and the lane steps when `e + d >= 0`. Read as a u32, `e`
+    /// is `2^32 + e`, so the step is exactly the carry out of the u32 add `e + d`, and the
+    /// correction `- t` is an add of `2^32 - t`: an add that sets the carry, a conditional add,
+    /// and the carry shifted into the mask, with no sign tests.
     #[inline(always)]
     fn bresenham(&mut self) -> u8 {
-        let t = self.t as i32;
-        let mut slots = 0u8;
+        let minus_t = self.t.wrapping_neg();
+        let mut slots = 0u32;
         macro_rules! lanes {
             ($($k:literal)*) => {{
                 $(
                     let l = &mut self.lanes[$k];
-                    let e = l.err.wrapping_add(l.d);
-                    let step = e >= 0;
-                    l.err = if step { e.wrapping_sub(t) } else { e };
-                    slots |= (step as u8) << $k;
+                    let (e, step) = l.err.overflowing_add(l.d);
+                    l.err = if step { e.wrapping_add(minus_t) } else { e };
+                    slots = (slots << 1) | step as u32;
                 )*
             }};
         }
@@ -579,7 +587,7 @@ impl Dda {
             6 => lanes!(0 1 2 3 4 5),
             _ => {}
         }
-        slots
+        slots as u8
     }
 
     #[inline(always)]
@@ -750,7 +758,7 @@ impl Dda {
         self.slot_axes = p.slot_axes;
         for (lane, &d) in self.lanes.iter_mut().zip(&p.d) {
             // err = k*d + h - t*(s + 1) with k = s = 0; d <= t < 2^31.
-            *lane = Lane { err: p.h as i32 - p.t as i32, d: d as i32 };
+            *lane = Lane { err: p.h.wrapping_sub(p.t), d };
         }
         self.seg_dir = p.dir;
         self.seg_steps = p.steps;

@@ -25,7 +25,8 @@ const TARGETS: [(&str, Target); 3] = [
     ("max_tick_hz_at_10pct", Target::AtLeast(250_000.0)),
 ];
 
-pub fn run(root: &Path) -> Result<()> {
+/// `quick`: only the DDA figures, printed, nothing written (for working on the tick).
+pub fn run(root: &Path, quick: bool) -> Result<()> {
     let bench_elf = firmware::build(root, Board::Netduinoplus2, &["bench"])?;
     let demo_elf = firmware::build(root, Board::Netduinoplus2, &[])?;
     divcheck::check_elf(&demo_elf)?;
@@ -46,6 +47,12 @@ pub fn run(root: &Path) -> Result<()> {
     }
     let four = figures["dda_tick_instr_4axes"];
     figures.insert("max_tick_hz_at_10pct".into(), (BUDGET_CYCLES_PER_S / four.max(1.0)).floor());
+    if quick {
+        for (k, v) in &figures {
+            println!("{k:<40} {v}");
+        }
+        return Ok(());
+    }
 
     let (flash, ram) = sizes(&demo_elf)?;
     figures.insert("flash_bytes".into(), flash as f64);

@@ -33,7 +33,8 @@ commands:
   demo                                                  run the demo job in QEMU and compare with the host model
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
-  bench                                                 run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
+  bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
+                                                        (--quick: DDA tick figures only, printed)
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
                                                         (f405-motion: the host-link firmware)";
 
@@ -91,9 +92,13 @@ fn run() -> Result<()> {
             scenarios::show(&root)
         }
         "bench" => {
-            no_args(cmd, rest)?;
+            let quick = match rest {
+                [] => false,
+                [q] if q == "--quick" => true,
+                _ => bail!("usage: cargo xtask bench [--quick]"),
+            };
             setup::ensure(&root)?;
-            bench::run(&root)
+            bench::run(&root, quick)
         }
         "flash" => {
             let [board] = rest else {
