@@ -10,6 +10,7 @@ pub mod demo_job;
 pub mod fixed_math;
 pub mod model;
 pub mod planner;
+pub mod polar;
 pub mod protocol;
 pub mod report;
 pub mod scenario;

@@ -14,6 +14,7 @@ pub mod job;
 pub mod link;
 pub mod noise;
 pub mod plan;
+pub mod polar;
 pub mod progress;
 pub mod qemu;
 pub mod runner;

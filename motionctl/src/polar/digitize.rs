@@ -1,0 +1,275 @@
+//! The software digitizer: the tool-centre path, parametrised by arc length, crossing the
+//! machine's grid of radii and angles, as timed single-axis step events.
+//!
+//! Modern form of the thesis's listing (App. C): instead of Newton on theta1 for each grid line
+//! (which fails at tangency and picks the direction by retrying), the tool-centre path is sampled
+//! with steps small enough that each axis's nearest grid index changes by at most one between
+//! samples; an index change is a step, its direction is the sign of the change (robust at
+//! tangency: a path that touches a grid line without crossing it gives no event), and its time
+//! is the arc length to the crossing over Vt. The arc length uses the correct integrand |Q'(u)|
+//! (for a polar contour with no tool, sqrt(r1^2 + r1'^2)); the listing integrated r1 alone.
+//! The machine sits at the grid point nearest the tool centre, so each axis is within half a
+//! resolution of the ideal path between events (the crossings are of the midlines).
+
+use super::contour::{Contour, Jet};
+use super::drive;
+use super::{Resolution, R_MAX_IN, R_MIN_IN, THETA_MAX_RAD};
+use motion::polar::StepEvent;
+use std::f64::consts::PI;
+
+/// What the digitizer needs besides the contour.
+#[derive(Clone, Copy, Debug)]
+pub struct Setup {
+    /// Contour pole O1 relative to the machine pole O: distance (RI) and angle (EPS).
+    pub pole_r_in: f64,
+    pub pole_angle_rad: f64,
+    /// Tool radius; the tool centre runs on the right of the direction of travel (outside a
+    /// counter-clockwise closed contour).
+    pub tool_radius_in: f64,
+    /// Tangential speed of the tool centre.
+    pub vt_in_per_s: f64,
+    pub res: Resolution,
+    /// Event time quantum (the playback's DDA tick).
+    pub tick_hz: u32,
+    /// Cap Vt at the curvature-based speed limit (with a warning) instead of only warning.
+    pub cap_speed: bool,
+}
+
+/// Why a contour cannot be digitized.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum DigitizeError {
+    #[error("the machine pole lies inside the closed contour (winding number {0}): the arm cannot follow it")]
+    PoleInside(i32),
+    #[error("tool path leaves the work area at u = {u:.4}: r = {r_in:.4} in, theta = {theta_rad:.4} rad (need 3 < r < 13 in, 0 < theta < 2.8 rad)")]
+    OutsideWorkArea { u: f64, r_in: f64, theta_rad: f64 },
+    #[error("tool radius {0} in is larger than the concave radius of curvature {1:.4} in: the offset path folds")]
+    ToolTooLarge(f64, f64),
+    #[error("bad setup: {0}")]
+    Setup(&'static str),
+}
+
+/// The digitizer's output.
+#[derive(Clone, Debug, Default)]
+pub struct Digitized {
+    pub events: Vec<StepEvent>,
+    /// Arc length of the tool centre at each event, inches.
+    pub s_in: Vec<f64>,
+    /// Start of the machine: radial grid index, angle theta0 (the angular grid's origin).
+    pub start_r_steps: i64,
+    pub theta0_rad: f64,
+    /// Tool-centre path length.
+    pub length_in: f64,
+    /// Speed the events are timed for (Vt, or the capped speed).
+    pub vt_in_per_s: f64,
+    /// Smallest radius of curvature of the tool-centre path.
+    pub min_rho_in: f64,
+    pub warnings: Vec<String>,
+}
+
+/// 4-point Gauss-Legendre nodes and weights (the listing's; its text calls them Laguerre).
+pub const GL4_NODES: [f64; 4] =
+    [-0.861136311594053, -0.339981043584856, 0.339981043584856, 0.861136311594053];
+pub const GL4_WEIGHTS: [f64; 4] =
+    [0.347854845137454, 0.652145154862546, 0.652145154862546, 0.347854845137454];
+
+/// Integral of `f` over [a, b] by 4-point Gauss-Legendre.
+pub fn gauss4(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
+    let (m, h) = ((a + b) / 2.0, (b - a) / 2.0);
+    h * GL4_NODES.iter().zip(GL4_WEIGHTS).map(|(&x, w)| w * f(m + h * x)).sum::<f64>()
+}
+
+/// The tool-centre path in the machine frame.
+pub struct ToolPath<'a, C: Contour + ?Sized> {
+    pub contour: &'a C,
+    pub pole: [f64; 2],
+    pub tool_radius_in: f64,
+}
+
+impl<'a, C: Contour + ?Sized> ToolPath<'a, C> {
+    pub fn new(contour: &'a C, s: &Setup) -> Self {
+        let (sn, cs) = s.pole_angle_rad.sin_cos();
+        ToolPath {
+            contour,
+            pole: [s.pole_r_in * cs, s.pole_r_in * sn],
+            tool_radius_in: s.tool_radius_in,
+        }
+    }
+
+    /// Tool centre X and its derivative X' in the machine frame, plus the contour's signed
+    /// curvature (positive turning left).
+    pub fn eval(&self, u: f64) -> ([f64; 2], [f64; 2], f64) {
+        let [p, d1, d2]: Jet = self.contour.jet(u);
+        let speed = d1[0].hypot(d1[1]);
+        let t = [d1[0] / speed, d1[1] / speed];
+        let kappa = (d1[0] * d2[1] - d1[1] * d2[0]) / (speed * speed * speed);
+        // Normal to the right of travel: n = (t_y, -t_x); dn/du = -(-kappa |P'|) ... = kappa|P'| t.
+        let n = [t[1], -t[0]];
+        let rr = self.tool_radius_in;
+        let x = [self.pole[0] + p[0] + rr * n[0], self.pole[1] + p[1] + rr * n[1]];
+        let g = 1.0 + rr * kappa;
+        let dx = [d1[0] * g, d1[1] * g];
+        (x, dx, kappa)
+    }
+}
+
+struct Sample {
+    u: f64,
+    s: f64,
+    r: f64,
+    /// Unwrapped machine angle.
+    th: f64,
+}
+
+/// Digitizes `contour` with `setup`.
+pub fn digitize<C: Contour + ?Sized>(
+    contour: &C,
+    setup: &Setup,
+) -> Result<Digitized, DigitizeError> {
+    let res = setup.res;
+    if !(setup.vt_in_per_s > 0.0 && res.dr_in > 0.0 && res.dtheta_rad > 0.0 && setup.tick_hz > 0) {
+        return Err(DigitizeError::Setup("Vt, resolutions and tick rate must be > 0"));
+    }
+    if setup.tool_radius_in < 0.0 {
+        return Err(DigitizeError::Setup("tool radius must be >= 0"));
+    }
+    let path = ToolPath::new(contour, setup);
+    let (u0, u1) = contour.range();
+    let polar = |u: f64| {
+        let (x, dx, k) = path.eval(u);
+        let r = x[0].hypot(x[1]);
+        (r, x[1].atan2(x[0]), x, dx, k)
+    };
+    let mut out = Digitized { min_rho_in: f64::INFINITY, ..Default::default() };
+    let (r_start, th_start, ..) = polar(u0);
+    out.theta0_rad = th_start;
+    let ir = |r: f64| (r / res.dr_in).round() as i64;
+    let jt = |th: f64| ((th - th_start) / res.dtheta_rad).round() as i64;
+    out.start_r_steps = ir(r_start);
+    let check = |u: f64, r: f64, th: f64| {
+        if r <= R_MIN_IN || r >= R_MAX_IN || th <= 0.0 || th >= THETA_MAX_RAD {
+            Err(DigitizeError::OutsideWorkArea { u, r_in: r, theta_rad: th })
+        } else {
+            Ok(())
+        }
+    };
+    if contour.closed() {
+        // Winding number of the tool path about the machine pole, before the work-area check
+        // (a path round the pole always leaves the 2.8 rad sector, and this is the clearer error).
+        let n = 4096;
+        let mut turn = 0.0;
+        let mut prev = th_start;
+        for i in 1..=n {
+            let (_, th, ..) = polar(u0 + (u1 - u0) * i as f64 / n as f64);
+            turn += (th - prev + PI).rem_euclid(2.0 * PI) - PI;
+            prev = th;
+        }
+        let winding = (turn / (2.0 * PI)).round() as i32;
+        if winding != 0 {
+            return Err(DigitizeError::PoleInside(winding));
+        }
+    }
+    check(u0, r_start, th_start)?;
+    let mut cur = Sample { u: u0, s: 0.0, r: r_start, th: th_start };
+    let (mut ri, mut tj) = (ir(r_start), 0i64);
+    let speed = |u: f64| {
+        let (_, dx, _) = path.eval(u);
+        dx[0].hypot(dx[1])
+    };
+    let span = u1 - u0;
+    let mut h = span * 1e-4;
+    let mut events: Vec<(f64, u8, bool)> = Vec::new();
+    while cur.u < u1 {
+        let (r, _, x, dx, kappa) = polar(cur.u);
+        // Concave curvature tighter than the tool radius folds the offset path.
+        let g = 1.0 + setup.tool_radius_in * kappa;
+        if g <= 0.0 {
+            return Err(DigitizeError::ToolTooLarge(setup.tool_radius_in, 1.0 / kappa.abs()));
+        }
+        let sp = dx[0].hypot(dx[1]);
+        if kappa.abs() > 0.0 {
+            out.min_rho_in = out.min_rho_in.min((1.0 / kappa + setup.tool_radius_in).abs());
+        }
+        let dr = (x[0] * dx[0] + x[1] * dx[1]) / r;
+        let dth = (x[0] * dx[1] - x[1] * dx[0]) / (r * r);
+        // Under half a resolution per sample on each axis (at most one index change), and at most a
+        // small fraction of the contour so the curvature is resolved.
+        let lim =
+            |rate: f64, q: f64| if rate.abs() > 1e-300 { q / rate.abs() } else { f64::INFINITY };
+        h = lim(dr, 0.45 * res.dr_in)
+            .min(lim(dth, 0.45 * res.dtheta_rad))
+            .min(lim(sp, 0.02))
+            .min(h * 4.0);
+        let mut un = (cur.u + h).min(u1);
+        let next = loop {
+            let (rn, thn_w, ..) = polar(un);
+            let mut dthw = thn_w - cur.th.rem_euclid(2.0 * PI);
+            dthw = (dthw + PI).rem_euclid(2.0 * PI) - PI;
+            let thn = cur.th + dthw;
+            let ok = (ir(rn) - ri).abs() <= 1 && (jt(thn) - tj).abs() <= 1;
+            if ok || un - cur.u < span * 1e-14 {
+                let s = cur.s + gauss4(cur.u, un, speed);
+                break Sample { u: un, s, r: rn, th: thn };
+            }
+            un = cur.u + (un - cur.u) / 2.0;
+        };
+        check(next.u, next.r, next.th)?;
+        // Crossings inside this interval, by linear interpolation of the index functions.
+        let mut pair: [(f64, u8, bool); 2] = [(0.0, 9, false); 2];
+        let mut k = 0;
+        let ri_n = ir(next.r);
+        if ri_n != ri {
+            let line = (ri.max(ri_n) as f64 - 0.5) * res.dr_in;
+            let f = ((line - cur.r) / (next.r - cur.r)).clamp(0.0, 1.0);
+            pair[k] = (cur.s + f * (next.s - cur.s), 1, ri_n < ri);
+            k += 1;
+            ri = ri_n;
+        }
+        let tj_n = jt(next.th);
+        if tj_n != tj {
+            let line = th_start + (tj.max(tj_n) as f64 - 0.5) * res.dtheta_rad;
+            let f = ((line - cur.th) / (next.th - cur.th)).clamp(0.0, 1.0);
+            pair[k] = (cur.s + f * (next.s - cur.s), 0, tj_n < tj);
+            k += 1;
+            tj = tj_n;
+        }
+        if k == 2 && pair[1].0 < pair[0].0 {
+            pair.swap(0, 1);
+        }
+        events.extend_from_slice(&pair[..k]);
+        cur = next;
+    }
+    out.length_in = cur.s;
+    if contour.closed() {
+        let winding = ((cur.th - th_start) / (2.0 * PI)).round() as i32;
+        if winding != 0 {
+            return Err(DigitizeError::PoleInside(winding));
+        }
+    }
+    // Speed limit from the curvature and the radial drive's torque (warn, and cap if asked).
+    let limit = drive::curvature_speed_limit_in_per_s(out.min_rho_in);
+    let mut vt = setup.vt_in_per_s;
+    if vt > limit {
+        let msg = format!(
+            "Vt {:.4} in/s exceeds the curvature speed limit {:.4} in/s at radius of curvature {:.4} in: steps would be lost",
+            vt, limit, out.min_rho_in
+        );
+        if setup.cap_speed {
+            out.warnings.push(format!("{msg}; slowed to the limit"));
+            vt = limit;
+        } else {
+            out.warnings.push(msg);
+        }
+    }
+    out.vt_in_per_s = vt;
+    // Times in whole ticks from the start (no drift), dt = difference.
+    let ticks_per_in = setup.tick_hz as f64 / vt;
+    let mut prev = 0u64;
+    for (s, axis, negative) in events {
+        let t = (s * ticks_per_in).round() as u64;
+        let dt = t.saturating_sub(prev);
+        prev = prev.max(t);
+        out.events.push(StepEvent { dt_ticks: dt as u32, axis, negative });
+        out.s_in.push(s);
+    }
+    Ok(out)
+}
