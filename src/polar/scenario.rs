@@ -1,5 +1,6 @@
 //! Scenario: plays the built-in limacon stream ([`super::limacon_stream::BYTES`]) at a speed and
-//! size scale, decoding block by block as the firmware's feeder would, and records the pins.
+//! size scale, decoding block by block in the background (as the firmware's feeder would) and
+//! recording the pins.
 
 use super::limacon_stream;
 use super::playback::{Playback, SizeScale};
@@ -11,8 +12,9 @@ use crate::trace::StepRecorder;
 
 /// Tick rate the stream was generated for.
 pub const TICK_HZ: u32 = 100_000;
-/// Events decoded into the playback queue per tick at most (bounds the tick's work).
-const REFILL_PER_TICK: usize = 4;
+/// The tick asks for more events once this many queue slots are free: the rest of the queue
+/// covers the ticks until the background decoder has run (at most 4 events fire per tick).
+const REFILL_WHEN_FREE: usize = super::playback::QUEUE_DEPTH / 2;
 
 /// Playback of the built-in stream.
 #[derive(Clone, Debug)]
@@ -25,6 +27,8 @@ pub struct PolarPlayback {
     ticks: u64,
     fault: u8,
     events_decoded: u32,
+    /// Every event of the stream is in the playback queue.
+    fed: bool,
 }
 
 impl PolarPlayback {
@@ -41,20 +45,20 @@ impl PolarPlayback {
             ticks: 0,
             fault: 0,
             events_decoded: 0,
+            fed: false,
         }
     }
 
-    /// Moves up to [`REFILL_PER_TICK`] decoded events into the playback queue.
+    /// Decodes events into the playback queue until it is full or the stream ends: block
+    /// parsing checks a CRC and decodes varints, planning-rate work kept out of the tick.
     fn refill(&mut self) {
-        let mut n = 0;
-        while n < REFILL_PER_TICK && self.play.free() > 0 {
+        while self.play.free() > 0 {
             if let Some(it) = self.block.as_mut() {
                 match it.next() {
                     Some(Ok(ev)) => {
                         // free() > 0 was checked.
                         let _ = self.play.push(ev);
                         self.events_decoded += 1;
-                        n += 1;
                         continue;
                     }
                     Some(Err(_)) => return self.fail(),
@@ -63,6 +67,7 @@ impl PolarPlayback {
             }
             if self.rest.is_empty() {
                 self.play.finish();
+                self.fed = true;
                 return;
             }
             match parse_block(self.rest) {
@@ -82,6 +87,7 @@ impl PolarPlayback {
         self.rest = &[];
         self.block = None;
         self.play.finish();
+        self.fed = true;
     }
 }
 
@@ -94,8 +100,15 @@ impl Scenario for PolarPlayback {
         TICK_HZ
     }
 
-    fn tick(&mut self) -> bool {
+    fn wants_background(&self) -> bool {
+        !self.fed && self.play.free() >= REFILL_WHEN_FREE
+    }
+
+    fn background(&mut self) {
         self.refill();
+    }
+
+    fn tick(&mut self) -> bool {
         if self.play.done() {
             return false;
         }

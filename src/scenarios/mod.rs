@@ -4,20 +4,30 @@
 
 pub mod override_sweep;
 
+use crate::polar::playback::SizeScale;
+use crate::polar::scenario::PolarPlayback;
+use crate::segment::Rate;
+
 use crate::scenario::{Scenario, ScenarioReport};
 
-/// One of the built-in scenarios.
+/// One of the built-in scenarios. Variants differ in size a lot; only one exists at a time (the
+/// firmware's single slot) and there is no allocator to box them.
+#[allow(clippy::large_enum_variant)]
 pub enum AnyScenario {
     OverrideSweep(override_sweep::OverrideSweep),
+    /// The built-in limacon contour (Fahim) at 2x speed and 3:2 radial size.
+    PolarPlayback(PolarPlayback),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 1;
+pub const COUNT: usize = 2;
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
     match index {
         0 => override_sweep::OverrideSweep::new().map(AnyScenario::OverrideSweep),
+        1 => SizeScale::new(3, 2)
+            .map(|scale| AnyScenario::PolarPlayback(PolarPlayback::new(Rate::lit("2"), scale))),
         _ => None,
     }
 }
@@ -26,6 +36,7 @@ macro_rules! dispatch {
     ($self:ident, $s:ident => $e:expr) => {
         match $self {
             AnyScenario::OverrideSweep($s) => $e,
+            AnyScenario::PolarPlayback($s) => $e,
         }
     };
 }
