@@ -37,7 +37,8 @@ const fn recip_q30(d32: u32) -> u64 {
 }
 
 /// `num / den` without a divide instruction, saturating at `u64::MAX` (also for `den == 0`).
-/// Rounds toward zero from a reciprocal good to ~2^-29 relative: within `num/den * 2e-9 + 1`.
+/// A reciprocal good to ~2^-29 relative and one correction step: exact (floor) for quotients
+/// below 2^28, within `num/den * 4e-9` above.
 pub const fn ratio_u64(num: u64, den: u64) -> u64 {
     if den == 0 {
         return u64::MAX;
@@ -49,7 +50,11 @@ pub const fn ratio_u64(num: u64, den: u64) -> u64 {
     let (d32, carry) = if d as u32 == 0 { (top, false) } else { top.overflowing_add(1) };
     // den = D 2^(64-s) with D = d32/2^32; num/den = num X 2^(s - 64 - 30). A carry means D = 1.
     let (x, shift) = if carry { (1u64 << 30, 94 - s) } else { (recip_q30(d32), 94 - s) };
-    let q = (num as u128 * x as u128) >> shift;
+    let mut q = (num as u128 * x as u128) >> shift;
+    // The estimate is never above the quotient; one step up when the remainder allows it.
+    if q < u64::MAX as u128 && (q + 1) * den as u128 <= num as u128 {
+        q += 1;
+    }
     if q > u64::MAX as u128 {
         u64::MAX
     } else {
@@ -93,7 +98,7 @@ mod tests {
             let exact = num / den;
             let got = ratio_u64(num, den);
             prop_assert!(got <= exact, "never above: {got} > {exact}");
-            let slack = (exact as f64 * 4e-9) as u64 + 1;
+            let slack = if exact < 1 << 28 { 0 } else { (exact as f64 * 4e-9) as u64 + 1 };
             prop_assert!(exact - got <= slack, "{num}/{den}: {got} vs {exact}");
         }
     }
