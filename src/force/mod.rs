@@ -8,5 +8,7 @@
 
 pub mod biquad;
 pub mod chain;
+pub mod control;
 pub mod intmath;
 pub mod peak;
+pub mod plant;
