@@ -47,10 +47,11 @@ impl Biquad {
     /// five Q30 products stays below 2^62.
     #[inline]
     pub fn step(&mut self, c: &BiquadCoeffs, x: i32) -> i32 {
-        let acc = c.b0 as i64 * x as i64 + c.b1 as i64 * self.x1 as i64 + c.b2 as i64 * self.x2 as i64
-            - c.a1 as i64 * self.y1 as i64
-            - c.a2 as i64 * self.y2 as i64
-            + self.residue;
+        let acc =
+            c.b0 as i64 * x as i64 + c.b1 as i64 * self.x1 as i64 + c.b2 as i64 * self.x2 as i64
+                - c.a1 as i64 * self.y1 as i64
+                - c.a2 as i64 * self.y2 as i64
+                + self.residue;
         // The clamp only matters for inputs beyond the documented range.
         let y = (acc >> 30).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
         self.residue = acc - ((y as i64) << 30);

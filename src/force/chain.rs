@@ -221,7 +221,12 @@ mod tests {
         }
     }
 
-    fn run(ch: &mut ForceChain, counts: [u16; 3], samples: usize, air: bool) -> Option<ForceReading> {
+    fn run(
+        ch: &mut ForceChain,
+        counts: [u16; 3],
+        samples: usize,
+        air: bool,
+    ) -> Option<ForceReading> {
         let mut last = None;
         for k in 0..samples {
             // +/-1 count of noise so the channels are alive.
@@ -267,7 +272,9 @@ mod tests {
         let mut ch = ForceChain::new(cfg()).unwrap();
         let mut at = None;
         for k in 0..1000u16 {
-            if let ChainOutput::Fault(f) = ch.sample(&[2100, 2100 + (k & 1), 2048 + (k & 3)], 8333, false) {
+            if let ChainOutput::Fault(f) =
+                ch.sample(&[2100, 2100 + (k & 1), 2048 + (k & 3)], 8333, false)
+            {
                 at = Some((k, f));
                 break;
             }

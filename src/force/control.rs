@@ -47,6 +47,9 @@ pub struct ControlParams {
     pub trip_mn: u32,
     /// Consecutive updates below the contact threshold that mean the tool left the cut.
     pub air_after_ms: u32,
+    /// Standstill at start while the chain learns the zero (the tool must be in air); the
+    /// contact threshold means nothing before that.
+    pub tare_ms: u32,
     pub control_hz: u32,
     /// Axis steps per second at override 1.0 (the segment's planned feed).
     pub steps_per_s_at_one: u32,
@@ -99,6 +102,8 @@ pub struct ControlInput {
 /// Where the controller is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
+    /// Feed 0 while the chain tares, updates left.
+    Tare(u32),
     Air,
     /// Algorithm A's slow-feed hold, updates left.
     ContactSlow(u32),
@@ -185,7 +190,7 @@ impl ForceController {
             slow_updates: slow,
             stop_updates: stop,
             reduced_updates: reduced,
-            mode: Mode::Air,
+            mode: Mode::Tare(ms_to_updates(p.tare_ms, hz).max(1)),
             below: 0,
             integ_q30: 0,
             u_q30: p.feed_air.to_bits() as i64,
@@ -228,6 +233,8 @@ impl ForceController {
         let f = inp.force_mn;
         let in_contact = f >= self.p.contact_mn;
         self.mode = match self.mode {
+            Mode::Tare(n) if n > 1 => Mode::Tare(n - 1),
+            Mode::Tare(_) => Mode::Air,
             Mode::Air if in_contact => self.contact(),
             Mode::Air => Mode::Air,
             Mode::ContactSlow(n) if n > 1 => Mode::ContactSlow(n - 1),
@@ -247,6 +254,7 @@ impl ForceController {
             }
         }
         self.u_q30 = match self.mode {
+            Mode::Tare(_) => 0,
             Mode::Air => self.p.feed_air.to_bits() as i64,
             Mode::ContactSlow(_) => match self.p.contact {
                 ContactStrategy::SlowHold { slow, .. } => slow.to_bits() as i64,
@@ -267,7 +275,7 @@ impl ForceController {
             feed: self.feed(),
             hold: false,
             fault: None,
-            air: self.mode == Mode::Air,
+            air: matches!(self.mode, Mode::Air | Mode::Tare(_)),
         }
     }
 

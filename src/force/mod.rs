@@ -12,3 +12,4 @@ pub mod control;
 pub mod intmath;
 pub mod peak;
 pub mod plant;
+pub mod scenario;

@@ -292,7 +292,9 @@ mod tests {
     /// Pass growth (digest oracle 8): mu = 1 gives 0.5, 0.75, 0.875; mu = 0.5 gives 0.667, 0.889.
     #[test]
     fn spindle_compliance_pass_growth() {
-        for (kc, ks, printed) in [(5800, 5800, &[0.5, 0.75, 0.875][..]), (2900, 5800, &[0.667, 0.889][..])] {
+        for (kc, ks, printed) in
+            [(5800, 5800, &[0.5, 0.75, 0.875][..]), (2900, 5800, &[0.667, 0.889][..])]
+        {
             let mut sc = SpindleCompliance::new(kc, ks);
             let mu = kc as f64 / ks as f64;
             for (n, &p) in printed.iter().enumerate() {
