@@ -341,3 +341,179 @@ impl ForceController {
         (self.integ_q30 + p_q30).clamp(lo, hi)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(contact: ContactStrategy) -> ControlParams {
+        ControlParams {
+            fnom_mn: 4_100_000,
+            contact_mn: 45_000,
+            trip_mn: 18_000_000,
+            air_after_ms: 50,
+            tare_ms: 10,
+            control_hz: 2000,
+            steps_per_s_at_one: 12_700,
+            kp_dec_q16: 1 << 15,
+            kp_inc_q16: 1 << 15,
+            ki_dec_per_s_q16: 40 << 16,
+            ki_inc_per_s_q16: 20 << 16,
+            normalise: true,
+            fixed_scale_q16: 6_554,
+            feed_min: Rate::lit("0.01"),
+            feed_max: Rate::ONE,
+            feed_air: Rate::ONE,
+            contact,
+            min_spindle_mrev_s: 2000,
+        }
+    }
+
+    /// A plant at control rate: the feed moves the axis at once (no ramp), force is
+    /// `mn_per_step` times the steps of the last 60 updates (one tooth), zero before `wall`.
+    struct Sim {
+        ctl: ForceController,
+        x_q16: i64,
+        hist: [i64; 64],
+        k: usize,
+        wall: i64,
+        mn_per_step: i64,
+    }
+
+    impl Sim {
+        fn new(contact: ContactStrategy, mn_per_step: i64) -> Self {
+            let ctl = ForceController::new(params(contact)).unwrap();
+            Sim { ctl, x_q16: 0, hist: [0; 64], k: 0, wall: 300, mn_per_step }
+        }
+
+        fn step(&mut self) -> ControlOutput {
+            let x = self.x_q16 >> 16;
+            let pen = (x - self.wall).max(0);
+            let then = self.hist[(self.k + 4) % 64];
+            self.hist[self.k % 64] = pen;
+            self.k += 1;
+            let f = ((pen - then).max(0) * self.mn_per_step) as u32;
+            let o = self.ctl.update(&ControlInput {
+                force_mn: f,
+                tooth_updates: 60,
+                position_steps: x,
+                spindle_mrev_s: 8333,
+                chain_fault: None,
+            });
+            // 12 700 steps/s at 2 kHz = 6.35 steps per update at 1.0.
+            self.x_q16 += (o.feed.to_bits() as i64 * 416_154) >> 30;
+            o
+        }
+    }
+
+    #[test]
+    fn algorithm_a_slow_feed_hold_then_bumpless_pi() {
+        let slow = Rate::lit("0.01");
+        let mut s = Sim::new(ContactStrategy::SlowHold { slow, hold_ms: 100 }, 41_000);
+        let mut contact_at = None;
+        let mut prev = Rate::ZERO;
+        for k in 0..3000 {
+            let o = s.step();
+            if contact_at.is_none() && matches!(s.ctl.mode(), Mode::ContactSlow(_)) {
+                contact_at = Some(k);
+            }
+            if let Some(c) = contact_at {
+                if k < c + 200 {
+                    assert_eq!(o.feed, slow, "update {k}");
+                } else if k == c + 200 {
+                    // Bumpless: the PI starts from the slow feed (its first step is one P move).
+                    assert!(o.feed.to_bits() - prev.to_bits() < Rate::lit("0.3").to_bits());
+                }
+            }
+            prev = o.feed;
+        }
+        assert!(contact_at.is_some());
+        // 41 N per step, Fnom 4100 N: 100 steps per tooth = 1.667 steps/update = 0.2625.
+        let u = s.ctl.feed().to_num::<f64>();
+        assert!((u - 0.2625).abs() < 0.01, "{u}");
+    }
+
+    #[test]
+    fn algorithm_b_stops_then_reduced_then_full() {
+        let c =
+            ContactStrategy::StopReduced { stop_ms: 40, reduced_ms: 100, reduced_gain_q16: 21_845 };
+        let mut s = Sim::new(c, 41_000);
+        let mut modes = std::vec::Vec::new();
+        for _ in 0..3000 {
+            let o = s.step();
+            if let Mode::ContactStop(_) = s.ctl.mode() {
+                assert_eq!(o.feed, Rate::ZERO);
+            }
+            let m = core::mem::discriminant(&s.ctl.mode());
+            if modes.last() != Some(&m) {
+                modes.push(m);
+            }
+        }
+        let want =
+            [Mode::Tare(0), Mode::Air, Mode::ContactStop(0), Mode::Reduced(0), Mode::Cutting]
+                .map(|m| core::mem::discriminant(&m));
+        assert_eq!(modes, want);
+        let u = s.ctl.feed().to_num::<f64>();
+        assert!((u - 0.2625).abs() < 0.01, "{u}");
+    }
+
+    /// Anti-windup: after a long stretch clamped at the top feed with force far below Fnom, a
+    /// force above Fnom cuts the feed at the next update.
+    #[test]
+    fn no_windup_at_the_clamp() {
+        let mut s = Sim::new(ContactStrategy::Direct, 2_000);
+        for _ in 0..2000 {
+            s.step();
+        }
+        assert_eq!(s.ctl.feed(), Rate::ONE, "clamped at the top");
+        // 381 steps per tooth at 15 N: 5.7 kN, above Fnom and below the trip level.
+        s.mn_per_step = 15_000;
+        let mut k = 0;
+        loop {
+            let o = s.step();
+            assert_eq!(o.fault, None);
+            if o.feed != Rate::ONE {
+                break;
+            }
+            k += 1;
+        }
+        assert!(k <= 1, "left the clamp after {k} updates");
+    }
+
+    #[test]
+    fn faults_latch_a_hold() {
+        let mut s = Sim::new(ContactStrategy::Direct, 41_000);
+        for _ in 0..500 {
+            s.step();
+        }
+        let o = s.ctl.update(&ControlInput {
+            force_mn: 18_000_001,
+            tooth_updates: 60,
+            position_steps: 0,
+            spindle_mrev_s: 8333,
+            chain_fault: None,
+        });
+        assert_eq!((o.hold, o.fault), (true, Some(FaultCode::ForceTrip)));
+        let o = s.step();
+        assert_eq!((o.hold, o.fault, o.feed), (true, Some(FaultCode::ForceTrip), Rate::ZERO));
+        let mut s = Sim::new(ContactStrategy::Direct, 41_000);
+        let o = s.ctl.update(&ControlInput {
+            force_mn: 0,
+            tooth_updates: 60,
+            position_steps: 0,
+            spindle_mrev_s: 100,
+            chain_fault: None,
+        });
+        assert_eq!(o.fault, Some(FaultCode::SpindleStopped));
+    }
+
+    #[test]
+    fn thresholds_must_be_ordered() {
+        let mut p = params(ContactStrategy::Direct);
+        p.trip_mn = p.fnom_mn;
+        assert_eq!(ForceController::new(p).unwrap_err(), ControlConfigError::Thresholds);
+        let mut p = params(ContactStrategy::Direct);
+        p.control_hz = 500;
+        assert_eq!(ForceController::new(p).unwrap_err(), ControlConfigError::Rate);
+    }
+}
