@@ -12,6 +12,7 @@ pub mod fourier;
 pub mod gcode;
 pub mod job;
 pub mod link;
+pub mod milling;
 pub mod noise;
 pub mod plan;
 pub mod polar;

@@ -1,0 +1,8 @@
+//! Host oracles for Elbestawi (1980), adaptive constant-force milling: the thesis's static
+//! numbers, root loci, pass-by-pass force growth and safe rapid feeds, recomputed in f64 so
+//! tests can compare them with the printed values (digest: shared/digest/elbestawi-adaptive-force.md).
+
+pub mod case_a;
+pub mod pass_growth;
+pub mod rapid_feed;
+pub mod root_locus;

@@ -1,0 +1,15 @@
+//! Constant-force adaptive feed for milling (Elbestawi 1980, issue #4): the force sensor chain,
+//! the control law that turns force into a DDA feed override, the milling plant the simulation
+//! drives, and the closed-loop scenarios.
+//!
+//! Rates: the chain's [`chain::ForceChain::sample`] runs per ADC sample (10 kHz in the scenario),
+//! every [`chain::DECIMATION`]th sample yields a reading for [`control::ForceController::update`]
+//! (2 kHz). Both are integer-only and division-free; setup code divides.
+
+pub mod biquad;
+pub mod chain;
+pub mod control;
+pub mod intmath;
+pub mod peak;
+pub mod plant;
+pub mod scenario;
