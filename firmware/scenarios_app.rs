@@ -21,62 +21,84 @@ compile_error!("select exactly one board feature");
 #[allow(dead_code, unused_imports)]
 mod board;
 
-/// Under QEMU each timer interrupt runs a batch of scenario ticks back to back, and the timer
-/// fires faster than a batch can finish, so the CPU never sleeps: QEMU (`-icount`, `sleep=off`)
-/// spends far more wall time delivering an interrupt than running a tick. A scenario's outcome
-/// depends only on its own tick count, never on the timer, so this changes nothing but the wall
-/// time. On hardware every interrupt is one tick at the scenario's rate.
-const QEMU_TICK_HZ: u32 = 1_000_000;
-const TICKS_PER_IRQ: u32 = if cfg!(feature = "board-netduinoplus2") { 256 } else { 1 };
+/// Under QEMU the timer does not pace the scenario: the runner pends the TIM2 interrupt itself and
+/// each interrupt runs a batch of ticks and pends the next, so ticks run back to back and the CPU
+/// never sleeps. QEMU (`-icount`, `sleep=off`) spends far more wall time delivering a timer
+/// interrupt than running a tick, and its STM32 timer model stops firing once a handler
+/// outlasts a few timer periods. A scenario's outcome depends only on its own tick count, never
+/// on the timer, so this changes nothing but the wall time. On hardware every timer interrupt
+/// is one tick at the scenario's rate.
+const SELF_PACED: bool = cfg!(feature = "board-netduinoplus2");
+const TICKS_PER_IRQ: u32 = if SELF_PACED { 256 } else { 1 };
 
 /// Tick rate the timer starts with; every scenario sets its own before the timer runs.
 const INITIAL_TICK_HZ: u32 = 10_000;
 
 #[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2])]
 mod app {
-    use super::{board, INITIAL_TICK_HZ, QEMU_TICK_HZ, TICKS_PER_IRQ};
-    use core::sync::atomic::Ordering::Relaxed;
+    use super::{board, INITIAL_TICK_HZ, SELF_PACED, TICKS_PER_IRQ};
     use motion::scenario::Scenario;
     use motion::scenarios::{self, AnyScenario};
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
+    use stm32f4::stm32f405::Interrupt;
 
     #[shared]
     struct Shared {
         active: Option<AnyScenario>,
+        /// Who owns the next step of the active scenario. Only the tick moves it out of
+        /// `Running`, only the runner moves it back, so a late or repeated timer interrupt (one
+        /// can be pending while the tick stops the timer) never ticks or reports twice.
+        phase: Phase,
         tick_timer: board::TickTimer,
+        /// Cycles (under QEMU: instructions) the tick spent in the active scenario, and its ticks.
+        cost: Cost,
     }
 
-    /// What the tick tells the runner.
-    #[derive(Clone, Copy)]
-    pub enum Event {
-        /// The scenario wants planning-rate work before its next tick.
+    #[derive(Clone, Copy, Default)]
+    pub struct Cost {
+        cycles: u64,
+        ticks: u64,
+    }
+
+    #[derive(Clone, Copy, PartialEq, Eq)]
+    pub enum Phase {
+        /// No scenario, or one being built or reported.
+        Idle,
+        /// The tick advances the scenario.
+        Running,
+        /// The scenario waits for planning-rate work: the runner's turn.
         Background,
+        /// The scenario has ended: the runner reports it.
         Finished,
     }
 
     #[local]
     struct Local {
         rate: board::TickRate,
-        events: SignalWriter<'static, Event>,
-        wait_event: SignalReader<'static, Event>,
-        /// A background request is out; the tick does not repeat it.
-        asked: &'static core::sync::atomic::AtomicBool,
+        wake_runner: SignalWriter<'static, ()>,
+        runner_waits: SignalReader<'static, ()>,
+        cycles: board::CycleCounter,
     }
 
     #[init]
     fn init(mut cx: init::Context) -> (Shared, Local) {
-        let board::Board { tick_timer, .. } = board::init(cx.device, &mut cx.core, INITIAL_TICK_HZ);
+        let board::Board { tick_timer, cycles, .. } =
+            board::init(cx.device, &mut cx.core, INITIAL_TICK_HZ);
         defmt::println!(
-            "motion-board {=str} board={=str} scenarios={=usize}",
+            "motion-board {=str} board={=str} scenarios={=usize} slot={=usize}",
             env!("CARGO_PKG_VERSION"),
             board::NAME,
-            scenarios::COUNT
+            scenarios::COUNT,
+            core::mem::size_of::<AnyScenario>()
         );
         let rate = tick_timer.rate_control();
-        let (events, wait_event) = make_signal!(Event);
+        let (wake_runner, runner_waits) = make_signal!(());
         defmt::unwrap!(runner::spawn().ok());
-        (Shared { active: None, tick_timer }, Local { rate, events, wait_event, asked: &ASKED })
+        (
+            Shared { active: None, phase: Phase::Idle, tick_timer, cost: Cost::default() },
+            Local { rate, wake_runner, runner_waits, cycles },
+        )
     }
 
     #[idle]
@@ -86,43 +108,66 @@ mod app {
         }
     }
 
-    static ASKED: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
-
     /// Scenario ticks (see [`TICKS_PER_IRQ`]) until the scenario waits for background work. The
     /// highest priority: its resources need no lock here.
-    #[task(binds = TIM2, priority = 3, shared = [active, tick_timer], local = [events, asked])]
+    #[task(binds = TIM2, priority = 3, shared = [active, phase, tick_timer, cost],
+        local = [wake_runner, cycles])]
     fn tick(cx: tick::Context) {
-        let tick::SharedResources { mut active, mut tick_timer, .. } = cx.shared;
+        let tick::SharedResources { mut active, mut phase, mut tick_timer, mut cost, .. } =
+            cx.shared;
         let l = cx.local;
         tick_timer.lock(|t| t.clear_update());
-        let event = active.lock(|a| {
-            let Some(s) = a.as_mut() else { return Some(Event::Finished) };
+        if phase.lock(|p| *p) != Phase::Running {
+            return;
+        }
+        let start = l.cycles.now();
+        let mut ticks = 0;
+        let next = active.lock(|a| {
+            let Some(s) = a.as_mut() else { return Phase::Finished };
             for _ in 0..TICKS_PER_IRQ {
                 if s.wants_background() {
-                    return Some(Event::Background);
+                    return Phase::Background;
                 }
                 if !s.tick() {
-                    return Some(Event::Finished);
+                    return Phase::Finished;
                 }
+                ticks += 1;
             }
-            None
+            Phase::Running
         });
-        match event {
-            // Asked once; the runner clears `asked` when the work is done.
-            Some(Event::Background) if !l.asked.swap(true, Relaxed) => {
-                l.events.write(Event::Background);
-            }
-            Some(Event::Finished) => {
+        let spent = l.cycles.now().wrapping_sub(start);
+        cost.lock(|c| {
+            c.cycles += spent as u64;
+            c.ticks += ticks;
+        });
+        if next != Phase::Running {
+            if next == Phase::Finished {
                 tick_timer.lock(|t| t.stop());
-                l.events.write(Event::Finished);
             }
-            _ => {}
+            phase.lock(|p| *p = next);
+            l.wake_runner.write(());
+        } else if SELF_PACED {
+            rtic::pend(Interrupt::TIM2);
         }
     }
 
-    #[task(priority = 1, shared = [active, tick_timer], local = [rate, wait_event])]
+    /// Hands the scenario to the tick: the timer paces it, or (self-paced) one pend starts it.
+    fn start(
+        phase: &mut impl rtic::Mutex<T = Phase>,
+        tick_timer: &mut impl rtic::Mutex<T = board::TickTimer>,
+    ) {
+        phase.lock(|p| *p = Phase::Running);
+        if SELF_PACED {
+            rtic::pend(Interrupt::TIM2);
+        } else {
+            tick_timer.lock(|t| t.start());
+        }
+    }
+
+    #[task(priority = 1, shared = [active, phase, tick_timer, cost], local = [rate, runner_waits])]
     async fn runner(cx: runner::Context) {
-        let runner::SharedResources { mut active, mut tick_timer, .. } = cx.shared;
+        let runner::SharedResources { mut active, mut phase, mut tick_timer, mut cost, .. } =
+            cx.shared;
         let mut ok = true;
         for index in 0..scenarios::COUNT {
             let Some(scenario) = scenarios::build(index) else {
@@ -130,25 +175,39 @@ mod app {
                 ok = false;
                 continue;
             };
-            let hz = if cfg!(feature = "board-netduinoplus2") {
-                QEMU_TICK_HZ
-            } else {
-                scenario.tick_hz()
-            };
-            if !cx.local.rate.set(hz) {
+            let hz = scenario.tick_hz();
+            if !SELF_PACED && !cx.local.rate.set(hz) {
                 defmt::error!("scenario {=str}: tick {=u32} Hz not supported", scenario.name(), hz);
                 ok = false;
                 continue;
             }
             active.lock(|a| *a = Some(scenario));
-            tick_timer.lock(|t| t.start());
-            while let Event::Background = cx.local.wait_event.wait().await {
-                active.lock(|a| a.as_mut().map(|s| s.background()));
-                ASKED.store(false, Relaxed);
+            cost.lock(|c| *c = Cost::default());
+            start(&mut phase, &mut tick_timer);
+            loop {
+                cx.local.runner_waits.wait().await;
+                match phase.lock(|p| *p) {
+                    Phase::Background => {
+                        active.lock(|a| a.as_mut().map(|s| s.background()));
+                        start(&mut phase, &mut tick_timer);
+                    }
+                    Phase::Finished => break,
+                    // A wake from before the last phase change: nothing to do.
+                    Phase::Running | Phase::Idle => {}
+                }
             }
+            phase.lock(|p| *p = Phase::Idle);
             active.lock(|a| {
                 if let Some(s) = a.take() {
                     s.report().write_lines(|line: &str| defmt::println!("{=str}", line));
+                    // Not part of the report: the host model has no cycle counter.
+                    let c = cost.lock(|c| *c);
+                    defmt::println!(
+                        "scenario_cost name={=str} ticks={=u64} cycles={=u64}",
+                        s.name(),
+                        c.ticks,
+                        c.cycles
+                    );
                 }
             });
         }

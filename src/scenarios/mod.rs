@@ -4,6 +4,7 @@
 
 pub mod override_sweep;
 
+use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
@@ -17,10 +18,12 @@ pub enum AnyScenario {
     OverrideSweep(override_sweep::OverrideSweep),
     /// The built-in limacon contour (Fahim) at 2x speed and 3:2 radial size.
     PolarPlayback(PolarPlayback),
+    /// Constant-force milling (Elbestawi): closed-loop Case A and its fault variants.
+    Force(ForceScenario),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 2;
+pub const COUNT: usize = 2 + ForceVariant::ALL.len();
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
@@ -28,7 +31,10 @@ pub fn build(index: usize) -> Option<AnyScenario> {
         0 => override_sweep::OverrideSweep::new().map(AnyScenario::OverrideSweep),
         1 => SizeScale::new(3, 2)
             .map(|scale| AnyScenario::PolarPlayback(PolarPlayback::new(Rate::lit("2"), scale))),
-        _ => None,
+        i => ForceVariant::ALL
+            .get(i - 2)
+            .and_then(|&v| ForceScenario::new(v).ok())
+            .map(AnyScenario::Force),
     }
 }
 
@@ -37,6 +43,7 @@ macro_rules! dispatch {
         match $self {
             AnyScenario::OverrideSweep($s) => $e,
             AnyScenario::PolarPlayback($s) => $e,
+            AnyScenario::Force($s) => $e,
         }
     };
 }

@@ -41,7 +41,11 @@ pub fn print_report(r: &ScenarioReport) {
 /// Builds and runs the scenario firmware; its report lines per scenario, and the wall time.
 pub fn firmware_lines(root: &Path) -> Result<(Reports, Duration)> {
     let elf = firmware::build_bin(root, "scenarios", Board::Netduinoplus2, &[])?;
-    let run = firmware::run_qemu_for(&elf, TIMEOUT)?;
+    let timeout = std::env::var("SCENARIO_TIMEOUT_S")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .map_or(TIMEOUT, Duration::from_secs);
+    let run = firmware::run_qemu_for(&elf, timeout)?;
     let mut out: Reports = Vec::new();
     for line in run.texts() {
         if let Some(rest) = line.strip_prefix("scenario name=") {
