@@ -8,6 +8,7 @@ pub mod config;
 pub mod dda;
 pub mod demo_job;
 pub mod fixed_math;
+pub mod machine;
 pub mod model;
 pub mod planner;
 pub mod protocol;
