@@ -51,12 +51,17 @@ impl BoardConfig {
     pub const fn safe_default() -> BoardConfig {
         const AXIS: AxisLimits =
             AxisLimits { max_rate_hz: 1_000, accel_steps_per_s2: 10_000, junction_jerk_hz: 100 };
-        const SCALE: AxisScale = AxisScale { steps_per_unit_milli: 1_000, soft_min: 0, soft_max: 0 };
+        const SCALE: AxisScale =
+            AxisScale { steps_per_unit_milli: 1_000, soft_min: 0, soft_max: 0 };
         BoardConfig {
             wire: WireConfig {
                 machine: MachineConfig {
                     tick_hz: 50_000,
-                    timing: StepTiming { pulse_ns: 5_000, dir_setup_ns: 10_000, dir_hold_ns: 10_000 },
+                    timing: StepTiming {
+                        pulse_ns: 5_000,
+                        dir_setup_ns: 10_000,
+                        dir_hold_ns: 10_000,
+                    },
                     axis_count: MAX_AXES as u8,
                     axes: [AXIS; MAX_AXES],
                 },

@@ -1,5 +1,6 @@
 //! The homing sequencer: per axis, in the configured order, seek the switch at the search speed,
-//! back off, approach again at the latch speed and set the origin where the switch closes.
+//! back off, approach again at the latch speed, set the origin where the switch closes, and pull
+//! off the switch again.
 //!
 //! Moves are planned in the background (the planner divides); the tick only watches the switch
 //! and the DDA: [`Homing::watch`] is a handful of compares.
@@ -17,6 +18,9 @@ pub enum HomePhase {
     Backoff,
     /// Toward the switch at the latch speed, at most twice the backoff.
     Latch,
+    /// Off the switch again by `backoff_steps`, so the next axis does not start with a closed
+    /// limit switch; it must open.
+    PullOff,
 }
 
 /// What the tick must do after [`Homing::watch`].
@@ -26,11 +30,17 @@ pub enum HomeEvent {
     /// Stop at once (the switch closed during a seek); the next move follows in the background.
     Stop,
     /// The switch closed during the latch approach: this axis's origin is here. Stop at once.
-    Latched { axis: u8 },
+    Latched {
+        axis: u8,
+    },
     /// The move ended without the switch closing.
-    NotFound { axis: u8 },
+    NotFound {
+        axis: u8,
+    },
     /// The switch stayed closed after backing off.
-    Stuck { axis: u8 },
+    Stuck {
+        axis: u8,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,7 +127,9 @@ impl Homing {
         let toward: i64 = if h.toward_max { 1 } else { -1 };
         let (len, feed_hz) = match self.phase {
             HomePhase::Seek => (toward * h.max_travel_steps as i64, h.search_hz),
-            HomePhase::Backoff => (-toward * h.backoff_steps as i64, h.search_hz),
+            HomePhase::Backoff | HomePhase::PullOff => {
+                (-toward * h.backoff_steps as i64, h.search_hz)
+            }
             HomePhase::Latch => (toward * 2 * h.backoff_steps as i64, h.latch_hz),
         };
         let mut steps = [0i32; MAX_AXES];
@@ -154,9 +166,19 @@ impl Homing {
                 HomeEvent::None
             }
             HomePhase::Latch if pressed => {
+                self.phase = HomePhase::PullOff;
+                self.moving = false;
+                self.need_move = true;
+                HomeEvent::Latched { axis }
+            }
+            HomePhase::PullOff if dda_idle => {
+                if pressed {
+                    self.moving = false;
+                    return HomeEvent::Stuck { axis };
+                }
                 self.k += 1;
                 self.begin_axis(cfg);
-                HomeEvent::Latched { axis }
+                HomeEvent::None
             }
             HomePhase::Seek | HomePhase::Latch if dda_idle => {
                 self.moving = false;

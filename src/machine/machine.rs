@@ -107,7 +107,9 @@ pub enum Refusal {
     InvalidConfig(ConfigError),
     Segment(SegmentError),
     /// The segment would end outside the soft limits of `axis`.
-    SoftLimit { axis: u8 },
+    SoftLimit {
+        axis: u8,
+    },
 }
 
 impl Refusal {
@@ -378,7 +380,10 @@ impl Machine {
         if self.frozen {
             // No edge this tick; DIR stays; a STEP high from the last tick stays high a little
             // longer (longer pulses are harmless).
-            return TickOut { step: StepOutput::new(0, 0, self.last_dir, 0), outputs: self.outputs };
+            return TickOut {
+                step: StepOutput::new(0, 0, self.last_dir, 0),
+                outputs: self.outputs,
+            };
         }
         let step = dda.tick();
         self.last_dir = step.dir();
@@ -466,10 +471,11 @@ impl Machine {
                 self.raw[i] += if dir & (1 << i) != 0 { -1 } else { 1 };
             }
         }
-        if self.homed && self.state != MachineState::Homing {
-            if self.limits.outside(&self.positions()).is_some() {
-                self.raise(FaultCode::SoftLimit);
-            }
+        if self.homed
+            && self.state != MachineState::Homing
+            && self.limits.outside(&self.positions()).is_some()
+        {
+            self.raise(FaultCode::SoftLimit);
         }
     }
 
@@ -518,8 +524,7 @@ impl Machine {
         // The DDA runs the last admitted segment, which expects a successor (exit speed > 0),
         // and nothing is queued behind it: the host is late. Hold now, so the stop is a ramp on
         // the path instead of the DDA's abrupt stop at the segment end.
-        let starving =
-            in_flight == 1 && self.last_exit_nonzero && dda.ready_free() == READY_DEPTH;
+        let starving = in_flight == 1 && self.last_exit_nonzero && dda.ready_free() == READY_DEPTH;
         if starving || dda.underruns() != self.underruns_base {
             self.raise(FaultCode::QueueUnderrun);
         }

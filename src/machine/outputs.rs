@@ -15,7 +15,8 @@ pub struct Outputs {
 
 impl Outputs {
     /// What an e-stop forces: everything that moves or heats off, the Z slide at rest.
-    pub const SAFE: Outputs = Outputs { spindle_enable: false, wire_power: false, z_dac: Z_DAC_MID_SCALE };
+    pub const SAFE: Outputs =
+        Outputs { spindle_enable: false, wire_power: false, z_dac: Z_DAC_MID_SCALE };
 }
 
 impl Default for Outputs {

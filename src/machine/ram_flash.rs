@@ -13,7 +13,9 @@ pub enum RamFlashError {
     NotAligned,
     OutOfBounds,
     /// A write to a byte not erased since its last write.
-    NotErased { offset: u32 },
+    NotErased {
+        offset: u32,
+    },
     /// The power was cut (this access may be partly done).
     PowerCut,
 }

@@ -2,23 +2,27 @@
 //! the firmware and the host model walk the same list. Each capability keeps its scenario next
 //! to its logic; this module only lists them.
 
+pub mod faults;
 pub mod override_sweep;
 
 use crate::scenario::{Scenario, ScenarioReport};
 
 /// One of the built-in scenarios.
+// Fixed capacity is the point (no allocation on the board); boxing is not an option.
+#[allow(clippy::large_enum_variant)]
 pub enum AnyScenario {
     OverrideSweep(override_sweep::OverrideSweep),
+    Fault(faults::FaultScenario),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 1;
+pub const COUNT: usize = 1 + faults::CASES.len();
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
     match index {
         0 => override_sweep::OverrideSweep::new().map(AnyScenario::OverrideSweep),
-        _ => None,
+        i => faults::FaultScenario::new(*faults::CASES.get(i - 1)?).map(AnyScenario::Fault),
     }
 }
 
@@ -26,6 +30,7 @@ macro_rules! dispatch {
     ($self:ident, $s:ident => $e:expr) => {
         match $self {
             AnyScenario::OverrideSweep($s) => $e,
+            AnyScenario::Fault($s) => $e,
         }
     };
 }
