@@ -3,9 +3,9 @@
 //! of bytes, which leaves the interrupted write or erase half done. The host tests use it as the
 //! flash mock; the QEMU scenarios use an erased one (QEMU's flash is read-only: config missing).
 
-use embedded_storage::nor_flash::{
-    ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
-};
+use embedded_storage::nor_flash::{ErrorType, NorFlashError, NorFlashErrorKind};
+/// The traits, re-exported so users of the mock need no direct dependency.
+pub use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 
 /// What went wrong in a [`RamFlash`] access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
