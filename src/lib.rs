@@ -9,6 +9,7 @@ pub mod dda;
 pub mod demo_job;
 pub mod fixed_math;
 pub mod force;
+pub mod machine;
 pub mod model;
 pub mod planner;
 pub mod polar;

@@ -2,6 +2,7 @@
 //! the firmware and the host model walk the same list. Each capability keeps its scenario next
 //! to its logic; this module only lists them.
 
+pub mod faults;
 pub mod override_sweep;
 
 use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
@@ -20,10 +21,12 @@ pub enum AnyScenario {
     PolarPlayback(PolarPlayback),
     /// Constant-force milling (Elbestawi): closed-loop Case A and its fault variants.
     Force(ForceScenario),
+    /// The machine's fault suite: each cause injected by the sim board.
+    Fault(faults::FaultScenario),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 2 + ForceVariant::ALL.len();
+pub const COUNT: usize = 2 + ForceVariant::ALL.len() + faults::CASES.len();
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
@@ -31,11 +34,20 @@ pub fn build(index: usize) -> Option<AnyScenario> {
         0 => override_sweep::OverrideSweep::new().map(AnyScenario::OverrideSweep),
         1 => SizeScale::new(3, 2)
             .map(|scale| AnyScenario::PolarPlayback(PolarPlayback::new(Rate::lit("2"), scale))),
-        i => ForceVariant::ALL
-            .get(i - 2)
-            .and_then(|&v| ForceScenario::new(v).ok())
-            .map(AnyScenario::Force),
+        _ => build_group(index - 2),
     }
+}
+
+/// The scenarios after the first two, group by group.
+fn build_group(mut i: usize) -> Option<AnyScenario> {
+    if let Some(&v) = ForceVariant::ALL.get(i) {
+        return ForceScenario::new(v).ok().map(AnyScenario::Force);
+    }
+    i -= ForceVariant::ALL.len();
+    if let Some(&c) = faults::CASES.get(i) {
+        return faults::FaultScenario::new(c).map(AnyScenario::Fault);
+    }
+    None
 }
 
 macro_rules! dispatch {
@@ -44,6 +56,7 @@ macro_rules! dispatch {
             AnyScenario::OverrideSweep($s) => $e,
             AnyScenario::PolarPlayback($s) => $e,
             AnyScenario::Force($s) => $e,
+            AnyScenario::Fault($s) => $e,
         }
     };
 }

@@ -1,0 +1,227 @@
+//! Every (state, command) pair of the machine's table, driven for real: the answer matches the
+//! table, and a refusal changes nothing at all (machine and DDA compared before and after).
+
+use motion::dda::{Dda, Preparer};
+use motion::machine::{
+    cell, BoardConfig, Cell, CommandKind, Inputs, Machine, MachineCommand, MachineState, Refusal,
+};
+use motion::planner::{Move, Planner};
+use motion::protocol::FaultCode;
+use motion::scenarios::faults::{config, Case};
+use motion::segment::Segment;
+
+struct Rig {
+    m: Machine,
+    dda: Dda,
+    prep: Preparer,
+}
+
+impl Rig {
+    fn new(cfg: Option<BoardConfig>) -> Rig {
+        let mut m = Machine::new();
+        if let Some(c) = cfg {
+            m.boot(Ok(c));
+        }
+        let mc = m.config().wire.machine;
+        Rig { m, dda: Dda::new(&mc).unwrap(), prep: Preparer::new(&mc).unwrap() }
+    }
+
+    fn settle(&mut self) {
+        while self.m.wants_background() {
+            self.m.background(&mut self.dda, &mut self.prep);
+        }
+    }
+
+    fn tick(&mut self, inp: &Inputs) {
+        self.settle();
+        self.m.tick(&mut self.dda, inp);
+        self.settle();
+    }
+
+    fn cmd(&mut self, c: MachineCommand<'_>) -> Result<MachineState, Refusal> {
+        self.m.command(c, &mut self.dda)
+    }
+
+    fn snapshot(&self) -> String {
+        format!(
+            "{:?} {:?} {:?} {} {}",
+            self.m,
+            self.dda.state(),
+            self.dda.positions(),
+            self.dda.ready_free(),
+            self.dda.now()
+        )
+    }
+}
+
+fn segment(steps: i32) -> Segment {
+    let mut p = Planner::new(&config(Case::EStop).wire.machine);
+    p.push(&Move { steps: [steps, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+    p.finish();
+    p.pop().unwrap()
+}
+
+/// A rig in `s`, reached through commands and ticks only.
+fn rig_in(s: MachineState) -> Rig {
+    let mut r = match s {
+        MachineState::Boot => return Rig::new(None),
+        MachineState::Homing => Rig::new(Some(config(Case::HomingOk))),
+        _ => Rig::new(Some(config(Case::EStop))),
+    };
+    if s == MachineState::Idle {
+        return r;
+    }
+    r.cmd(MachineCommand::Home).unwrap();
+    r.settle();
+    if s == MachineState::Homing {
+        return r;
+    }
+    r.tick(&Inputs::QUIET);
+    assert_eq!(r.m.state(), MachineState::Ready);
+    match s {
+        MachineState::Ready => {}
+        MachineState::Running | MachineState::Holding => {
+            let seg = segment(2_000);
+            r.cmd(MachineCommand::Queue(&seg)).unwrap();
+            r.dda.push(&r.prep.prepare(&seg).unwrap()).unwrap();
+            r.cmd(MachineCommand::Start).unwrap();
+            for _ in 0..100 {
+                r.tick(&Inputs::QUIET);
+            }
+            if s == MachineState::Holding {
+                r.cmd(MachineCommand::Hold).unwrap();
+            }
+        }
+        MachineState::Fault => {
+            r.tick(&Inputs { estop: true, ..Inputs::QUIET });
+            // E-stop released again: the cause is gone, the fault stays latched.
+            r.tick(&Inputs::QUIET);
+        }
+        _ => unreachable!(),
+    }
+    assert_eq!(r.m.state(), s);
+    r
+}
+
+fn command_of<'a>(k: CommandKind, cfg: &'a BoardConfig, seg: &'a Segment) -> MachineCommand<'a> {
+    match k {
+        CommandKind::SetConfig => MachineCommand::SetConfig(cfg),
+        CommandKind::Home => MachineCommand::Home,
+        CommandKind::Start => MachineCommand::Start,
+        CommandKind::Queue => MachineCommand::Queue(seg),
+        CommandKind::Hold => MachineCommand::Hold,
+        CommandKind::Resume => MachineCommand::Resume,
+        CommandKind::Abort => MachineCommand::Abort,
+        CommandKind::ClearFault => MachineCommand::ClearFault,
+    }
+}
+
+#[test]
+fn every_state_command_pair_is_answered_as_the_table_says() {
+    let cfg = config(Case::EStop);
+    let seg = segment(100);
+    let mut pairs = 0;
+    for s in MachineState::ALL {
+        for k in CommandKind::ALL {
+            let mut r = rig_in(s);
+            let before = r.snapshot();
+            let got = r.cmd(command_of(k, &cfg, &seg));
+            let want = match cell(s, k) {
+                Cell::Refused => Err(Refusal::OutOfState(s)),
+                Cell::Stay => Ok(s),
+                Cell::To(t) => Ok(t),
+                // After an e-stop the homing is not trusted: Idle.
+                Cell::Recover => Ok(MachineState::Idle),
+            };
+            assert_eq!(got, want, "{s:?} {k:?}");
+            if got.is_err() {
+                assert_eq!(r.snapshot(), before, "{s:?} {k:?} refused but changed something");
+            } else {
+                assert_eq!(r.m.state(), want.unwrap());
+            }
+            pairs += 1;
+        }
+    }
+    assert_eq!(pairs, MachineState::COUNT * CommandKind::COUNT);
+}
+
+#[test]
+fn clear_fault_is_refused_while_the_cause_is_active_and_changes_nothing() {
+    let mut r = rig_in(MachineState::Ready);
+    let pressed = Inputs { limit_max: 0b10, ..Inputs::QUIET };
+    // A pressed switch with nothing moving is no fault; it becomes one once motion may happen.
+    r.tick(&pressed);
+    assert_eq!(r.m.state(), MachineState::Ready);
+    let seg = segment(1_000);
+    r.cmd(MachineCommand::Queue(&seg)).unwrap();
+    r.dda.push(&r.prep.prepare(&seg).unwrap()).unwrap();
+    r.cmd(MachineCommand::Start).unwrap();
+    r.tick(&pressed);
+    assert_eq!(r.m.state(), MachineState::Fault);
+    assert_eq!(r.m.faults().first(), Some(FaultCode::LimitSwitch));
+    let before = r.snapshot();
+    assert_eq!(
+        r.cmd(MachineCommand::ClearFault),
+        Err(Refusal::CauseActive(FaultCode::LimitSwitch))
+    );
+    assert_eq!(r.snapshot(), before);
+    // Released: the limit kept the homing, so ClearFault goes to Ready.
+    r.tick(&Inputs::QUIET);
+    assert_eq!(r.cmd(MachineCommand::ClearFault), Ok(MachineState::Ready));
+    assert!(r.m.faults().is_clear());
+}
+
+#[test]
+fn invalid_config_is_refused_with_its_field() {
+    let mut r = rig_in(MachineState::Idle);
+    let mut bad = config(Case::HomingOk);
+    bad.home[1].latch_hz = bad.home[1].search_hz + 1;
+    let before = r.snapshot();
+    match r.cmd(MachineCommand::SetConfig(&bad)) {
+        Err(Refusal::InvalidConfig(e)) => assert_eq!((e.field, e.axis), ("latch_hz", Some(1))),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(r.snapshot(), before);
+}
+
+#[test]
+fn first_fault_is_kept_and_every_fault_is_in_the_mask() {
+    let mut r = rig_in(MachineState::Running);
+    let inp = Inputs {
+        sensor_faults: FaultCode::ForceStuck.bit() | FaultCode::ResolverLoss.bit(),
+        ..Inputs::QUIET
+    };
+    r.tick(&inp);
+    r.tick(&Inputs { estop: true, ..inp });
+    let l = r.m.faults();
+    assert_eq!(l.first(), Some(FaultCode::ForceStuck));
+    assert_eq!(
+        l.mask(),
+        FaultCode::ForceStuck.bit() | FaultCode::ResolverLoss.bit() | FaultCode::EStop.bit()
+    );
+    // The e-stop came second but still killed the outputs.
+    assert_eq!(r.m.outputs(), motion::machine::Outputs::SAFE);
+}
+
+#[test]
+fn rendered_docs_are_stable_and_cover_the_table() {
+    let render = || {
+        let mut s = String::new();
+        motion::machine::markdown(&mut s).unwrap();
+        s
+    };
+    let doc = render();
+    assert_eq!(doc, render());
+    for s in MachineState::ALL {
+        let row = doc.lines().find(|l| l.starts_with(&format!("| {} |", s.name()))).unwrap();
+        assert_eq!(row.matches(" |").count(), CommandKind::COUNT + 1, "{row}");
+        for k in CommandKind::ALL {
+            if let Cell::To(t) = cell(s, k) {
+                assert!(doc.contains(&format!("    {} --> {}: {}", s.name(), t.name(), k.name())));
+            }
+        }
+    }
+    for f in FaultCode::ALL {
+        assert!(doc.contains(&format!("| {} | {} |", f.code(), f.name())));
+    }
+}

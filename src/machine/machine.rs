@@ -1,0 +1,611 @@
+//! [`Machine`]: the state machine, the fault latch and its reactions, soft limits, homing and the
+//! step counters, wrapped around the DDA. The tick interrupt calls [`Machine::tick`] (which ticks
+//! the DDA), the control task calls [`Machine::command`] and, whenever
+//! [`Machine::wants_background`], [`Machine::background`].
+//!
+//! Why the immediate stops are split in two: `Dda::abort` reads `Dda::positions`, which divides
+//! (a 64-bit software divide on the M4), so it must not run in the tick. The tick therefore
+//! *freezes* the DDA (stops ticking it: no further edge reaches the pins, the same tick the cause
+//! is seen) and the background aborts it before the next DDA tick. Nothing is stepped in between,
+//! so the positions are exactly what was stepped.
+
+use super::config::BoardConfig;
+use super::faults::{reaction, FaultLatch, Reaction};
+use super::homing::{HomeEvent, Homing};
+use super::limits::SoftLimits;
+use super::outputs::Outputs;
+use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
+use crate::config::{ConfigError, MAX_AXES};
+use crate::dda::{Command, Dda, Preparer, StepOutput, READY_DEPTH};
+use crate::planner::Planner;
+use crate::protocol::{ErrorCode, FaultCode, WireState};
+use crate::segment::{Segment, SegmentError};
+
+/// What the board reads every tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Inputs {
+    /// E-stop chain open.
+    pub estop: bool,
+    /// Limit switches closed: bit i = axis i.
+    pub limit_min: u8,
+    pub limit_max: u8,
+    /// Faults the sensor monitors raise now: `FaultCode::bit()`s (force, spindle, encoder,
+    /// resolver, following error, ...). Bits of other codes are ignored.
+    pub sensor_faults: u32,
+    /// The host link is alive (a valid frame within the link timeout).
+    pub link_ok: bool,
+    /// The previous tick overran (from [`super::OverrunDetector`]).
+    pub tick_overrun: bool,
+}
+
+impl Inputs {
+    /// Nothing wrong.
+    pub const QUIET: Inputs = Inputs {
+        estop: false,
+        limit_min: 0,
+        limit_max: 0,
+        sensor_faults: 0,
+        link_ok: true,
+        tick_overrun: false,
+    };
+}
+
+/// The fault codes a sensor monitor may raise through [`Inputs::sensor_faults`].
+pub const SENSOR_FAULTS: u32 = FaultCode::SensorFault.bit()
+    | FaultCode::ForceSaturated.bit()
+    | FaultCode::ForceStuck.bit()
+    | FaultCode::ForceTrip.bit()
+    | FaultCode::SpindleStopped.bit()
+    | FaultCode::EncoderIndex.bit()
+    | FaultCode::ResolverLoss.bit()
+    | FaultCode::ZSlideLimit.bit()
+    | FaultCode::WireStall.bit()
+    | FaultCode::FollowingError.bit();
+
+/// What the board applies after a tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TickOut {
+    pub step: StepOutput,
+    pub outputs: Outputs,
+}
+
+/// A command with its payload.
+#[derive(Clone, Copy, Debug)]
+pub enum MachineCommand<'a> {
+    SetConfig(&'a BoardConfig),
+    Home,
+    Start,
+    Queue(&'a Segment),
+    Hold,
+    Resume,
+    Abort,
+    ClearFault,
+}
+
+impl MachineCommand<'_> {
+    pub const fn kind(&self) -> CommandKind {
+        match self {
+            MachineCommand::SetConfig(_) => CommandKind::SetConfig,
+            MachineCommand::Home => CommandKind::Home,
+            MachineCommand::Start => CommandKind::Start,
+            MachineCommand::Queue(_) => CommandKind::Queue,
+            MachineCommand::Hold => CommandKind::Hold,
+            MachineCommand::Resume => CommandKind::Resume,
+            MachineCommand::Abort => CommandKind::Abort,
+            MachineCommand::ClearFault => CommandKind::ClearFault,
+        }
+    }
+}
+
+/// Why a command was refused; nothing changed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refusal {
+    /// The table does not allow this command in this state.
+    OutOfState(MachineState),
+    /// `ClearFault` while this fault's cause is still active.
+    CauseActive(FaultCode),
+    InvalidConfig(ConfigError),
+    Segment(SegmentError),
+    /// The segment would end outside the soft limits of `axis`.
+    SoftLimit {
+        axis: u8,
+    },
+}
+
+impl Refusal {
+    /// The NAK code the link sends for this refusal.
+    pub const fn error_code(&self) -> ErrorCode {
+        match self {
+            Refusal::OutOfState(_) | Refusal::CauseActive(_) => ErrorCode::OutOfState,
+            Refusal::InvalidConfig(_) => ErrorCode::InvalidConfig,
+            Refusal::Segment(_) | Refusal::SoftLimit { .. } => ErrorCode::InvalidSegment,
+        }
+    }
+}
+
+/// Why a stored config could not be used at boot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BootConfig {
+    Missing,
+    Corrupt,
+    Invalid(ConfigError),
+}
+
+#[derive(Clone, Debug)]
+pub struct Machine {
+    state: MachineState,
+    cfg: BoardConfig,
+    config_set: bool,
+    limits: SoftLimits,
+    latch: FaultLatch,
+    /// Fault causes present now (levels: e-stop, switches, sensors, link, missing config).
+    active: u32,
+    outputs: Outputs,
+    /// Steps that reached the pins since boot, per axis.
+    raw: [i64; MAX_AXES],
+    /// Machine position = raw + offset; set by homing.
+    offset: [i64; MAX_AXES],
+    homed: bool,
+    /// Machine position after every admitted segment.
+    planned_end: [i64; MAX_AXES],
+    admitted: u32,
+    done_base: u32,
+    underruns_base: u32,
+    last_exit_nonzero: bool,
+    /// The DDA is not ticked (immediate stop) until the background aborts it.
+    frozen: bool,
+    abort_pending: bool,
+    hold_pending: bool,
+    homing: Homing,
+    last_dir: u8,
+    ticks: u64,
+}
+
+impl Default for Machine {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Machine {
+    /// In `Boot`, with the safe default config until [`Machine::boot`].
+    pub fn new() -> Self {
+        let cfg = BoardConfig::safe_default();
+        Machine {
+            state: MachineState::Boot,
+            limits: SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count),
+            cfg,
+            config_set: false,
+            latch: FaultLatch::new(),
+            active: 0,
+            outputs: Outputs::SAFE,
+            raw: [0; MAX_AXES],
+            offset: [0; MAX_AXES],
+            homed: false,
+            planned_end: [0; MAX_AXES],
+            admitted: 0,
+            done_base: 0,
+            underruns_base: 0,
+            last_exit_nonzero: false,
+            frozen: false,
+            abort_pending: false,
+            hold_pending: false,
+            homing: Homing::idle(),
+            last_dir: 0,
+            ticks: 0,
+        }
+    }
+
+    /// Leaves `Boot` with the config loaded from flash: a valid one -> `Idle`; missing, corrupt
+    /// or invalid -> safe defaults and `ConfigMissing` (`Fault`). Build the DDA and preparer from
+    /// [`Machine::config`] afterwards. Outside `Boot` it changes nothing.
+    pub fn boot(&mut self, loaded: Result<BoardConfig, BootConfig>) -> MachineState {
+        if self.state != MachineState::Boot {
+            return self.state;
+        }
+        match loaded.and_then(|c| c.validate().map(|_| c).map_err(BootConfig::Invalid)) {
+            Ok(cfg) => {
+                self.install(cfg);
+                self.enter(MachineState::Idle);
+            }
+            Err(_) => {
+                self.install(BoardConfig::safe_default());
+                self.config_set = false;
+                self.active |= FaultCode::ConfigMissing.bit();
+                self.raise(FaultCode::ConfigMissing);
+            }
+        }
+        self.state
+    }
+
+    fn install(&mut self, cfg: BoardConfig) {
+        self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
+        self.cfg = cfg;
+        self.config_set = true;
+        self.active &= !FaultCode::ConfigMissing.bit();
+    }
+
+    pub fn state(&self) -> MachineState {
+        self.state
+    }
+
+    /// The state as the link reports it.
+    pub fn wire_state(&self, dda: &Dda) -> WireState {
+        match self.state {
+            MachineState::Fault => WireState::Faulted,
+            MachineState::Boot | MachineState::Idle | MachineState::Ready => WireState::Idle,
+            _ => dda.state().into(),
+        }
+    }
+
+    pub fn config(&self) -> &BoardConfig {
+        &self.cfg
+    }
+
+    pub fn faults(&self) -> &FaultLatch {
+        &self.latch
+    }
+
+    /// Fault causes present now (`FaultCode::bit()`s).
+    pub fn active_causes(&self) -> u32 {
+        self.active
+    }
+
+    /// Machine positions (steps on the pins since boot plus the homing offset).
+    pub fn positions(&self) -> [i64; MAX_AXES] {
+        let mut p = self.raw;
+        for i in 0..MAX_AXES {
+            p[i] += self.offset[i];
+        }
+        p
+    }
+
+    /// Steps that reached the pins since boot, per axis (no offset).
+    pub fn raw_positions(&self) -> [i64; MAX_AXES] {
+        self.raw
+    }
+
+    /// Machine position after every admitted segment (what `Queue` checks against).
+    pub fn planned_end(&self) -> [i64; MAX_AXES] {
+        self.planned_end
+    }
+
+    pub fn is_homed(&self) -> bool {
+        self.homed
+    }
+
+    pub fn homing(&self) -> &Homing {
+        &self.homing
+    }
+
+    pub fn outputs(&self) -> Outputs {
+        self.outputs
+    }
+
+    /// Sets the spindle, wire and Z outputs; refused (false, nothing changes) while an e-stop is
+    /// latched or pressed.
+    pub fn set_outputs(&mut self, o: Outputs) -> bool {
+        if self.latch.has(FaultCode::EStop) || self.active & FaultCode::EStop.bit() != 0 {
+            return false;
+        }
+        self.outputs = o;
+        true
+    }
+
+    /// The feeder may move admitted segments into the DDA (a job runs or holds).
+    pub fn may_feed(&self) -> bool {
+        matches!(self.state, MachineState::Running | MachineState::Holding) && !self.frozen
+    }
+
+    /// Ticks seen.
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+
+    /// Runs `cmd` if the table allows it in the current state; else refuses and changes
+    /// nothing. Control-task priority (with the DDA locked: Hold and Resume act on it).
+    /// After an accepted `Abort`, `ClearFault` or `SetConfig` the caller drops the segments it
+    /// holds for the DDA (its link queue); after `SetConfig` it rebuilds the DDA and preparer
+    /// from [`Machine::config`] before the next [`Machine::background`].
+    pub fn command(
+        &mut self,
+        cmd: MachineCommand<'_>,
+        dda: &mut Dda,
+    ) -> Result<MachineState, Refusal> {
+        let to = match cell(self.state, cmd.kind()) {
+            Cell::Refused => return Err(Refusal::OutOfState(self.state)),
+            Cell::Stay => self.state,
+            Cell::To(s) => s,
+            Cell::Recover => {
+                if let Some(&f) = FaultCode::ALL.iter().find(|f| self.active & f.bit() != 0) {
+                    return Err(Refusal::CauseActive(f));
+                }
+                if self.homed {
+                    MachineState::Ready
+                } else {
+                    MachineState::Idle
+                }
+            }
+        };
+        // Checks first (a refusal changes nothing), then effects.
+        match cmd {
+            MachineCommand::SetConfig(new) => {
+                new.validate().map_err(Refusal::InvalidConfig)?;
+                self.install(*new);
+                self.homed = false;
+                self.homing.cancel();
+                self.freeze();
+            }
+            MachineCommand::Queue(seg) => {
+                seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
+                let end = self
+                    .limits
+                    .check_move(&self.planned_end, &seg.steps)
+                    .map_err(|axis| Refusal::SoftLimit { axis })?;
+                self.planned_end = end;
+                self.admitted = self.admitted.wrapping_add(1);
+                self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
+            }
+            MachineCommand::Home => {
+                self.homed = false;
+                self.homing = Homing::start(&self.cfg);
+            }
+            MachineCommand::Start => {}
+            MachineCommand::Hold => dda.apply(Command::Hold),
+            MachineCommand::Resume => dda.apply(Command::Resume),
+            MachineCommand::Abort => {
+                self.homing.cancel();
+                self.freeze();
+            }
+            MachineCommand::ClearFault => {
+                self.latch.clear();
+                self.homing.cancel();
+                self.hold_pending = false;
+                self.freeze();
+            }
+        }
+        self.state = to;
+        Ok(to)
+    }
+
+    /// One tick (interrupt rate): fault inputs, then the DDA tick unless an immediate stop froze
+    /// it, then the step counters, the run-time soft-limit check, homing and job bookkeeping.
+    /// Integer compares and adds only; no division, bounded (a few loops over the 6 axes or the
+    /// 17 fault codes, the latter only while a sensor fault bit is set).
+    #[inline]
+    pub fn tick(&mut self, dda: &mut Dda, inp: &Inputs) -> TickOut {
+        self.ticks += 1;
+        self.watch_inputs(dda, inp);
+        self.apply_hold(dda);
+        if self.frozen {
+            // No edge this tick; DIR stays; a STEP high from the last tick stays high a little
+            // longer (longer pulses are harmless).
+            return TickOut {
+                step: StepOutput::new(0, 0, self.last_dir, 0),
+                outputs: self.outputs,
+            };
+        }
+        let step = dda.tick();
+        self.last_dir = step.dir();
+        if step.rise() != 0 {
+            self.count(step);
+        }
+        match self.state {
+            MachineState::Homing => self.watch_homing(dda, inp),
+            MachineState::Running => self.watch_job(dda),
+            _ => {}
+        }
+        self.apply_hold(dda);
+        TickOut { step, outputs: self.outputs }
+    }
+
+    /// Level causes and the faults they raise.
+    #[inline]
+    fn watch_inputs(&mut self, dda: &Dda, inp: &Inputs) {
+        let mut active = self.active & FaultCode::ConfigMissing.bit();
+        if inp.estop {
+            active |= FaultCode::EStop.bit();
+        }
+        let limits = inp.limit_min | inp.limit_max;
+        if limits != 0 {
+            active |= FaultCode::LimitSwitch.bit();
+        }
+        if !inp.link_ok {
+            active |= FaultCode::LinkLost.bit();
+        }
+        let sensors = inp.sensor_faults & SENSOR_FAULTS;
+        active |= sensors;
+        self.active = active;
+        if active == 0 && !inp.tick_overrun {
+            return;
+        }
+        self.fault_inputs(dda, inp, sensors);
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn fault_inputs(&mut self, dda: &Dda, inp: &Inputs, sensors: u32) {
+        if inp.estop {
+            self.raise(FaultCode::EStop);
+        }
+        if inp.tick_overrun {
+            self.raise(FaultCode::TickOverrun);
+        }
+        // Switches matter while anything may move; the homing switch is the sequencer's.
+        let moving = matches!(
+            self.state,
+            MachineState::Homing | MachineState::Running | MachineState::Holding
+        ) || !dda.is_idle();
+        let (mut min, mut max) = (inp.limit_min, inp.limit_max);
+        if self.state == MachineState::Homing {
+            if let Some((axis, toward_max)) = self.homing.switch() {
+                let bit = 1u8.checked_shl(axis as u32).unwrap_or(0);
+                if toward_max {
+                    max &= !bit;
+                } else {
+                    min &= !bit;
+                }
+            }
+        }
+        if moving && (min | max) != 0 {
+            self.raise(FaultCode::LimitSwitch);
+        }
+        if !inp.link_ok && matches!(self.state, MachineState::Running | MachineState::Holding) {
+            self.raise(FaultCode::LinkLost);
+        }
+        if sensors != 0 {
+            for &f in FaultCode::ALL {
+                if sensors & f.bit() != 0 {
+                    self.raise(f);
+                }
+            }
+        }
+    }
+
+    /// Counts the tick's rising edges, and checks the soft limits where the position changed.
+    #[cold]
+    fn count(&mut self, step: StepOutput) {
+        let (rise, dir) = (step.rise(), step.dir());
+        for i in 0..MAX_AXES {
+            if rise & (1 << i) != 0 {
+                self.raw[i] += if dir & (1 << i) != 0 { -1 } else { 1 };
+            }
+        }
+        if self.homed
+            && self.state != MachineState::Homing
+            && self.limits.outside(&self.positions()).is_some()
+        {
+            self.raise(FaultCode::SoftLimit);
+        }
+    }
+
+    fn watch_homing(&mut self, dda: &Dda, inp: &Inputs) {
+        let pressed = match self.homing.switch() {
+            Some((axis, toward_max)) => {
+                let bits = if toward_max { inp.limit_max } else { inp.limit_min };
+                bits & 1u8.checked_shl(axis as u32).unwrap_or(0) != 0
+            }
+            None => false,
+        };
+        match self.homing.watch(&self.cfg, pressed, dda.is_idle()) {
+            HomeEvent::None => {}
+            HomeEvent::Stop => self.freeze(),
+            HomeEvent::Latched { axis } => {
+                let a = (axis as usize).min(MAX_AXES - 1);
+                self.offset[a] = self.cfg.home[a].home_pos_steps - self.raw[a];
+                self.freeze();
+            }
+            HomeEvent::NotFound { .. } | HomeEvent::Stuck { .. } => {
+                // No dedicated code: a switch that never closes (or never opens) is a sensor
+                // reading out of range.
+                self.raise(FaultCode::SensorFault);
+                return;
+            }
+        }
+        if self.homing.is_done() && !self.homing.needs_move() {
+            self.homed = true;
+            self.homing.cancel();
+            self.enter(MachineState::Ready);
+            // The background resets the job bookkeeping to the homed position.
+            self.freeze();
+        }
+    }
+
+    fn in_flight(&self, dda: &Dda) -> u32 {
+        self.admitted.wrapping_sub(dda.segments_done().wrapping_sub(self.done_base))
+    }
+
+    fn watch_job(&mut self, dda: &Dda) {
+        let in_flight = self.in_flight(dda);
+        if in_flight == 0 && dda.is_idle() {
+            self.enter(MachineState::Ready);
+            return;
+        }
+        // The DDA runs the last admitted segment, which expects a successor (exit speed > 0),
+        // and nothing is queued behind it: the host is late. Hold now, so the stop is a ramp on
+        // the path instead of the DDA's abrupt stop at the segment end.
+        let starving = in_flight == 1 && self.last_exit_nonzero && dda.ready_free() == READY_DEPTH;
+        if starving || dda.underruns() != self.underruns_base {
+            self.raise(FaultCode::QueueUnderrun);
+        }
+    }
+
+    /// Latches `code`; a new fault gets its class's reaction and the machine goes to `Fault`.
+    fn raise(&mut self, code: FaultCode) {
+        if !self.latch.raise(code) {
+            return;
+        }
+        match reaction(code) {
+            Reaction::Kill => {
+                self.freeze();
+                self.outputs = Outputs::SAFE;
+                self.homed = false;
+            }
+            Reaction::Stop => self.freeze(),
+            Reaction::Hold => self.hold_pending = true,
+        }
+        self.homing.cancel();
+        self.enter(MachineState::Fault);
+    }
+
+    #[inline]
+    fn apply_hold(&mut self, dda: &mut Dda) {
+        if self.hold_pending {
+            self.hold_pending = false;
+            dda.apply(Command::Hold);
+        }
+    }
+
+    /// Immediate stop: the DDA is not ticked again until the background has aborted it.
+    fn freeze(&mut self) {
+        self.frozen = true;
+        self.abort_pending = true;
+    }
+
+    /// Event transitions, only along the documented edges.
+    fn enter(&mut self, to: MachineState) {
+        if event_allowed(self.state, to) {
+            self.state = to;
+        }
+    }
+
+    /// Planning-rate work is due: an abort after an immediate stop, or a homing move to plan.
+    pub fn wants_background(&self) -> bool {
+        self.abort_pending || (self.state == MachineState::Homing && self.homing.needs_move())
+    }
+
+    /// The planning-rate work (control task; divides): aborts a frozen DDA, then plans and
+    /// queues the next homing move. A homing move the planner or DDA refuses raises
+    /// `SensorFault` (the config was validated, so it does not happen with a valid one).
+    pub fn background(&mut self, dda: &mut Dda, prep: &mut Preparer) {
+        if self.abort_pending {
+            dda.abort();
+            prep.reset_junction();
+            self.abort_pending = false;
+            self.frozen = false;
+            self.hold_pending = false;
+            self.planned_end = self.positions();
+            self.admitted = 0;
+            self.done_base = dda.segments_done();
+            self.underruns_base = dda.underruns();
+            self.last_exit_nonzero = false;
+        }
+        if self.state != MachineState::Homing {
+            return;
+        }
+        let Some(mv) = self.homing.take_move() else { return };
+        let mut planner = Planner::new(&self.cfg.wire.machine);
+        let mut ok = planner.push(&mv).is_ok();
+        planner.finish();
+        while ok {
+            let Some(seg) = planner.pop() else { break };
+            ok = match prep.prepare(&seg) {
+                Ok(p) => dda.push(&p).is_ok(),
+                Err(_) => false,
+            };
+        }
+        if !ok {
+            self.raise(FaultCode::SensorFault);
+        }
+    }
+}

@@ -1,0 +1,54 @@
+//! Machine safety: one state machine and one fault model for every capability.
+//!
+//! * [`state`]: the states, the commands and the one table of which command each state accepts
+//!   (rendered as Markdown and a Mermaid diagram for the docs: [`markdown`]).
+//! * [`faults`]: the fault latch and the reaction per fault class.
+//! * [`machine`]: [`Machine`], which the tick and control tasks drive.
+//! * [`homing`], [`limits`], [`outputs`]: homing sequencer, soft limits, safe outputs.
+//! * [`watchdog`]: watchdog feeding gate and tick-overrun detector.
+//! * [`persist`]: the config record in NOR flash (version, CRC, two slots), and [`ram_flash`],
+//!   a RAM NOR-flash with real NOR rules for tests and the QEMU scenarios.
+
+pub mod config;
+pub mod faults;
+pub mod homing;
+pub mod limits;
+#[allow(clippy::module_inception)]
+pub mod machine;
+pub mod outputs;
+pub mod persist;
+pub mod ram_flash;
+pub mod state;
+pub mod watchdog;
+
+pub use config::{BoardConfig, HomeAxis};
+pub use faults::{reaction, FaultLatch, Reaction};
+pub use machine::{BootConfig, Inputs, Machine, MachineCommand, Refusal, TickOut};
+pub use outputs::{Outputs, Z_DAC_MID_SCALE};
+pub use state::{cell, Cell, CommandKind, MachineState};
+pub use watchdog::{OverrunDetector, WatchdogGate};
+
+/// The machine documentation, generated: the command table, the state diagram (Mermaid) and the
+/// fault reactions. `src/machine/MACHINE.md` holds this text; a test keeps them equal.
+pub fn markdown(out: &mut impl core::fmt::Write) -> core::fmt::Result {
+    out.write_str("### Commands by state\n\n")?;
+    state::markdown_table(out)?;
+    out.write_str("\n### State diagram\n\n```mermaid\n")?;
+    state::mermaid_diagram(out)?;
+    out.write_str("```\n\n### Faults and reactions\n\n")?;
+    faults::markdown_reactions(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn machine_doc_has_the_current_tables() {
+        let mut s = String::new();
+        super::markdown(&mut s).unwrap();
+        let doc = include_str!("MACHINE.md");
+        if std::env::var_os("MACHINE_DOC_PRINT").is_some() {
+            println!("{s}");
+        }
+        assert!(doc.contains(&s), "src/machine/MACHINE.md is out of date; its tables are:\n{s}");
+    }
+}

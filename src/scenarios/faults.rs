@@ -1,0 +1,674 @@
+//! The fault suite: one scenario per fault cause, with a sim board that injects it. Each drives
+//! [`Machine`] around the real DDA exactly as the firmware's tick and control tasks do (tick:
+//! `Machine::tick`; planning, preparing and aborting: `Scenario::background`), ends in the
+//! documented state with its fault code, and reports the machine's position counters next to the
+//! DDA's positions and the `StepRecorder`'s net steps, so their equality is visible in QEMU's
+//! report as well as the host's.
+
+use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
+use crate::dda::{Dda, Preparer};
+use crate::machine::persist::{ConfigStore, LoadError};
+use crate::machine::ram_flash::RamFlash;
+use crate::machine::{
+    BoardConfig, BootConfig, HomeAxis, Inputs, Machine, MachineCommand, MachineState, Outputs,
+    OverrunDetector, Refusal,
+};
+use crate::planner::{Move, Planner};
+use crate::protocol::{AxisScale, FaultCode, WireConfig};
+use crate::scenario::{Scenario, ScenarioReport, TraceHash};
+use crate::segment::Segment;
+use crate::trace::StepRecorder;
+
+const TICK_HZ: u32 = 50_000;
+const AXIS: AxisLimits =
+    AxisLimits { max_rate_hz: 20_000, accel_steps_per_s2: 200_000, junction_jerk_hz: 1_000 };
+/// Where the sim's switches close (sim steps from the start point): min at or below, max at or
+/// above.
+const SWITCH_MIN: i64 = -3_000;
+const SWITCH_MAX: i64 = 3_000;
+/// Tick at which the cause appears.
+const INJECT_TICK: u64 = 3_000;
+/// Ticks the scenario keeps running once everything has settled.
+const SETTLE_TICKS: u32 = 100;
+/// Safety net: no scenario comes near it.
+const MAX_TICKS: u64 = 50_000;
+/// Soft limits of the soft-limit cases (steps, both axes).
+const SOFT_LIMIT: i64 = 2_000;
+
+/// The injected cause.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Case {
+    EStop,
+    LimitMin(u8),
+    LimitMax(u8),
+    HomingOk,
+    HomingNotFound,
+    SoftLimitQueue,
+    SoftLimitRun,
+    QueueUnderrun,
+    LinkLoss,
+    TickOverrun,
+    ConfigMissing,
+    Sensor(FaultCode),
+}
+
+/// Every case, in the order the scenario list runs them.
+pub const CASES: [Case; 19] = [
+    Case::EStop,
+    Case::LimitMin(0),
+    Case::LimitMax(0),
+    Case::LimitMin(1),
+    Case::LimitMax(1),
+    Case::HomingOk,
+    Case::HomingNotFound,
+    Case::SoftLimitQueue,
+    Case::SoftLimitRun,
+    Case::QueueUnderrun,
+    Case::LinkLoss,
+    Case::TickOverrun,
+    Case::ConfigMissing,
+    Case::Sensor(FaultCode::ForceSaturated),
+    Case::Sensor(FaultCode::ForceStuck),
+    Case::Sensor(FaultCode::SpindleStopped),
+    Case::Sensor(FaultCode::EncoderIndex),
+    Case::Sensor(FaultCode::ResolverLoss),
+    Case::Sensor(FaultCode::SensorFault),
+];
+
+impl Case {
+    pub const fn name(self) -> &'static str {
+        match self {
+            Case::EStop => "fault_estop",
+            Case::LimitMin(0) => "fault_limit_x_min",
+            Case::LimitMax(0) => "fault_limit_x_max",
+            Case::LimitMin(_) => "fault_limit_y_min",
+            Case::LimitMax(_) => "fault_limit_y_max",
+            Case::HomingOk => "fault_homing_ok",
+            Case::HomingNotFound => "fault_homing_not_found",
+            Case::SoftLimitQueue => "fault_soft_limit_queue",
+            Case::SoftLimitRun => "fault_soft_limit_run",
+            Case::QueueUnderrun => "fault_queue_underrun",
+            Case::LinkLoss => "fault_link_loss",
+            Case::TickOverrun => "fault_tick_overrun",
+            Case::ConfigMissing => "fault_config_missing",
+            Case::Sensor(FaultCode::ForceSaturated) => "fault_force_saturated",
+            Case::Sensor(FaultCode::ForceStuck) => "fault_force_stuck",
+            Case::Sensor(FaultCode::SpindleStopped) => "fault_spindle_stopped",
+            Case::Sensor(FaultCode::EncoderIndex) => "fault_encoder_index",
+            Case::Sensor(FaultCode::ResolverLoss) => "fault_resolver_loss",
+            Case::Sensor(_) => "fault_sensor",
+        }
+    }
+
+    /// The state the case ends in and the fault code it reports (`None`: no fault).
+    pub const fn expected(self) -> (MachineState, Option<FaultCode>) {
+        use MachineState::{Fault, Ready};
+        let (state, code) = match self {
+            Case::EStop => (Fault, FaultCode::EStop),
+            Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
+            Case::HomingOk => return (Ready, None),
+            Case::HomingNotFound => (Fault, FaultCode::SensorFault),
+            // Refused at the queue: nothing changes, the refusal names the soft limit.
+            Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
+            Case::SoftLimitRun => (Fault, FaultCode::SoftLimit),
+            Case::QueueUnderrun => (Fault, FaultCode::QueueUnderrun),
+            Case::LinkLoss => (Fault, FaultCode::LinkLost),
+            Case::TickOverrun => (Fault, FaultCode::TickOverrun),
+            Case::ConfigMissing => (Fault, FaultCode::ConfigMissing),
+            Case::Sensor(code) => (Fault, code),
+        };
+        (state, Some(code))
+    }
+}
+
+fn home_axis(toward_max: bool, max_travel_steps: u32, home_pos_steps: i64) -> HomeAxis {
+    HomeAxis {
+        toward_max,
+        search_hz: 10_000,
+        latch_hz: 2_000,
+        backoff_steps: 200,
+        max_travel_steps,
+        home_pos_steps,
+    }
+}
+
+/// The scenarios' board: two axes, switches at +-3000 steps, wide soft limits and no homing
+/// switches (homing sets the origin where the machine stands), except where a case says.
+pub fn config(case: Case) -> BoardConfig {
+    let mut axes = [AxisLimits::UNUSED; MAX_AXES];
+    axes[0] = AXIS;
+    axes[1] = AXIS;
+    let soft = match case {
+        Case::SoftLimitQueue | Case::SoftLimitRun => SOFT_LIMIT,
+        _ => 100_000,
+    };
+    let scale = AxisScale { steps_per_unit_milli: 80_000, soft_min: -soft, soft_max: soft };
+    let mut cfg = BoardConfig {
+        wire: WireConfig {
+            machine: MachineConfig {
+                tick_hz: TICK_HZ,
+                timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },
+                axis_count: 2,
+                axes,
+            },
+            scale: [
+                scale,
+                scale,
+                AxisScale::UNUSED,
+                AxisScale::UNUSED,
+                AxisScale::UNUSED,
+                AxisScale::UNUSED,
+            ],
+        },
+        home_order: [0, 1, 0, 0, 0, 0],
+        home_count: 0,
+        home: [HomeAxis::UNUSED; MAX_AXES],
+    };
+    match case {
+        Case::HomingOk => {
+            cfg.home_count = 2;
+            // x on its min switch, y on its max switch; the switch points become +-3000.
+            cfg.home[0] = home_axis(false, 4_000, SWITCH_MIN);
+            cfg.home[1] = home_axis(true, 4_000, SWITCH_MAX);
+        }
+        Case::HomingNotFound => {
+            cfg.home_count = 1;
+            cfg.home[0] = home_axis(false, 500, SWITCH_MIN);
+        }
+        _ => {}
+    }
+    cfg
+}
+
+const fn mv(x: i32, y: i32, feed_hz: u32) -> Move {
+    Move { steps: [x, y, 0, 0, 0, 0], feed_hz }
+}
+
+const LONG_X: [Move; 1] = [mv(2_500, 1_000, 10_000)];
+const TO_X_MIN: [Move; 1] = [mv(-5_000, 0, 12_000)];
+const TO_X_MAX: [Move; 1] = [mv(5_000, 0, 12_000)];
+const TO_Y_MIN: [Move; 1] = [mv(0, -5_000, 12_000)];
+const TO_Y_MAX: [Move; 1] = [mv(0, 5_000, 12_000)];
+const INSIDE: [Move; 1] = [mv(1_500, 500, 10_000)];
+/// Eighteen short collinear moves: the planner emits the first ones at speed (exit rate > 0).
+const STREAM: [Move; 18] = [mv(300, 0, 10_000); 18];
+/// The move the soft-limit-at-queue case tries after `INSIDE`: it would end at x = 2500.
+const BEYOND: Move = mv(1_000, 0, 10_000);
+/// The segment the run-time case pushes past the admission check (a stand-in for any path
+/// that bypasses it): x from 1500 to 4000 through the 2000 limit.
+const ROGUE_X_STEPS: i32 = 2_500;
+
+/// The flash the config-missing case boots from: erased, as QEMU's read-only flash reads.
+type SimFlash = RamFlash<2048, 1024>;
+
+pub struct FaultScenario {
+    case: Case,
+    machine: Machine,
+    dda: Dda,
+    prep: Preparer,
+    planner: Planner,
+    moves: &'static [Move],
+    next_move: usize,
+    planning_done: bool,
+    /// Segments the feeder hands over before it stalls (the underrun case).
+    feed_limit: u32,
+    fed: u32,
+    home_sent: bool,
+    started: bool,
+    rogue_pushed: bool,
+    beyond_tried: bool,
+    refusal: Option<Refusal>,
+    clear_refused: Option<Refusal>,
+    home_refused: bool,
+    overrun: OverrunDetector,
+    overrun_flag: bool,
+    /// Sim plant: where the axes are, in sim steps from the start point.
+    start_phys: [i64; MAX_AXES],
+    rec: StepRecorder,
+    hash: TraceHash,
+    t: u64,
+    fault_tick: u64,
+    steps_after_fault: u64,
+    settled: u32,
+    done: bool,
+}
+
+impl FaultScenario {
+    pub fn new(case: Case) -> Option<Self> {
+        let mut machine = Machine::new();
+        let loaded = if case == Case::ConfigMissing {
+            let mut store = ConfigStore::new(SimFlash::new(), 0, 1024).ok()?;
+            store.load().map_err(|e| match e {
+                LoadError::Missing => BootConfig::Missing,
+                LoadError::Corrupt | LoadError::Flash => BootConfig::Corrupt,
+            })
+        } else {
+            Ok(config(case))
+        };
+        machine.boot(loaded);
+        let cfg = machine.config().wire.machine;
+        let moves: &'static [Move] = match case {
+            Case::EStop | Case::LinkLoss | Case::TickOverrun | Case::Sensor(_) => &LONG_X,
+            Case::LimitMin(0) => &TO_X_MIN,
+            Case::LimitMax(0) => &TO_X_MAX,
+            Case::LimitMin(_) => &TO_Y_MIN,
+            Case::LimitMax(_) => &TO_Y_MAX,
+            Case::SoftLimitQueue | Case::SoftLimitRun => &INSIDE,
+            Case::QueueUnderrun => &STREAM,
+            Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing => &[],
+        };
+        let start_phys = match case {
+            Case::HomingOk => [-2_000, 2_200, 0, 0, 0, 0],
+            _ => [0; MAX_AXES],
+        };
+        let mut s = FaultScenario {
+            case,
+            dda: Dda::new(&cfg).ok()?,
+            prep: Preparer::new(&cfg).ok()?,
+            planner: Planner::new(&cfg),
+            machine,
+            moves,
+            next_move: 0,
+            planning_done: moves.is_empty(),
+            feed_limit: if case == Case::QueueUnderrun { 2 } else { u32::MAX },
+            fed: 0,
+            home_sent: false,
+            started: false,
+            rogue_pushed: false,
+            beyond_tried: false,
+            refusal: None,
+            clear_refused: None,
+            home_refused: false,
+            overrun: OverrunDetector::new(),
+            overrun_flag: false,
+            start_phys,
+            rec: StepRecorder::new(),
+            hash: TraceHash::new(),
+            t: 0,
+            fault_tick: 0,
+            steps_after_fault: 0,
+            settled: 0,
+            done: false,
+        };
+        if case == Case::ConfigMissing {
+            // Motion before a config: refused, nothing changes.
+            let home = s.machine.command(MachineCommand::Home, &mut s.dda);
+            s.home_refused = home.is_err();
+        }
+        // Outputs a running cut would have on, so the e-stop's switch-off shows.
+        s.machine.set_outputs(Outputs { spindle_enable: true, wire_power: true, z_dac: 3_000 });
+        Some(s)
+    }
+
+    fn phys(&self, axis: usize) -> i64 {
+        self.start_phys[axis] + self.rec.net[axis]
+    }
+
+    /// The sim board's inputs this tick.
+    fn inputs(&mut self) -> Inputs {
+        let mut inp = Inputs::QUIET;
+        for a in 0..2 {
+            if self.phys(a) <= SWITCH_MIN {
+                inp.limit_min |= 1 << a;
+            }
+            if self.phys(a) >= SWITCH_MAX {
+                inp.limit_max |= 1 << a;
+            }
+        }
+        let injected = self.t >= INJECT_TICK;
+        match self.case {
+            Case::EStop => inp.estop = injected,
+            Case::LinkLoss => inp.link_ok = !injected,
+            Case::Sensor(code) if injected => inp.sensor_faults = code.bit(),
+            _ => {}
+        }
+        inp.tick_overrun = self.overrun_flag;
+        inp
+    }
+
+    fn has_more_to_feed(&self) -> bool {
+        self.fed < self.feed_limit && !self.planning_done
+    }
+
+    fn wants_feed(&self) -> bool {
+        if self.done {
+            return false;
+        }
+        match self.machine.state() {
+            MachineState::Idle => !self.home_sent,
+            MachineState::Ready => {
+                (!self.started && self.has_more_to_feed())
+                    || (self.case == Case::SoftLimitQueue && self.started && !self.beyond_tried)
+            }
+            MachineState::Running | MachineState::Holding => {
+                self.dda.ready_free() > 0
+                    && (self.has_more_to_feed()
+                        || (self.case == Case::SoftLimitRun && !self.rogue_pushed))
+            }
+            _ => false,
+        }
+    }
+
+    /// The next planned segment of the job, if the planner has one final.
+    fn next_segment(&mut self) -> Option<Segment> {
+        loop {
+            if let Some(seg) = self.planner.pop() {
+                return Some(seg);
+            }
+            let Some(m) = self.moves.get(self.next_move) else {
+                self.planning_done = true;
+                return None;
+            };
+            if self.planner.push(m).is_err() {
+                self.planning_done = true;
+                return None;
+            }
+            self.next_move += 1;
+            if self.next_move == self.moves.len() {
+                self.planner.finish();
+            }
+        }
+    }
+
+    /// The control task's work: homing command, admitting and feeding segments, starting.
+    fn feed(&mut self) {
+        match self.machine.state() {
+            MachineState::Idle => {
+                self.home_sent = true;
+                let _ = self.machine.command(MachineCommand::Home, &mut self.dda);
+            }
+            MachineState::Ready if self.started => {
+                self.beyond_tried = true;
+                let mut p = Planner::new(&self.machine.config().wire.machine);
+                let seg = p.push(&BEYOND).ok().and_then(|_| {
+                    p.finish();
+                    p.pop()
+                });
+                if let Some(seg) = seg {
+                    let r = self.machine.command(MachineCommand::Queue(&seg), &mut self.dda);
+                    self.refusal = r.err();
+                }
+            }
+            _ => {
+                while self.dda.ready_free() > 0 && self.has_more_to_feed() {
+                    let Some(seg) = self.next_segment() else { break };
+                    if let Err(r) = self.machine.command(MachineCommand::Queue(&seg), &mut self.dda)
+                    {
+                        self.refusal = Some(r);
+                        self.planning_done = true;
+                        break;
+                    }
+                    match self.prep.prepare(&seg) {
+                        Ok(p) => {
+                            let _ = self.dda.push(&p);
+                        }
+                        Err(_) => self.planning_done = true,
+                    }
+                    self.fed += 1;
+                }
+                if self.case == Case::SoftLimitRun
+                    && self.started
+                    && !self.has_more_to_feed()
+                    && !self.rogue_pushed
+                    && self.dda.ready_free() > 0
+                {
+                    self.rogue_pushed = true;
+                    let rogue = Segment {
+                        steps: [ROGUE_X_STEPS, 0, 0, 0, 0, 0],
+                        duration_ticks: 25_000,
+                        entry_rate: crate::segment::Rate::ZERO,
+                        exit_rate: crate::segment::Rate::ZERO,
+                        accel_per_tick: crate::segment::Rate::from_bits(1 << 18),
+                        id: 0xbad,
+                    };
+                    if let Ok(p) = self.prep.prepare(&rogue) {
+                        let _ = self.dda.push(&p);
+                    }
+                }
+                if self.machine.state() == MachineState::Ready && !self.started {
+                    self.started = true;
+                    let _ = self.machine.command(MachineCommand::Start, &mut self.dda);
+                }
+            }
+        }
+    }
+
+    /// Everything has come to rest in the case's final state.
+    fn settled_now(&self) -> bool {
+        let state = self.machine.state();
+        let at_rest = self.dda.is_idle()
+            || self.dda.state() == crate::dda::MotionState::Held
+            || state == MachineState::Fault && self.dda.rate().to_bits() == 0;
+        let final_state = match self.case {
+            Case::HomingOk => state == MachineState::Ready && self.machine.is_homed(),
+            Case::SoftLimitQueue => self.beyond_tried,
+            _ => state == MachineState::Fault,
+        };
+        final_state && at_rest && !self.machine.wants_background() && !self.wants_feed()
+    }
+
+    /// Attempts a `ClearFault` while a level cause is still present: the table says refused.
+    fn try_clear_while_active(&mut self) {
+        let level = matches!(
+            self.case,
+            Case::EStop
+                | Case::LimitMin(_)
+                | Case::LimitMax(_)
+                | Case::LinkLoss
+                | Case::ConfigMissing
+                | Case::Sensor(_)
+        );
+        if level && self.machine.active_causes() != 0 {
+            self.clear_refused =
+                self.machine.command(MachineCommand::ClearFault, &mut self.dda).err();
+        }
+    }
+}
+
+impl Scenario for FaultScenario {
+    fn name(&self) -> &'static str {
+        self.case.name()
+    }
+
+    fn tick_hz(&self) -> u32 {
+        TICK_HZ
+    }
+
+    fn wants_background(&self) -> bool {
+        self.machine.wants_background() || self.wants_feed()
+    }
+
+    /// Aborts, homing moves, planning, preparing and admitting: all divide, none in the tick.
+    fn background(&mut self) {
+        if self.machine.wants_background() {
+            self.machine.background(&mut self.dda, &mut self.prep);
+            return;
+        }
+        self.feed();
+    }
+
+    fn tick(&mut self) -> bool {
+        if self.done {
+            return false;
+        }
+        if self.t >= MAX_TICKS || self.settled >= SETTLE_TICKS {
+            self.try_clear_while_active();
+            self.done = true;
+            return false;
+        }
+        self.t += 1;
+        let inp = self.inputs();
+        let was_fault = self.machine.state() == MachineState::Fault;
+        let out = self.machine.tick(&mut self.dda, &inp);
+        // The sim timer: the tick after INJECT_TICK finds its update flag pending.
+        self.overrun_flag =
+            self.overrun.after_tick(self.case == Case::TickOverrun && self.t == INJECT_TICK);
+        if !was_fault && self.machine.state() == MachineState::Fault {
+            self.fault_tick = self.t;
+        }
+        if self.fault_tick != 0 && self.fault_tick != self.t {
+            self.steps_after_fault += out.step.rise().count_ones() as u64;
+        }
+        self.rec.record(self.t, &out.step);
+        self.hash.u32(out.step.rise() as u32 | (out.step.dir() as u32) << 8);
+        self.hash.u32(self.machine.state() as u32 | self.machine.faults().mask() << 8);
+        if self.settled_now() {
+            self.settled += 1;
+        } else {
+            self.settled = 0;
+        }
+        true
+    }
+
+    fn report(&self) -> ScenarioReport {
+        let fault = match (self.machine.faults().first(), self.refusal) {
+            (Some(f), _) => f.code(),
+            (None, Some(Refusal::SoftLimit { .. })) => FaultCode::SoftLimit.code(),
+            _ => 0,
+        };
+        let mut r = ScenarioReport::new(self.name(), self.t, self.hash.value(), fault);
+        let pos = self.machine.positions();
+        let raw = self.machine.raw_positions();
+        let dda = self.dda.positions();
+        r.push("state", self.machine.state() as i64);
+        r.push("fault_mask", self.machine.faults().mask() as i64);
+        r.push("pos0_steps", pos[0]);
+        r.push("pos1_steps", pos[1]);
+        r.push("raw0_steps", raw[0]);
+        r.push("raw1_steps", raw[1]);
+        r.push("dda0_steps", dda[0]);
+        r.push("dda1_steps", dda[1]);
+        r.push("net0_steps", self.rec.net[0]);
+        r.push("net1_steps", self.rec.net[1]);
+        r.push("phys0_steps", self.phys(0));
+        r.push("phys1_steps", self.phys(1));
+        r.push("fault_tick", self.fault_tick as i64);
+        r.push("steps_after_fault", self.steps_after_fault as i64);
+        r.push("segments", self.dda.segments_done() as i64);
+        r.push("dda_underruns", self.dda.underruns() as i64);
+        let o = self.machine.outputs();
+        r.push("spindle", o.spindle_enable as i64);
+        r.push("wire_power", o.wire_power as i64);
+        r.push("z_dac", o.z_dac as i64);
+        r.push("refusal_nak", self.refusal.map_or(0, |x| x.error_code().code() as i64));
+        r.push("clear_refused_nak", self.clear_refused.map_or(0, |x| x.error_code().code() as i64));
+        r.push("home_refused", self.home_refused as i64);
+        r.push("homed", self.machine.is_homed() as i64);
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::{reaction, Reaction};
+    use crate::scenario::run_to_end;
+
+    #[test]
+    fn every_case_ends_documented_with_exact_counters() {
+        for c in CASES {
+            let mut s = FaultScenario::new(c).unwrap();
+            let r = run_to_end(&mut s, MAX_TICKS + 1);
+            let f = |n: &str| r.figure(n).unwrap();
+            let (state, code) = c.expected();
+            assert_eq!(f("state"), state as i64, "{}", r.name);
+            assert_eq!(r.fault, code.map_or(0, |c| c.code()), "{}", r.name);
+            assert!(r.ticks < MAX_TICKS, "{} did not settle: {} ticks", r.name, r.ticks);
+            for a in 0..2 {
+                let raw = f(["raw0_steps", "raw1_steps"][a]);
+                // Machine counters = DDA positions = what the pins did = where the sim stands.
+                assert_eq!(raw, f(["dda0_steps", "dda1_steps"][a]), "{}", r.name);
+                assert_eq!(raw, f(["net0_steps", "net1_steps"][a]), "{}", r.name);
+            }
+            if let Some(code) = code.filter(|_| state == MachineState::Fault) {
+                if reaction(code) != Reaction::Hold {
+                    assert_eq!(f("steps_after_fault"), 0, "{}: stop not immediate", r.name);
+                }
+            }
+        }
+    }
+
+    fn run(c: Case) -> ScenarioReport {
+        let mut s = FaultScenario::new(c).unwrap();
+        run_to_end(&mut s, MAX_TICKS + 1)
+    }
+
+    #[test]
+    fn estop_switches_outputs_off_and_refuses_clear_while_pressed() {
+        let r = run(Case::EStop);
+        assert_eq!(r.figure("fault_tick"), Some(INJECT_TICK as i64));
+        assert_eq!(r.figure("spindle"), Some(0));
+        assert_eq!(r.figure("wire_power"), Some(0));
+        assert_eq!(r.figure("z_dac"), Some(crate::machine::Z_DAC_MID_SCALE as i64));
+        assert_eq!(r.figure("homed"), Some(0));
+        assert_eq!(
+            r.figure("clear_refused_nak"),
+            Some(crate::protocol::ErrorCode::OutOfState.code() as i64)
+        );
+        assert!(r.figure("net0_steps").unwrap() > 0, "moving when the e-stop came");
+    }
+
+    #[test]
+    fn limits_stop_on_the_switch() {
+        for (c, axis, at) in [
+            (Case::LimitMin(0), 0, SWITCH_MIN),
+            (Case::LimitMax(0), 0, SWITCH_MAX),
+            (Case::LimitMin(1), 1, SWITCH_MIN),
+            (Case::LimitMax(1), 1, SWITCH_MAX),
+        ] {
+            let r = run(c);
+            assert_eq!(r.figure(["phys0_steps", "phys1_steps"][axis]), Some(at), "{}", r.name);
+            assert_eq!(r.figure(["pos0_steps", "pos1_steps"][axis]), Some(at), "{}", r.name);
+            assert_eq!(r.figure("clear_refused_nak"), Some(10), "{}", r.name);
+        }
+    }
+
+    #[test]
+    fn homing_puts_the_origin_on_the_switches() {
+        let r = run(Case::HomingOk);
+        assert_eq!(r.figure("homed"), Some(1));
+        // Machine position equals the sim's physical position: the origin is exact.
+        assert_eq!(r.figure("pos0_steps"), r.figure("phys0_steps"));
+        assert_eq!(r.figure("pos1_steps"), r.figure("phys1_steps"));
+        // Pulled off by the backoff: 200 steps inside each switch.
+        assert_eq!(r.figure("pos0_steps"), Some(SWITCH_MIN + 200));
+        assert_eq!(r.figure("pos1_steps"), Some(SWITCH_MAX - 200));
+        let r = run(Case::HomingNotFound);
+        assert_eq!(r.figure("net0_steps"), Some(-500), "stopped after max_travel");
+        assert_eq!(r.figure("homed"), Some(0));
+    }
+
+    #[test]
+    fn soft_limits_at_queue_and_at_run_time() {
+        let r = run(Case::SoftLimitQueue);
+        assert_eq!(
+            r.figure("refusal_nak"),
+            Some(crate::protocol::ErrorCode::InvalidSegment.code() as i64)
+        );
+        assert_eq!(r.figure("fault_mask"), Some(0), "a refused segment latches nothing");
+        assert_eq!(r.figure("pos0_steps"), Some(INSIDE[0].steps[0] as i64));
+        let r = run(Case::SoftLimitRun);
+        assert_eq!(
+            r.figure("pos0_steps"),
+            Some(SOFT_LIMIT + 1),
+            "stopped on the first step outside"
+        );
+    }
+
+    #[test]
+    fn underrun_is_a_controlled_stop() {
+        let r = run(Case::QueueUnderrun);
+        // Two 300-step segments fed; the hold ramps down inside the second, no abrupt stop.
+        assert_eq!(r.figure("dda_underruns"), Some(0));
+        assert!(r.figure("net0_steps").unwrap() <= 600);
+        assert!(r.figure("steps_after_fault").unwrap() > 0, "decelerated, not aborted");
+    }
+
+    #[test]
+    fn config_missing_refuses_motion() {
+        let r = run(Case::ConfigMissing);
+        assert_eq!(r.figure("home_refused"), Some(1));
+        assert_eq!(r.figure("net0_steps"), Some(0));
+        assert_eq!(r.figure("clear_refused_nak"), Some(10));
+    }
+}
