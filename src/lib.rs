@@ -14,7 +14,9 @@ pub mod protocol;
 pub mod report;
 pub mod scenario;
 pub mod segment;
+pub mod spindle;
 pub mod trace;
+pub mod zslide;
 
 pub use config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
 pub use dda::{Command, Dda, StepOutput};
