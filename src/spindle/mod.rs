@@ -43,3 +43,6 @@ pub const fn speed_turn_q32_per_tick(rpm_milli: u64, tick_hz: u32) -> i32 {
 pub const fn rpm_milli(speed_turn_q32_per_tick: i32, tick_hz: u32) -> i64 {
     (speed_turn_q32_per_tick as i64 * 60_000 * tick_hz as i64) >> 32
 }
+
+#[cfg(test)]
+mod tests;

@@ -4,7 +4,7 @@
 //! `FaultCode::ResolverLoss`).
 //!
 //! Observer: `e = sin(theta) cos(phi) - cos(theta) sin(phi) = A sin(theta - phi)`;
-//! `omega += Ki e`, `phi += omega + Kp e`. With `wn T` the loop's natural frequency times the tick
+//! `phi += omega` (prediction to this sample), then `omega += Ki e`, `phi += Kp e`. With `wn T` the loop's natural frequency times the tick
 //! period and damping 1, `Kp = 2 wn T`, `Ki = (wn T)^2` (both scaled by the nominal amplitude,
 //! once, at setup). Zero steady-state error at constant speed; a constant acceleration `alpha`
 //! (turns per tick^2) leaves an angle lag of `alpha / Ki`.
@@ -98,8 +98,10 @@ impl Resolver {
         } else {
             self.out_of_band_ticks = 0;
         }
+        // Predict to this sample, then correct: the angle reported belongs to this sample.
+        self.phi_turn_q48 = self.phi_turn_q48.wrapping_add(self.omega_turn_q48_per_tick as u64);
         let phi = (self.phi_turn_q48 >> 16) as u32;
-        // |e| <= 2 * 32768 * 2^30 = 2^46; gains < 2^17 for sane configs, clamped anyway.
+        // |e| <= 2 * 32768 * 2^30 = 2^46; gains < 2^17 for sane configs, saturating anyway.
         let e = s as i64 * cos_q30(phi) as i64 - c as i64 * sin_q30(phi) as i64;
         let ki = (e.saturating_mul(self.ki_q16)) >> 16;
         let kp = (e.saturating_mul(self.kp_q16)) >> 16;
@@ -107,10 +109,7 @@ impl Resolver {
         const OMEGA_MAX: i64 = 1 << 47;
         self.omega_turn_q48_per_tick =
             self.omega_turn_q48_per_tick.saturating_add(ki).clamp(-OMEGA_MAX, OMEGA_MAX);
-        self.phi_turn_q48 = self
-            .phi_turn_q48
-            .wrapping_add(self.omega_turn_q48_per_tick as u64)
-            .wrapping_add(kp as u64);
+        self.phi_turn_q48 = self.phi_turn_q48.wrapping_add(kp as u64);
     }
 
     pub fn config(&self) -> &ResolverConfig {
