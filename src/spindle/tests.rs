@@ -164,8 +164,8 @@ fn counter_wraps_many_times() {
         let (c, i) = sim.encoder(CPR);
         enc.update(c, i);
     }
-    let expect = sim.turns() as i64 * CPR as i64
-        + ((sim.angle_turn_q32() as u64 * CPR as u64) >> 32) as i64;
+    let expect =
+        sim.turns() as i64 * CPR as i64 + ((sim.angle_turn_q32() as u64 * CPR as u64) >> 32) as i64;
     assert_eq!(enc.position_counts(), expect);
     assert!(expect > 100 * 65_536);
     assert_eq!(enc.fault(), None);

@@ -155,10 +155,10 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
     /// Velocity and acceleration the table needs at this spindle speed, worst case over the
     /// table (inches Q48 per tick, per tick^2).
     pub fn required_at(&self, speed_turn_q32_per_tick: i32) -> (i64, i64) {
-        let w = rad_per_tick_q32(speed_turn_q32_per_tick.clamp(
-            -MAX_SPEED_TURN_Q32_PER_TICK,
-            MAX_SPEED_TURN_Q32_PER_TICK,
-        ))
+        let w = rad_per_tick_q32(
+            speed_turn_q32_per_tick
+                .clamp(-MAX_SPEED_TURN_Q32_PER_TICK, MAX_SPEED_TURN_Q32_PER_TICK),
+        )
         .abs();
         (vel_q48(self.max_dz_dphi_in_q32, w), acc_q48(self.max_d2z_dphi2_in_q32, w))
     }
@@ -235,8 +235,8 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
             return self.fault(FaultCode::ZSlideLimit);
         }
         // Phase advance for the known latency: phi + omega * tau (wraps as angles do).
-        let advance = ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64)
-            >> 16) as u32;
+        let advance =
+            ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64) >> 16) as u32;
         let phi = angle_turn_q32.wrapping_add(advance);
         let p: ZPoint = self.table.eval(x_in_q24, phi, self.cfg.interp);
         let w = rad_per_tick_q32(speed_turn_q32_per_tick);

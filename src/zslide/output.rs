@@ -78,8 +78,7 @@ impl DacScale {
     /// The code for `z_in_q32`, or `ZSlideLimit` if it is outside the DAC's range.
     #[inline]
     pub fn code(&self, z_in_q32: i32) -> Result<u16, FaultCode> {
-        let c = self.mid_code as i64
-            + ((z_in_q32 as i64 * self.codes_per_in + (1 << 31)) >> 32);
+        let c = self.mid_code as i64 + ((z_in_q32 as i64 * self.codes_per_in + (1 << 31)) >> 32);
         if (0..=4095).contains(&c) {
             Ok(c as u16)
         } else {

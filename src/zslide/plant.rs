@@ -129,7 +129,12 @@ impl VoiceCoilSlide {
     /// plant integrates eq 4-11 over the tick. Bounded, no division; clamped operands so a wild
     /// command cannot overflow (the amplifier clamps at its voltage limit, as a real one).
     #[inline]
-    pub fn tick(&mut self, z_cmd_in_q32: i32, v_ff_in_q48_per_tick: i64, a_ff_in_q48_per_tick2: i64) {
+    pub fn tick(
+        &mut self,
+        z_cmd_in_q32: i32,
+        v_ff_in_q48_per_tick: i64,
+        a_ff_in_q48_per_tick2: i64,
+    ) {
         // Plain 64-bit products (no i128: a libcall on the M4); the clamps below bound every
         // operand so no product can overflow (bounds in the comments, from the motor-1 scale).
         let m = |x: i64, k: i64, s: u32| -> i64 { (x * k) >> s };
@@ -137,7 +142,7 @@ impl VoiceCoilSlide {
         const V_MAX: i64 = 1 << 36; // about 12 in/s at 50 kHz
         const A_MAX: i64 = 1 << 26; // about 6000 in/s^2 at 50 kHz, 3x what 8 A gives
         const I_MAX: i64 = 1 << 35; // 34 A, beyond the amplifier's V/R
-        // Servo: gage in Q30 inches (about 1 nin), velocity from its difference.
+                                    // Servo: gage in Q30 inches (about 1 nin), velocity from its difference.
         let gage = self.z_in_q48 >> 18;
         let v_meas = ((gage - self.gage_prev_in_q30) << 18).clamp(-V_MAX, V_MAX);
         self.gage_prev_in_q30 = gage;
@@ -220,7 +225,8 @@ mod tests {
         // exact derivatives. The thesis's loop (no feedforward, Kv ~ 4800/s) predicts +-390 uin
         // here (digest section 3 I); feedforward plus a 250 Hz PD loop must do 100x better.
         let hz = 50_000.0;
-        let mut s = VoiceCoilSlide::new(VoiceCoilMotor::MOTOR_1, VoiceCoilServo::default(), 50_000, 0);
+        let mut s =
+            VoiceCoilSlide::new(VoiceCoilMotor::MOTOR_1, VoiceCoilServo::default(), 50_000, 0);
         let mut worst = 0.0f64;
         for k in 0..100_000 {
             let t = k as f64 / hz;

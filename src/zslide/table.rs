@@ -279,7 +279,11 @@ pub fn eval_row(form: TableForm, c: &[i32], phi_turn_q32: u32) -> ZPoint {
                 d2 -= kk * kk * (ac + bs);
                 angle = angle.wrapping_add(phi_turn_q32);
             }
-            ZPoint { z_in_q32: z.clamp(i32::MIN as i64, i32::MAX as i64) as i32, dz_dphi_in_q32: d1, d2z_dphi2_in_q32: d2 }
+            ZPoint {
+                z_in_q32: z.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+                dz_dphi_in_q32: d1,
+                d2z_dphi2_in_q32: d2,
+            }
         }
     }
 }
@@ -328,11 +332,14 @@ mod tests {
             assert!((a.dz_dphi_in_q32 - b.dz_dphi_in_q32).abs() < 64, "{k}");
             assert!((a.d2z_dphi2_in_q32 - b.d2z_dphi2_in_q32).abs() < 256, "{k}");
             let phi_rad = k as f64 * std::f64::consts::PI / 180.0;
-            let exact = c0 + s1 * phi_rad.sin() + c2 * (2.0 * phi_rad).cos() + s3 * (3.0 * phi_rad).sin();
-            let d1 = s1 * phi_rad.cos() - 2.0 * c2 * (2.0 * phi_rad).sin() + 3.0 * s3 * (3.0 * phi_rad).cos();
+            let exact =
+                c0 + s1 * phi_rad.sin() + c2 * (2.0 * phi_rad).cos() + s3 * (3.0 * phi_rad).sin();
+            let d1 = s1 * phi_rad.cos() - 2.0 * c2 * (2.0 * phi_rad).sin()
+                + 3.0 * s3 * (3.0 * phi_rad).cos();
             // sin/cos error 3e-7 times coefficients of a few 1e-3 in.
             // Bound: sin error times |dZ/ds| <= |C01| + 2 |C02| + 3 |C03|, plus rounding.
-            let bound = 2.96e-7 * (s1.abs() + 3.0 * s3.abs() + 4.0 * c2.abs() + 12.0 * s3.abs()) + 1e-9;
+            let bound =
+                2.96e-7 * (s1.abs() + 3.0 * s3.abs() + 4.0 * c2.abs() + 12.0 * s3.abs()) + 1e-9;
             assert!((a.z_in_q32 as f64 / IN_Q32 - exact).abs() < bound);
             let e1 = (a.dz_dphi_in_q32 as f64 / IN_Q32 - d1).abs();
             assert!(e1 < 1e-8, "{k}: {e1:e}");
@@ -390,7 +397,9 @@ mod tests {
             CoefficientTable::<300, 4>::try_new(TableForm::Power, 0, 1 << 10, 300, many),
             Err(TableError::Grid)
         );
-        assert!(CoefficientTable::<300, 4>::try_new(TableForm::Power, 0, 1 << 10, 257, many).is_ok());
+        assert!(
+            CoefficientTable::<300, 4>::try_new(TableForm::Power, 0, 1 << 10, 257, many).is_ok()
+        );
     }
 
     proptest! {
