@@ -168,12 +168,13 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
         (self.v_max_in_q48_per_tick, self.a_max_in_q48_per_tick2)
     }
 
-    /// Pre-start check and soft engage from `z_now_in_q32` (the slide's current Z, which
+    /// Pre-start check and soft engage, at `x_in_q24`, from `z_now_in_q32` (the slide's current Z, which
     /// becomes the rest Z the disengage returns to). Errs with `ZSlideLimit` if the table at
     /// this spindle speed (or the engage ramp) needs more than the slide has, `SpindleStopped`
     /// if the spindle is stopped.
     pub fn start(
         &mut self,
+        x_in_q24: i32,
         speed_turn_q32_per_tick: i32,
         z_now_in_q32: i32,
     ) -> Result<(), FaultCode> {
@@ -184,16 +185,14 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
             return Err(FaultCode::ZSlideLimit);
         }
         let (v, a) = self.required_at(speed_turn_q32_per_tick);
-        // Engage ramp: smoothstep's peak slope is 1.5 / engage_ticks times the distance.
+        // Engage ramp: smoothstep's peak slope is 1.5 / engage_ticks times the distance from
+        // the current Z to the table's Z at the engage X.
+        let c = self.table.coefficients(x_in_q24, self.cfg.interp);
         let mut far = 0i64;
-        for i in 0..self.table.len() {
-            if let Some(row) = self.table.row(i) {
-                for j in 0..CHECK_ANGLES {
-                    let phi = j.wrapping_mul(u32::MAX / CHECK_ANGLES + 1);
-                    let z = super::table::eval_row(self.table.form(), row, phi).z_in_q32;
-                    far = far.max((z as i64 - z_now_in_q32 as i64).abs());
-                }
-            }
+        for j in 0..CHECK_ANGLES {
+            let phi = j.wrapping_mul(u32::MAX / CHECK_ANGLES + 1);
+            let z = super::table::eval_row(self.table.form(), &c, phi).z_in_q32;
+            far = far.max((z as i64 - z_now_in_q32 as i64).abs());
         }
         let ramp_v = (far << 16) * 3 / 2 / self.cfg.engage_ticks as i64;
         if v + ramp_v > self.v_max_in_q48_per_tick || a > self.a_max_in_q48_per_tick2 {

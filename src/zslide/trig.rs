@@ -99,7 +99,7 @@ mod tests {
         let bound = (core::f64::consts::FRAC_PI_2 / 1024.0).powi(2) / 8.0 + 2e-9;
         let mut worst = 0.0f64;
         for k in 0..200_003u64 {
-            let a = (k * 21_474_7u64 + k * k) as u32;
+            let a = (k * 214_747_u64 + k * k) as u32;
             let phi = a as f64 / 4_294_967_296.0 * 2.0 * core::f64::consts::PI;
             let es = (sin_q30(a) as f64 / ONE_Q30 as f64 - phi.sin()).abs();
             let ec = (cos_q30(a) as f64 / ONE_Q30 as f64 - phi.cos()).abs();

@@ -66,7 +66,7 @@ pub fn harmonic_table<const ROWS: usize, const WIDTH: usize>(
     harmonics: &[Harmonics],
 ) -> Result<CoefficientTable<ROWS, WIDTH>> {
     let order = (WIDTH - 1) / 2;
-    if WIDTH % 2 == 0 || order == 0 || order > MAX_ORDER {
+    if WIDTH.is_multiple_of(2) || order == 0 || order > MAX_ORDER {
         return Err(refused(motion::zslide::TableError::Width));
     }
     if harmonics.len() > ROWS {
