@@ -18,7 +18,9 @@ pub mod report;
 pub mod scenario;
 pub mod scenarios;
 pub mod segment;
+pub mod spindle;
 pub mod trace;
+pub mod zslide;
 
 pub use config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
 pub use dda::{Command, Dda, StepOutput};

@@ -9,6 +9,7 @@ use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
+use crate::zslide::scenario::{ZSlideScenario, ZSlideVariant};
 
 use crate::scenario::{Scenario, ScenarioReport};
 
@@ -23,10 +24,15 @@ pub enum AnyScenario {
     Force(ForceScenario),
     /// The machine's fault suite: each cause injected by the sim board.
     Fault(faults::FaultScenario),
+    /// Non-axisymmetric turning (Douglass): the Fourier-series Z slide from encoder or resolver.
+    ZSlide(ZSlideScenario),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 2 + ForceVariant::ALL.len() + faults::CASES.len();
+pub const COUNT: usize = 2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len();
+
+const ZSLIDE_VARIANTS: [ZSlideVariant; 3] =
+    [ZSlideVariant::Encoder, ZSlideVariant::Resolver, ZSlideVariant::IndexLoss];
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
@@ -47,6 +53,10 @@ fn build_group(mut i: usize) -> Option<AnyScenario> {
     if let Some(&c) = faults::CASES.get(i) {
         return faults::FaultScenario::new(c).map(AnyScenario::Fault);
     }
+    i -= faults::CASES.len();
+    if let Some(&v) = ZSLIDE_VARIANTS.get(i) {
+        return Some(AnyScenario::ZSlide(ZSlideScenario::new(v)));
+    }
     None
 }
 
@@ -57,6 +67,7 @@ macro_rules! dispatch {
             AnyScenario::PolarPlayback($s) => $e,
             AnyScenario::Force($s) => $e,
             AnyScenario::Fault($s) => $e,
+            AnyScenario::ZSlide($s) => $e,
         }
     };
 }

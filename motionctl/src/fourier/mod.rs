@@ -21,6 +21,7 @@
 
 pub mod accurate;
 pub mod csmp;
+pub mod firmware_table;
 pub mod fit;
 pub mod forex4;
 pub mod paraboloid;

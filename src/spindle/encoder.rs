@@ -1,0 +1,158 @@
+//! Quadrature encoder in a timer's encoder mode: the timer's free-running `u16` count (read every
+//! tick; wrap-safe as long as it moves less than 32768 counts per tick) and the count latched by
+//! the index pulse. Counts per revolution are checked at every index (a mismatch or a missing
+//! index latches `FaultCode::EncoderIndex`); the speed is the count difference over a fixed
+//! window of `2^window_log2` ticks, scaled by a precomputed multiplier (no division per tick).
+
+use super::SpindleSource;
+use crate::protocol::errors::FaultCode;
+
+/// Longest speed window, in ticks (a ring of this many positions).
+pub const MAX_WINDOW_TICKS: usize = 256;
+
+/// Encoder setup.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EncoderConfig {
+    /// Quadrature counts per revolution (4 x lines), 4..=2^24.
+    pub counts_per_rev: u32,
+    /// Allowed difference between counts seen between two index pulses and `counts_per_rev`.
+    pub index_tolerance_counts: u32,
+    /// Speed window `2^window_log2` ticks, 0..=8.
+    pub window_log2: u8,
+    /// Below this many counts per window the spindle counts as stopped.
+    pub stop_counts_per_window: u32,
+}
+
+/// Why an encoder config was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EncoderConfigError {
+    CountsPerRev,
+    Window,
+    Tolerance,
+}
+
+/// Encoder state: extended position, index reference, speed window.
+#[derive(Clone, Debug)]
+pub struct QuadratureEncoder {
+    cfg: EncoderConfig,
+    /// `2^48 / counts_per_rev`: counts -> turn Q32 with 16 extra fraction bits.
+    turn_q48_per_count: u64,
+    last_count: u16,
+    position_counts: i64,
+    /// Position at the last index pulse, or at start before the first one.
+    reference_counts: i64,
+    referenced: bool,
+    angle_turn_q32: u32,
+    window: [i32; MAX_WINDOW_TICKS],
+    head: usize,
+    window_counts: i32,
+    fault: Option<FaultCode>,
+}
+
+impl QuadratureEncoder {
+    /// A new encoder whose timer currently reads `count`.
+    pub fn new(cfg: EncoderConfig, count: u16) -> Result<Self, EncoderConfigError> {
+        if !(4..=1 << 24).contains(&cfg.counts_per_rev) {
+            return Err(EncoderConfigError::CountsPerRev);
+        }
+        if cfg.window_log2 > 8 {
+            return Err(EncoderConfigError::Window);
+        }
+        if cfg.index_tolerance_counts >= cfg.counts_per_rev / 2 {
+            return Err(EncoderConfigError::Tolerance);
+        }
+        Ok(Self {
+            cfg,
+            turn_q48_per_count: (1u64 << 48) / cfg.counts_per_rev as u64,
+            last_count: count,
+            position_counts: 0,
+            reference_counts: 0,
+            referenced: false,
+            angle_turn_q32: 0,
+            window: [0; MAX_WINDOW_TICKS],
+            head: 0,
+            window_counts: 0,
+            fault: None,
+        })
+    }
+
+    /// One tick: the timer's count now and, if an index pulse came since the last tick, the
+    /// count the timer latched on it. Bounded, division-free, never panics.
+    #[inline]
+    pub fn update(&mut self, count: u16, index_count: Option<u16>) {
+        // Wrap-safe: the signed 16-bit difference is right for moves under 32768 counts/tick.
+        let delta = count.wrapping_sub(self.last_count) as i16 as i64;
+        self.last_count = count;
+        self.position_counts = self.position_counts.wrapping_add(delta);
+        let cpr = self.cfg.counts_per_rev as i64;
+        let tol = self.cfg.index_tolerance_counts as i64;
+        if let Some(latched) = index_count {
+            let at_index =
+                self.position_counts.wrapping_sub(count.wrapping_sub(latched) as i16 as i64);
+            if self.referenced {
+                let between = at_index.wrapping_sub(self.reference_counts).unsigned_abs();
+                if between.abs_diff(cpr as u64) > tol as u64 {
+                    self.fault = Some(FaultCode::EncoderIndex);
+                }
+            }
+            self.reference_counts = at_index;
+            self.referenced = true;
+        }
+        let mut rel = self.position_counts.wrapping_sub(self.reference_counts);
+        // A revolution and the tolerance without an index: the index is lost (or, before the
+        // first one, never came).
+        if rel > cpr + tol || rel < -(cpr + tol) {
+            self.fault = Some(FaultCode::EncoderIndex);
+        }
+        if rel >= cpr {
+            rel -= cpr;
+        } else if rel < 0 {
+            rel += cpr;
+        }
+        let rel = rel.clamp(0, cpr - 1) as u64;
+        self.angle_turn_q32 = ((rel * self.turn_q48_per_count) >> 16) as u32;
+        // Speed window: position now minus position 2^window_log2 ticks ago.
+        let mask = (1usize << self.cfg.window_log2) - 1;
+        let slot = self.head & mask;
+        let pos = self.position_counts as i32;
+        let old = self.window.get(slot).copied().unwrap_or(pos);
+        self.window_counts = pos.wrapping_sub(old);
+        if let Some(s) = self.window.get_mut(slot) {
+            *s = pos;
+        }
+        self.head = (slot + 1) & mask;
+    }
+
+    /// Counts moved over the last window.
+    pub fn window_counts(&self) -> i32 {
+        self.window_counts
+    }
+    /// Extended position in counts since start.
+    pub fn position_counts(&self) -> i64 {
+        self.position_counts
+    }
+    pub fn config(&self) -> &EncoderConfig {
+        &self.cfg
+    }
+}
+
+impl SpindleSource for QuadratureEncoder {
+    fn angle_turn_q32(&self) -> u32 {
+        self.angle_turn_q32
+    }
+    fn speed_turn_q32_per_tick(&self) -> i32 {
+        // counts/window * turn per count / window; |window_counts| < 2^24 so this fits.
+        let v = (self.window_counts as i64).saturating_mul(self.turn_q48_per_count as i64)
+            >> (16 + self.cfg.window_log2 as u32);
+        v.clamp(i32::MIN as i64, i32::MAX as i64) as i32
+    }
+    fn fault(&self) -> Option<FaultCode> {
+        self.fault
+    }
+    fn is_referenced(&self) -> bool {
+        self.referenced
+    }
+    fn is_stopped(&self) -> bool {
+        self.window_counts.unsigned_abs() < self.cfg.stop_counts_per_window
+    }
+}

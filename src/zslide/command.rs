@@ -1,0 +1,311 @@
+//! The interrupt-rate Z command: `Z(X, phi + omega tau)` from a coefficient table, with soft
+//! engage from the slide's current Z, a blended disengage at the table edge (smoothstep weights,
+//! so neither engage nor disengage steps the command), and velocity/acceleration limits checked
+//! against the spindle speed before start and at every update (`FaultCode::ZSlideLimit`; the
+//! command is never clipped silently). Faults latch and freeze the command.
+//!
+//! Per update ([`ZCommand::update`]): one table evaluation (interpolation in X, sin/cos, the
+//! series and its two angle derivatives), a few multiplies for the limits and the blend. No
+//! division, no loops beyond the table width, no panics.
+
+use super::table::{rad_per_tick_q32, CoefficientTable, Interp, ZPoint};
+use crate::protocol::errors::FaultCode;
+
+/// Fastest spindle the generator accepts: 2^22 turn Q32 per tick (1/1024 turn per tick, 2930
+/// rpm at 50 kHz). Keeps every product in range; faster is a `ZSlideLimit` fault.
+pub const MAX_SPEED_TURN_Q32_PER_TICK: i32 = 1 << 22;
+/// Angles sampled per table row by the pre-start check.
+pub const CHECK_ANGLES: u32 = 256;
+
+/// Generator setup (config time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ZCommandConfig {
+    pub tick_hz: u32,
+    pub interp: Interp,
+    /// Latency the command is advanced by (`phi + omega tau`), ticks Q16.
+    pub advance_ticks_q16: u32,
+    /// Soft-engage duration, ticks (>= 1).
+    pub engage_ticks: u32,
+    /// Disengage blend: weight 1 at `blend_start`, 0 at `blend_end` (<= the table's last X).
+    pub blend_start_x_in_q24: i32,
+    pub blend_end_x_in_q24: i32,
+    /// Slide limits, micro-inches per second and per second^2.
+    pub max_velocity_uin_per_s: u32,
+    pub max_accel_uin_per_s2: u32,
+    /// While engaged, a spindle slower than this (turn Q32 per tick) is `SpindleStopped`.
+    pub min_speed_turn_q32_per_tick: u32,
+}
+
+/// Why a config was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZConfigError {
+    TickRate,
+    Engage,
+    Blend,
+    Limits,
+}
+
+/// Where the generator is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZState {
+    /// Holding the rest Z, not following the table.
+    Idle,
+    /// Following the table with weight `< 1` (engaging) or 1.
+    Running,
+    /// Past the blend end: back at the rest Z.
+    Finished,
+    /// A fault latched: the command is frozen.
+    Faulted(FaultCode),
+}
+
+/// One update's output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ZUpdate {
+    /// Z command, inches Q32.
+    pub z_in_q32: i32,
+    /// Its velocity and acceleration along the spindle angle (feedforward for a servo), inches
+    /// Q48 per tick and per tick^2, scaled by the blend weight.
+    pub v_in_q48_per_tick: i64,
+    pub a_in_q48_per_tick2: i64,
+}
+
+/// The generator over one table.
+#[derive(Clone, Debug)]
+pub struct ZCommand<'t, const ROWS: usize, const WIDTH: usize> {
+    table: &'t CoefficientTable<ROWS, WIDTH>,
+    cfg: ZCommandConfig,
+    v_max_in_q48_per_tick: i64,
+    a_max_in_q48_per_tick2: i64,
+    engage_step_q16: u32,
+    blend_per_x_q32: i64,
+    /// Largest |dZ/dphi|, |d2Z/dphi2| over the table (inches Q32 per rad, per rad^2).
+    max_dz_dphi_in_q32: i64,
+    max_d2z_dphi2_in_q32: i64,
+    state: ZState,
+    z_rest_in_q32: i32,
+    engage_weight_q16: u32,
+    last: ZUpdate,
+    updates: u64,
+}
+
+/// `3 w^2 - 2 w^3` in Q16 for `0 <= w <= 1` (Q16): zero slope at both ends.
+#[inline]
+fn smoothstep_q16(w_q16: u32) -> i64 {
+    let w = w_q16.min(1 << 16) as i64;
+    let w2 = (w * w) >> 16;
+    (w2 * ((3 << 16) - 2 * w)) >> 16
+}
+
+impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
+    /// Checks the config and scans the table once for its largest angle derivatives (config
+    /// time: divides, loops over rows x [`CHECK_ANGLES`]).
+    pub fn new(
+        table: &'t CoefficientTable<ROWS, WIDTH>,
+        cfg: ZCommandConfig,
+        z_rest_in_q32: i32,
+    ) -> Result<Self, ZConfigError> {
+        if cfg.tick_hz < 1000 {
+            return Err(ZConfigError::TickRate);
+        }
+        if cfg.engage_ticks == 0 {
+            return Err(ZConfigError::Engage);
+        }
+        if cfg.blend_end_x_in_q24 <= cfg.blend_start_x_in_q24
+            || cfg.blend_end_x_in_q24 > table.x_last_in_q24()
+        {
+            return Err(ZConfigError::Blend);
+        }
+        if cfg.max_velocity_uin_per_s == 0 || cfg.max_accel_uin_per_s2 == 0 {
+            return Err(ZConfigError::Limits);
+        }
+        let hz = cfg.tick_hz as i64;
+        // uin/s -> in Q48 per tick: v * 2^48 / 1e6 / hz.
+        let v_max = ((cfg.max_velocity_uin_per_s as i128) << 48) / (1_000_000 * hz as i128);
+        let a_max = ((cfg.max_accel_uin_per_s2 as i128) << 48) / (1_000_000 * (hz * hz) as i128);
+        let span = (cfg.blend_end_x_in_q24 as i64 - cfg.blend_start_x_in_q24 as i64).max(1);
+        let mut max_d1 = 0i64;
+        let mut max_d2 = 0i64;
+        for i in 0..table.len() {
+            if let Some(row) = table.row(i) {
+                for j in 0..CHECK_ANGLES {
+                    let phi = j.wrapping_mul(u32::MAX / CHECK_ANGLES + 1);
+                    let p = super::table::eval_row(table.form(), row, phi);
+                    max_d1 = max_d1.max(p.dz_dphi_in_q32.abs());
+                    max_d2 = max_d2.max(p.d2z_dphi2_in_q32.abs());
+                }
+            }
+        }
+        Ok(Self {
+            table,
+            cfg,
+            v_max_in_q48_per_tick: v_max as i64,
+            a_max_in_q48_per_tick2: (a_max as i64).max(1),
+            engage_step_q16: ((1u32 << 16) / cfg.engage_ticks).max(1),
+            blend_per_x_q32: (1i64 << 48) / span,
+            max_dz_dphi_in_q32: max_d1,
+            max_d2z_dphi2_in_q32: max_d2,
+            state: ZState::Idle,
+            z_rest_in_q32,
+            engage_weight_q16: 0,
+            last: ZUpdate { z_in_q32: z_rest_in_q32, ..ZUpdate::default() },
+            updates: 0,
+        })
+    }
+
+    /// Velocity and acceleration the table needs at this spindle speed, worst case over the
+    /// table (inches Q48 per tick, per tick^2).
+    pub fn required_at(&self, speed_turn_q32_per_tick: i32) -> (i64, i64) {
+        let w = rad_per_tick_q32(
+            speed_turn_q32_per_tick
+                .clamp(-MAX_SPEED_TURN_Q32_PER_TICK, MAX_SPEED_TURN_Q32_PER_TICK),
+        )
+        .abs();
+        (vel_q48(self.max_dz_dphi_in_q32, w), acc_q48(self.max_d2z_dphi2_in_q32, w))
+    }
+
+    /// The slide limits in the same units.
+    pub fn limits(&self) -> (i64, i64) {
+        (self.v_max_in_q48_per_tick, self.a_max_in_q48_per_tick2)
+    }
+
+    /// Pre-start check and soft engage, at `x_in_q24`, from `z_now_in_q32` (the slide's current Z, which
+    /// becomes the rest Z the disengage returns to). Errs with `ZSlideLimit` if the table at
+    /// this spindle speed (or the engage ramp) needs more than the slide has, `SpindleStopped`
+    /// if the spindle is stopped.
+    pub fn start(
+        &mut self,
+        x_in_q24: i32,
+        speed_turn_q32_per_tick: i32,
+        z_now_in_q32: i32,
+    ) -> Result<(), FaultCode> {
+        if speed_turn_q32_per_tick.unsigned_abs() < self.cfg.min_speed_turn_q32_per_tick {
+            return Err(FaultCode::SpindleStopped);
+        }
+        if speed_turn_q32_per_tick.unsigned_abs() > MAX_SPEED_TURN_Q32_PER_TICK as u32 {
+            return Err(FaultCode::ZSlideLimit);
+        }
+        let (v, a) = self.required_at(speed_turn_q32_per_tick);
+        // Engage ramp: smoothstep's peak slope is 1.5 / engage_ticks times the distance from
+        // the current Z to the table's Z at the engage X.
+        let c = self.table.coefficients(x_in_q24, self.cfg.interp);
+        let mut far = 0i64;
+        for j in 0..CHECK_ANGLES {
+            let phi = j.wrapping_mul(u32::MAX / CHECK_ANGLES + 1);
+            let z = super::table::eval_row(self.table.form(), &c, phi).z_in_q32;
+            far = far.max((z as i64 - z_now_in_q32 as i64).abs());
+        }
+        let ramp_v = (far << 16) * 3 / 2 / self.cfg.engage_ticks as i64;
+        if v + ramp_v > self.v_max_in_q48_per_tick || a > self.a_max_in_q48_per_tick2 {
+            return Err(FaultCode::ZSlideLimit);
+        }
+        self.z_rest_in_q32 = z_now_in_q32;
+        self.engage_weight_q16 = 0;
+        self.state = ZState::Running;
+        Ok(())
+    }
+
+    /// One update (call once per tick, >= 20 kHz): spindle angle and speed from the source,
+    /// its fault if any, the X position. Returns the command (frozen once faulted).
+    #[inline(never)]
+    pub fn update(
+        &mut self,
+        x_in_q24: i32,
+        angle_turn_q32: u32,
+        speed_turn_q32_per_tick: i32,
+        sensor_fault: Option<FaultCode>,
+    ) -> ZUpdate {
+        self.updates = self.updates.wrapping_add(1);
+        match self.state {
+            ZState::Running => {}
+            ZState::Faulted(_) => return self.last,
+            ZState::Idle | ZState::Finished => {
+                self.last = ZUpdate { z_in_q32: self.z_rest_in_q32, ..ZUpdate::default() };
+                return self.last;
+            }
+        }
+        if let Some(f) = sensor_fault {
+            return self.fault(f);
+        }
+        let speed_abs = speed_turn_q32_per_tick.unsigned_abs();
+        if speed_abs < self.cfg.min_speed_turn_q32_per_tick {
+            return self.fault(FaultCode::SpindleStopped);
+        }
+        if speed_abs > MAX_SPEED_TURN_Q32_PER_TICK as u32 {
+            return self.fault(FaultCode::ZSlideLimit);
+        }
+        // Phase advance for the known latency: phi + omega * tau (wraps as angles do).
+        let advance =
+            ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64) >> 16) as u32;
+        let phi = angle_turn_q32.wrapping_add(advance);
+        let p: ZPoint = self.table.eval(x_in_q24, phi, self.cfg.interp);
+        let w = rad_per_tick_q32(speed_turn_q32_per_tick);
+        let v = (p.dz_dphi_in_q32 * w) >> 16;
+        let a = acc_q48(p.d2z_dphi2_in_q32, w);
+        // Blend weight: engage ramp in time, disengage ramp in X.
+        self.engage_weight_q16 = (self.engage_weight_q16 + self.engage_step_q16).min(1 << 16);
+        let to_end = (self.cfg.blend_end_x_in_q24 as i64 - x_in_q24 as i64).max(0);
+        let edge_q16 = ((to_end * self.blend_per_x_q32) >> 32).min(1 << 16) as u32;
+        let weight = smoothstep_q16(self.engage_weight_q16.min(edge_q16));
+        let v = (v * weight) >> 16;
+        let a = (a * weight) >> 16;
+        if v.abs() > self.v_max_in_q48_per_tick || a.abs() > self.a_max_in_q48_per_tick2 {
+            return self.fault(FaultCode::ZSlideLimit);
+        }
+        let rest = self.z_rest_in_q32 as i64;
+        let z = rest + (((p.z_in_q32 as i64 - rest) * weight) >> 16);
+        // Command step check: the blends must not move faster than the slide either (the
+        // per-update change, with 25 % allowance for the angle quantisation of the source).
+        let dz_q48 = (z - self.last.z_in_q32 as i64) << 16;
+        if dz_q48.abs() > self.v_max_in_q48_per_tick + (self.v_max_in_q48_per_tick >> 2) {
+            return self.fault(FaultCode::ZSlideLimit);
+        }
+        if edge_q16 == 0 {
+            self.state = ZState::Finished;
+        }
+        self.last = ZUpdate {
+            z_in_q32: z.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+            v_in_q48_per_tick: v,
+            a_in_q48_per_tick2: a,
+        };
+        self.last
+    }
+
+    fn fault(&mut self, f: FaultCode) -> ZUpdate {
+        self.state = ZState::Faulted(f);
+        self.last = ZUpdate { z_in_q32: self.last.z_in_q32, ..ZUpdate::default() };
+        self.last
+    }
+
+    pub fn state(&self) -> ZState {
+        self.state
+    }
+    /// The latched fault, if any.
+    pub fn fault_code(&self) -> Option<FaultCode> {
+        match self.state {
+            ZState::Faulted(f) => Some(f),
+            _ => None,
+        }
+    }
+    pub fn last(&self) -> ZUpdate {
+        self.last
+    }
+    /// Updates done (every call counts).
+    pub fn updates(&self) -> u64 {
+        self.updates
+    }
+    pub fn table(&self) -> &'t CoefficientTable<ROWS, WIDTH> {
+        self.table
+    }
+}
+
+/// `dZ/dphi * w` in inches Q48 per tick (w in rad per tick Q32).
+#[inline]
+fn vel_q48(dz_dphi_in_q32: i64, w_rad_q32: i64) -> i64 {
+    (dz_dphi_in_q32 * w_rad_q32) >> 16
+}
+
+/// `d2Z/dphi2 * w^2` in inches Q48 per tick^2.
+#[inline]
+fn acc_q48(d2z_in_q32: i64, w_rad_q32: i64) -> i64 {
+    (((d2z_in_q32 * w_rad_q32) >> 32) * w_rad_q32) >> 16
+}
