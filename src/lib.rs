@@ -15,6 +15,7 @@ pub mod report;
 pub mod scenario;
 pub mod segment;
 pub mod trace;
+pub mod wire;
 
 pub use config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
 pub use dda::{Command, Dda, StepOutput};
