@@ -7,5 +7,6 @@
 //! [`history`] (bounded record of executed path pieces), [`controller`] (feed, hold, retrace,
 //! recover, wire power, e-stop), [`scenario`] (the scenarios).
 
+pub mod circle_complex_job;
 pub mod job;
 pub mod machine;

@@ -19,6 +19,7 @@ pub mod continuous;
 pub mod csv;
 pub mod gear;
 pub mod ik;
+pub mod job_file;
 pub mod limits;
 pub mod path;
 pub mod shapes;
