@@ -8,5 +8,8 @@
 //! recover, wire power, e-stop), [`scenario`] (the scenarios).
 
 pub mod circle_complex_job;
+pub mod controller;
+pub mod debounce;
+pub mod history;
 pub mod job;
 pub mod machine;
