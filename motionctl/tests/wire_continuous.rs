@@ -93,8 +93,8 @@ fn segments_sum_to_every_ik_target() {
     let mut point = 0usize;
     for (k, s) in job.segments.iter().enumerate() {
         s.check(&cfg).unwrap();
-        for a in 0..4 {
-            pos[a] += s.steps[a] as i64;
+        for (p, &d) in pos.iter_mut().zip(&s.steps) {
+            *p += d as i64;
         }
         let last_piece = job.pieces[job.segment_pieces[k].1];
         if last_piece.u1 == 1.0 {

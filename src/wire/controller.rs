@@ -178,6 +178,10 @@ impl<'a> WireController<'a> {
         while self.done_seen != self.dda.segments_done() {
             self.done_seen = self.dda.segments_done();
             self.complete_front();
+            let job_done = self.next_job >= self.job.len() && self.in_flight.is_empty();
+            if self.phase == Phase::Running && job_done && self.dda.is_idle() {
+                self.phase = Phase::Done;
+            }
         }
         out
     }
@@ -255,7 +259,11 @@ impl<'a> WireController<'a> {
                 }
                 return Ok(());
             };
-            let seg = js.segment(self.next_job as u32);
+            let mut seg = js.segment(self.next_job as u32);
+            if self.next_job + 1 == self.job.len() {
+                // A job (or a slice of one) always ends at rest.
+                seg.exit_rate = Rate::ZERO;
+            }
             let end = add(self.pos, js.steps);
             let piece = Piece {
                 start: self.pos,
@@ -282,6 +290,8 @@ impl<'a> WireController<'a> {
     /// A rest-to-rest recovery segment from the current position to `piece.end` over the
     /// piece's duration and ramp; nothing when already there.
     fn push_recovery(&mut self, kind: Kind, piece: Piece) -> Result<bool, SegmentError> {
+        // Mid-piece after an interrupted retrace: only the part left, in its share of time.
+        let piece = if self.pos == piece.start { piece } else { piece.part(self.pos, piece.end) };
         let d = piece.steps_to_end(self.pos);
         if d == [0; 4] {
             return Ok(false);
@@ -297,8 +307,7 @@ impl<'a> WireController<'a> {
             accel_per_tick: Rate::from_bits(piece.accel_q30.max(1)),
             id: RECOVERY_ID | (self.recovery_ids & !RECOVERY_ID),
         };
-        let start = self.pos;
-        self.push(seg, kind, Piece { start, ..piece })?;
+        self.push(seg, kind, piece)?;
         Ok(true)
     }
 
@@ -318,8 +327,8 @@ impl<'a> WireController<'a> {
             match f.kind {
                 Kind::Job(_) | Kind::Return => {
                     // Executed part (all of it when stopped exactly at its end) and the rest.
-                    self.history.push(Piece { end: p, ..f.piece });
-                    ok = self.replay.push(Piece { start: p, ..f.piece });
+                    self.history.push(f.piece.part(f.piece.start, p));
+                    ok = self.replay.push(f.piece.part(p, f.piece.end));
                 }
                 // Its piece is on the replay stack already.
                 Kind::Retrace => {}

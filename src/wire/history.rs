@@ -19,6 +19,29 @@ pub struct Piece {
 }
 
 impl Piece {
+    /// The part of this piece from `start` to `end` (points on it), over the share of the
+    /// duration that keeps every axis at or below the piece's own rate:
+    /// `max_i ceil(T |d'_i| / |d_i|)`. Feeder-task code (it divides).
+    pub fn part(&self, start: [i32; 4], end: [i32; 4]) -> Piece {
+        let full = sub(self.end, self.start);
+        let part = sub(end, start);
+        let t = self.duration_ticks as u64;
+        let mut ticks = 1u64;
+        for (&d, &p) in full.iter().zip(&part) {
+            let (d, p) = (d.unsigned_abs() as u64, p.unsigned_abs() as u64);
+            // An axis the part moves more than the piece (not on it): keep the whole time.
+            let need = if p > d || (d == 0 && p != 0) {
+                t
+            } else if d == 0 {
+                0
+            } else {
+                (t * p).div_ceil(d)
+            };
+            ticks = ticks.max(need);
+        }
+        Piece { start, end, duration_ticks: ticks.min(t.max(1)) as u32, accel_q30: self.accel_q30 }
+    }
+
     /// Steps from `from` to this piece's `end`.
     pub fn steps_to_end(&self, from: [i32; 4]) -> [i32; 4] {
         sub(self.end, from)
@@ -141,5 +164,16 @@ mod tests {
         assert_eq!(r.pop(), Some(piece(3, 5)));
         assert_eq!(piece(0, 3).steps_to_end([1, 2, 0, -4]), [2, -2, 0, 4]);
         assert_eq!(l1_steps([2, -2, 0, 4]), 8);
+        // A third of a piece takes a third of its time (rounded up), the rest the remainder.
+        let p = Piece {
+            start: [0, 0, 0, 0],
+            end: [300, -90, 0, 0],
+            duration_ticks: 1000,
+            accel_q30: 7,
+        };
+        assert_eq!(p.part([0, 0, 0, 0], [100, -30, 0, 0]).duration_ticks, 334);
+        assert_eq!(p.part([100, -30, 0, 0], [300, -90, 0, 0]).duration_ticks, 667);
+        // An axis off the piece keeps the whole duration.
+        assert_eq!(p.part([0, 0, 0, 0], [1, 0, 0, 5]).duration_ticks, 1000);
     }
 }

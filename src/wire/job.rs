@@ -17,7 +17,8 @@ pub struct JobSegment {
     pub accel_q30: u32,
 }
 
-/// Compact constructor used by the generated tables.
+/// Compact constructor used by the generated tables (one call per line keeps them short).
+#[allow(clippy::too_many_arguments)]
 pub const fn seg(
     x: i32,
     y: i32,

@@ -13,3 +13,4 @@ pub mod debounce;
 pub mod history;
 pub mod job;
 pub mod machine;
+pub mod scenario;
