@@ -20,6 +20,7 @@ pub mod scenarios;
 pub mod segment;
 pub mod spindle;
 pub mod trace;
+pub mod wire;
 pub mod zslide;
 
 pub use config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};

@@ -9,6 +9,7 @@ use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
+use crate::wire::scenario::{WireJobScenario, WireStallScenario};
 use crate::zslide::scenario::{ZSlideScenario, ZSlideVariant};
 
 use crate::scenario::{Scenario, ScenarioReport};
@@ -26,10 +27,15 @@ pub enum AnyScenario {
     Fault(faults::FaultScenario),
     /// Non-axisymmetric turning (Douglass): the Fourier-series Z slide from encoder or resolver.
     ZSlide(ZSlideScenario),
+    /// The 4-axis wire manipulator (Bhatti): the whole circle -> complex job, continuous.
+    WireJob(WireJobScenario),
+    /// A shortened wire job with a stall injected: retrace, return, finish.
+    WireStall(WireStallScenario),
 }
 
 /// How many scenarios [`build`] knows.
-pub const COUNT: usize = 2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len();
+pub const COUNT: usize =
+    2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len() + 2;
 
 const ZSLIDE_VARIANTS: [ZSlideVariant; 3] =
     [ZSlideVariant::Encoder, ZSlideVariant::Resolver, ZSlideVariant::IndexLoss];
@@ -57,7 +63,12 @@ fn build_group(mut i: usize) -> Option<AnyScenario> {
     if let Some(&v) = ZSLIDE_VARIANTS.get(i) {
         return Some(AnyScenario::ZSlide(ZSlideScenario::new(v)));
     }
-    None
+    i -= ZSLIDE_VARIANTS.len();
+    match i {
+        0 => WireJobScenario::new().ok().map(AnyScenario::WireJob),
+        1 => WireStallScenario::new().ok().map(AnyScenario::WireStall),
+        _ => None,
+    }
 }
 
 macro_rules! dispatch {
@@ -68,6 +79,8 @@ macro_rules! dispatch {
             AnyScenario::Force($s) => $e,
             AnyScenario::Fault($s) => $e,
             AnyScenario::ZSlide($s) => $e,
+            AnyScenario::WireJob($s) => $e,
+            AnyScenario::WireStall($s) => $e,
         }
     };
 }

@@ -15,9 +15,11 @@
 //! per point), [`path`] (machining area/time and joint-space targets per step).
 
 pub mod area;
+pub mod continuous;
 pub mod csv;
 pub mod gear;
 pub mod ik;
+pub mod job_file;
 pub mod limits;
 pub mod path;
 pub mod shapes;

@@ -1,0 +1,631 @@
+//! Runs a wire job on the DDA with wire-stall recovery and the wire power output.
+//!
+//! On a debounced stall the controller cuts the wire power, holds the feed, and once the DDA
+//! reports `Held` aborts it (positions stay exactly what was stepped). It then retraces the
+//! executed path backwards, one recorded piece at a time (each as a rest-to-rest segment over
+//! the piece's own duration and ramp), until the stall clears or the retraced distance would
+//! pass the limit (fault [`FaultCode::WireStall`]). A stall that clears in the middle of a
+//! retrace piece holds and aborts again there. Then the power comes back on and the controller
+//! replays the retraced pieces forward to the stall point, finishes the interrupted segment and
+//! continues the job at a reduced feed override. Every target is an absolute step position, so
+//! no step is lost however often it stops. E-stop aborts at once and cuts the power.
+//!
+//! Split by rate: [`WireController::tick`] is the timer-interrupt part (debounce, e-stop, hold,
+//! the DDA tick, completions: integer adds and compares, no division); [`WireController::feed`]
+//! is the feeder-task part (segment preparation, abort bookkeeping and retrace planning, which
+//! divide in [`Preparer::prepare`] and [`Dda::positions`]), called whenever the DDA has room or
+//! the controller changed phase.
+
+use super::debounce::Debouncer;
+use super::history::{l1_steps, sub, History, Piece, Replay};
+use super::job::JobSegment;
+use crate::config::{ConfigError, MachineConfig, MAX_AXES};
+use crate::dda::{Command, Dda, MotionState, Preparer, StepOutput, READY_DEPTH};
+use crate::protocol::errors::FaultCode;
+use crate::segment::{Rate, Segment, SegmentError};
+use heapless::Deque;
+
+/// Stall handling parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StallParams {
+    /// Consecutive ticks the switch must agree before a change counts.
+    pub debounce_ticks: u16,
+    /// Largest retraced distance, sum of absolute steps over the four axes.
+    pub retrace_limit_steps: u64,
+    /// Feed override while retracing (the thesis retraced at the cutting feed).
+    pub retrace_override: Rate,
+    /// Feed override from the return until `resume_segments` job segments have completed.
+    pub resume_override: Rate,
+    pub resume_segments: u32,
+}
+
+/// Where the controller is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Feeding job segments.
+    Running,
+    /// Stall seen: holding, waiting for `Held` to abort.
+    Stopping,
+    /// Running backwards along the history.
+    Retracing,
+    /// The stall cleared in the middle of a retrace piece: holding there.
+    RetraceStopping,
+    /// Replaying the retraced pieces and the interrupted segment's rest.
+    Returning,
+    /// The job is complete.
+    Done,
+    /// Stopped for good with this fault; wire power off.
+    Faulted(FaultCode),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// Job segment with its table index.
+    Job(u32),
+    Retrace,
+    Return,
+}
+
+/// A segment handed to the DDA and not completed yet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Flight {
+    kind: Kind,
+    piece: Piece,
+}
+
+/// Tag bit of recovery segments (job segments carry their table index).
+pub const RECOVERY_ID: u32 = 1 << 31;
+
+/// Counters for reports and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StallStats {
+    pub stalls: u32,
+    pub retrace_segments: u32,
+    pub return_segments: u32,
+    /// Retrace pieces left in the middle because the stall cleared.
+    pub retrace_interrupts: u32,
+    /// Largest retraced distance of one stall, L1 steps.
+    pub max_retrace_steps: u64,
+    /// Tick of the first stall detection and of the first return to `Running` after it.
+    pub first_stall_tick: u64,
+    pub first_resume_tick: u64,
+}
+
+pub struct WireController<'a> {
+    dda: Dda,
+    prep: Preparer,
+    job: &'a [JobSegment],
+    next_job: usize,
+    in_flight: Deque<Flight, { READY_DEPTH + 2 }>,
+    /// End of the last segment handed to the DDA (the position once it is idle).
+    pos: [i32; 4],
+    history: History,
+    replay: Replay,
+    stall_in: Debouncer,
+    stalled: bool,
+    phase: Phase,
+    wire_on: bool,
+    params: StallParams,
+    done_seen: u32,
+    retraced_steps: u64,
+    resume_left: u32,
+    recovery_ids: u32,
+    stats: StallStats,
+}
+
+fn pos4(p: [i64; MAX_AXES]) -> [i32; 4] {
+    // Wire positions stay within +-2^31 steps (a few metres of travel); saturate otherwise.
+    p[..4].iter().enumerate().fold([0; 4], |mut a, (i, &v)| {
+        a[i] = v.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        a
+    })
+}
+
+impl<'a> WireController<'a> {
+    pub fn new(
+        cfg: &MachineConfig,
+        job: &'a [JobSegment],
+        params: StallParams,
+    ) -> Result<Self, ConfigError> {
+        Ok(WireController {
+            dda: Dda::new(cfg)?,
+            prep: Preparer::new(cfg)?,
+            job,
+            next_job: 0,
+            in_flight: Deque::new(),
+            pos: [0; 4],
+            history: History::new(),
+            replay: Replay::new(),
+            stall_in: Debouncer::new(params.debounce_ticks),
+            stalled: false,
+            phase: Phase::Running,
+            wire_on: true,
+            params,
+            done_seen: 0,
+            retraced_steps: 0,
+            resume_left: 0,
+            recovery_ids: 0,
+            stats: StallStats::default(),
+        })
+    }
+
+    /// Timer interrupt: samples the inputs, reacts to e-stop and stall, ticks the DDA and books
+    /// completed segments. Bounded, integer only, no division.
+    #[inline]
+    pub fn tick(&mut self, stall_raw: bool, estop_raw: bool) -> StepOutput {
+        if estop_raw && !matches!(self.phase, Phase::Faulted(_)) {
+            self.fault(FaultCode::EStop);
+        }
+        self.stalled = self.stall_in.sample(stall_raw);
+        match self.phase {
+            Phase::Running | Phase::Returning if self.stalled => {
+                self.wire_on = false;
+                self.dda.apply(Command::Hold);
+                self.phase = Phase::Stopping;
+                if self.stats.stalls == 0 {
+                    self.stats.first_stall_tick = self.dda.now();
+                }
+                self.stats.stalls += 1;
+            }
+            Phase::Retracing if !self.stalled && self.dda.state() == MotionState::Moving => {
+                self.dda.apply(Command::Hold);
+                self.phase = Phase::RetraceStopping;
+                self.stats.retrace_interrupts += 1;
+            }
+            _ => {}
+        }
+        let out = self.dda.tick();
+        while self.done_seen != self.dda.segments_done() {
+            self.done_seen = self.dda.segments_done();
+            self.complete_front();
+            let job_done = self.next_job >= self.job.len() && self.in_flight.is_empty();
+            if self.phase == Phase::Running && job_done && self.dda.is_idle() {
+                self.phase = Phase::Done;
+            }
+        }
+        out
+    }
+
+    #[cold]
+    fn complete_front(&mut self) {
+        let Some(f) = self.in_flight.pop_front() else {
+            return;
+        };
+        match f.kind {
+            Kind::Job(_) => {
+                self.history.push(f.piece);
+                if self.resume_left > 0 {
+                    self.resume_left -= 1;
+                    if self.resume_left == 0 {
+                        self.dda.apply(Command::SetOverride(Rate::ONE));
+                    }
+                }
+            }
+            Kind::Return => self.history.push(f.piece),
+            Kind::Retrace => {}
+        }
+    }
+
+    fn fault(&mut self, code: FaultCode) {
+        self.dda.abort();
+        self.in_flight.clear();
+        self.done_seen = self.dda.segments_done();
+        self.wire_on = false;
+        self.phase = Phase::Faulted(code);
+    }
+
+    /// Feeder task: hands segments to the DDA and plans the recovery moves.
+    /// True when [`WireController::feed`] has work: a free DDA slot for the job, or a stop,
+    /// retrace or return step due. Cheap and division-free: the timer interrupt asks it every
+    /// tick and hands `feed` to the feeder task only when it is true.
+    pub fn wants_feed(&self) -> bool {
+        let settled = self.in_flight.is_empty() && self.dda.is_idle();
+        match self.phase {
+            Phase::Running => {
+                (self.dda.ready_free() > 0
+                    && !self.in_flight.is_full()
+                    && self.next_job < self.job.len())
+                    || (self.next_job >= self.job.len() && settled)
+            }
+            Phase::Stopping | Phase::RetraceStopping => {
+                matches!(self.dda.state(), MotionState::Held | MotionState::Idle)
+            }
+            Phase::Retracing | Phase::Returning => settled,
+            Phase::Done | Phase::Faulted(_) => false,
+        }
+    }
+
+    pub fn feed(&mut self) -> Result<(), SegmentError> {
+        match self.phase {
+            Phase::Running => self.feed_job()?,
+            Phase::Stopping | Phase::RetraceStopping => {
+                let s = self.dda.state();
+                if (s == MotionState::Held || s == MotionState::Idle) && self.stop_here() {
+                    self.phase = if self.phase == Phase::Stopping && self.stalled {
+                        self.dda.apply(Command::SetOverride(self.params.retrace_override));
+                        self.retraced_steps = 0;
+                        Phase::Retracing
+                    } else {
+                        self.start_return();
+                        Phase::Returning
+                    };
+                }
+            }
+            Phase::Retracing => {
+                if self.in_flight.is_empty() && self.dda.is_idle() {
+                    if !self.stalled {
+                        self.start_return();
+                        self.phase = Phase::Returning;
+                    } else {
+                        self.retrace_next()?;
+                    }
+                }
+            }
+            Phase::Returning => {
+                if self.in_flight.is_empty() && self.dda.is_idle() {
+                    self.return_next()?;
+                }
+            }
+            Phase::Done | Phase::Faulted(_) => {}
+        }
+        Ok(())
+    }
+
+    fn feed_job(&mut self) -> Result<(), SegmentError> {
+        while self.dda.ready_free() > 0 && !self.in_flight.is_full() {
+            let Some(js) = self.job.get(self.next_job) else {
+                if self.in_flight.is_empty() && self.dda.is_idle() {
+                    self.phase = Phase::Done;
+                }
+                return Ok(());
+            };
+            let mut seg = js.segment(self.next_job as u32);
+            if self.next_job + 1 == self.job.len() {
+                // A job (or a slice of one) always ends at rest.
+                seg.exit_rate = Rate::ZERO;
+            }
+            let end = add(self.pos, js.steps);
+            let piece = Piece {
+                start: self.pos,
+                end,
+                duration_ticks: js.duration_ticks,
+                accel_q30: js.accel_q30,
+            };
+            self.push(seg, Kind::Job(self.next_job as u32), piece)?;
+            self.next_job += 1;
+        }
+        Ok(())
+    }
+
+    fn push(&mut self, seg: Segment, kind: Kind, piece: Piece) -> Result<(), SegmentError> {
+        let p = self.prep.prepare(&seg)?;
+        if self.dda.push(&p).is_err() || self.in_flight.push_back(Flight { kind, piece }).is_err() {
+            // Callers check room first.
+            return Err(SegmentError::Duration);
+        }
+        self.pos = piece.end;
+        Ok(())
+    }
+
+    /// A rest-to-rest recovery segment from the current position to `piece.end` over the
+    /// piece's duration and ramp; nothing when already there.
+    fn push_recovery(&mut self, kind: Kind, piece: Piece) -> Result<bool, SegmentError> {
+        // Mid-piece after an interrupted retrace: only the part left, in its share of time.
+        let piece = if self.pos == piece.start { piece } else { piece.part(self.pos, piece.end) };
+        let d = piece.steps_to_end(self.pos);
+        if d == [0; 4] {
+            return Ok(false);
+        }
+        let mut steps = [0i32; MAX_AXES];
+        steps[..4].copy_from_slice(&d);
+        self.recovery_ids = self.recovery_ids.wrapping_add(1);
+        let seg = Segment {
+            steps,
+            duration_ticks: piece.duration_ticks,
+            entry_rate: Rate::ZERO,
+            exit_rate: Rate::ZERO,
+            accel_per_tick: Rate::from_bits(piece.accel_q30.max(1)),
+            id: RECOVERY_ID | (self.recovery_ids & !RECOVERY_ID),
+        };
+        self.push(seg, kind, piece)?;
+        Ok(true)
+    }
+
+    /// After a hold: abort where the DDA stands and book the interrupted segment: its executed
+    /// part joins the history, its rest goes on the replay stack; unstarted job segments are
+    /// fed again later from the table.
+    fn stop_here(&mut self) -> bool {
+        let p = pos4(self.dda.positions());
+        self.dda.abort();
+        self.prep.reset_junction();
+        self.done_seen = self.dda.segments_done();
+        let mut ok = true;
+        if let Some(f) = self.in_flight.pop_front() {
+            if let Kind::Job(k) = f.kind {
+                self.next_job = k as usize + 1;
+            }
+            match f.kind {
+                Kind::Job(_) | Kind::Return => {
+                    // Executed part (all of it when stopped exactly at its end) and the rest.
+                    self.history.push(f.piece.part(f.piece.start, p));
+                    ok = self.replay.push(f.piece.part(p, f.piece.end));
+                }
+                // Its piece is on the replay stack already.
+                Kind::Retrace => {}
+            }
+        }
+        self.in_flight.clear();
+        self.pos = p;
+        if !ok {
+            self.fault(FaultCode::WireStall);
+        }
+        ok
+    }
+
+    fn retrace_next(&mut self) -> Result<(), SegmentError> {
+        let Some(h) = self.history.pop() else {
+            self.fault(FaultCode::WireStall);
+            return Ok(());
+        };
+        let d = l1_steps(sub(h.start, self.pos));
+        if self.retraced_steps + d > self.params.retrace_limit_steps || !self.replay.push(h) {
+            self.fault(FaultCode::WireStall);
+            return Ok(());
+        }
+        self.retraced_steps += d;
+        self.stats.max_retrace_steps = self.stats.max_retrace_steps.max(self.retraced_steps);
+        // Backwards: to the piece's start.
+        let back = Piece { start: h.end, end: h.start, ..h };
+        if self.push_recovery(Kind::Retrace, back)? {
+            self.stats.retrace_segments += 1;
+        }
+        Ok(())
+    }
+
+    fn start_return(&mut self) {
+        self.wire_on = true;
+        self.dda.apply(Command::SetOverride(self.params.resume_override));
+    }
+
+    fn return_next(&mut self) -> Result<(), SegmentError> {
+        while let Some(r) = self.replay.pop() {
+            if self.push_recovery(Kind::Return, r)? {
+                self.stats.return_segments += 1;
+                return Ok(());
+            }
+        }
+        self.phase = Phase::Running;
+        self.resume_left = self.params.resume_segments;
+        if self.stats.first_resume_tick == 0 {
+            self.stats.first_resume_tick = self.dda.now();
+        }
+        if self.resume_left == 0 {
+            self.dda.apply(Command::SetOverride(Rate::ONE));
+        }
+        self.feed_job()
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The wire power output: on while cutting, off from a stall until the return, and after
+    /// a fault (e-stop included).
+    pub fn wire_power(&self) -> bool {
+        self.wire_on && !matches!(self.phase, Phase::Faulted(_) | Phase::Done)
+    }
+
+    pub fn fault_code(&self) -> Option<FaultCode> {
+        match self.phase {
+            Phase::Faulted(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    pub fn is_finished(&self) -> bool {
+        matches!(self.phase, Phase::Done | Phase::Faulted(_))
+    }
+
+    pub fn dda(&self) -> &Dda {
+        &self.dda
+    }
+
+    pub fn stats(&self) -> StallStats {
+        self.stats
+    }
+
+    /// Absolute position the job ends at, relative to where it started.
+    pub fn job_end(&self) -> [i64; 4] {
+        super::job::total_steps(self.job)
+    }
+}
+
+fn add(a: [i32; 4], b: [i32; 4]) -> [i32; 4] {
+    [
+        a[0].wrapping_add(b[0]),
+        a[1].wrapping_add(b[1]),
+        a[2].wrapping_add(b[2]),
+        a[3].wrapping_add(b[3]),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trace::StepRecorder;
+    use crate::wire::job::seg;
+    use crate::wire::machine;
+
+    const ONE: u32 = 1 << 30;
+
+    /// Six 4-axis segments, 2000 ticks each, meeting at full speed.
+    fn job() -> [JobSegment; 6] {
+        // Full speed to rest in 400 ticks.
+        let a = ONE / 400;
+        [
+            seg(400, 100, 20, -50, 2000, 0, ONE, a),
+            seg(400, 200, 10, -50, 2000, ONE, ONE, a),
+            seg(300, 300, 0, -50, 2000, ONE, ONE, a),
+            seg(200, 400, -10, -50, 2000, ONE, ONE, a),
+            seg(100, 400, -20, -50, 2000, ONE, ONE, a),
+            seg(0, 400, -30, -50, 2000, ONE, 0, a),
+        ]
+    }
+
+    fn params() -> StallParams {
+        StallParams {
+            debounce_ticks: 5,
+            retrace_limit_steps: 100_000,
+            retrace_override: Rate::ONE,
+            resume_override: Rate::lit("0.5"),
+            resume_segments: 2,
+        }
+    }
+
+    struct Outcome {
+        phase: Phase,
+        positions: [i64; 4],
+        net: [i64; 4],
+        stats: StallStats,
+        /// Wire power seen while the debounced stall was asserted / while retracing.
+        power_while_retracing: bool,
+        min_x_after_stall: i64,
+        ticks: u64,
+    }
+
+    fn run(
+        job: &[JobSegment],
+        p: StallParams,
+        stall: impl Fn(u64) -> bool,
+        estop: impl Fn(u64) -> bool,
+    ) -> Outcome {
+        let mut c = WireController::new(&machine::config(), job, p).unwrap();
+        let mut rec = StepRecorder::new();
+        let mut power_while_retracing = false;
+        let mut min_x_after_stall = i64::MAX;
+        let mut n = 0u64;
+        while !c.is_finished() && n < 1_000_000 {
+            c.feed().unwrap();
+            let out = c.tick(stall(n), estop(n));
+            n += 1;
+            rec.record(c.dda().now(), &out);
+            if matches!(c.phase(), Phase::Retracing | Phase::RetraceStopping) {
+                power_while_retracing |= c.wire_power();
+            }
+            if c.stats().stalls > 0 && out.rise() & 1 != 0 {
+                min_x_after_stall = min_x_after_stall.min(c.dda().positions()[0]);
+            }
+        }
+        let p = c.dda().positions();
+        Outcome {
+            phase: c.phase(),
+            positions: [p[0], p[1], p[2], p[3]],
+            net: [rec.net[0], rec.net[1], rec.net[2], rec.net[3]],
+            stats: c.stats(),
+            power_while_retracing,
+            min_x_after_stall,
+            ticks: n,
+        }
+    }
+
+    fn end(job: &[JobSegment]) -> [i64; 4] {
+        crate::wire::job::total_steps(job)
+    }
+
+    #[test]
+    fn runs_the_job_without_stall() {
+        let j = job();
+        let o = run(&j, params(), |_| false, |_| false);
+        assert_eq!(o.phase, Phase::Done);
+        assert_eq!(o.positions, end(&j));
+        assert_eq!(o.net, o.positions);
+        assert_eq!(o.stats.stalls, 0);
+    }
+
+    #[test]
+    fn stall_retraces_backwards_then_finishes_exactly() {
+        let j = job();
+        // Stalled for 3000 ticks from the middle of segment 2.
+        let o = run(&j, params(), |t| (5000..8000).contains(&t), |_| false);
+        assert_eq!(o.phase, Phase::Done);
+        assert_eq!(o.positions, end(&j));
+        assert_eq!(o.net, o.positions, "steps on the pins == DDA positions");
+        assert_eq!(o.stats.stalls, 1);
+        assert!(o.stats.retrace_segments >= 2, "{:?}", o.stats);
+        assert!(o.stats.return_segments >= 2, "{:?}", o.stats);
+        assert!(!o.power_while_retracing);
+        // X went back below where it was at the stall (~1000 steps into the job).
+        assert!(o.min_x_after_stall < 800, "{}", o.min_x_after_stall);
+        // The whole job at nominal speed is 12 000 ticks; the stall costs time.
+        assert!(o.ticks > 12_000 + 3_000);
+    }
+
+    #[test]
+    fn debouncer_ignores_short_glitches() {
+        let j = job();
+        let o = run(&j, params(), |t| t % 1000 < 3, |_| false);
+        assert_eq!(o.phase, Phase::Done);
+        assert_eq!(o.stats.stalls, 0);
+    }
+
+    #[test]
+    fn stall_clearing_mid_retrace_returns_from_there() {
+        let j = job();
+        // Stall late in segment 4; it clears 1500 ticks later, in the middle of retracing.
+        let o = run(&j, params(), |t| (9000..10_500).contains(&t), |_| false);
+        assert_eq!(o.phase, Phase::Done);
+        assert_eq!(o.stats.retrace_interrupts, 1, "{:?}", o.stats);
+        assert_eq!(o.positions, end(&j));
+        assert_eq!(o.net, o.positions);
+        assert_eq!(o.stats.stalls, 1);
+    }
+
+    #[test]
+    fn repeated_stalls_lose_no_steps() {
+        let j = job();
+        let o = run(
+            &j,
+            params(),
+            |t| {
+                (2500..3500).contains(&t)
+                    || (9000..9500).contains(&t)
+                    || (14_000..16_000).contains(&t)
+            },
+            |_| false,
+        );
+        assert_eq!(o.phase, Phase::Done);
+        assert_eq!(o.positions, end(&j));
+        assert_eq!(o.net, o.positions);
+        assert!(o.stats.stalls >= 2, "{:?}", o.stats);
+    }
+
+    #[test]
+    fn permanent_stall_faults_at_the_limit() {
+        let j = job();
+        let p = StallParams { retrace_limit_steps: 1_000, ..params() };
+        let o = run(&j, p, |t| t >= 7000, |_| false);
+        assert_eq!(o.phase, Phase::Faulted(FaultCode::WireStall));
+        assert!(o.stats.max_retrace_steps <= 1_000);
+        assert_eq!(o.net, o.positions);
+        // Without a limit it runs out of history (back at the start) and faults the same way.
+        let p = StallParams { retrace_limit_steps: u64::MAX, ..params() };
+        let o = run(&j, p, |t| t >= 7000, |_| false);
+        assert_eq!(o.phase, Phase::Faulted(FaultCode::WireStall));
+        assert_eq!(o.positions, [0; 4]);
+    }
+
+    #[test]
+    fn estop_cuts_wire_power_at_once() {
+        let j = job();
+        let mut c = WireController::new(&machine::config(), &j, params()).unwrap();
+        for n in 0..4000 {
+            c.feed().unwrap();
+            c.tick(false, false);
+            assert!(c.wire_power(), "tick {n}");
+        }
+        c.tick(false, true);
+        assert!(!c.wire_power());
+        assert_eq!(c.fault_code(), Some(FaultCode::EStop));
+        assert!(c.dda().is_idle());
+    }
+}
