@@ -7,6 +7,7 @@ pub mod digitize;
 pub mod drive;
 pub mod listing;
 pub mod pole;
+pub mod segments;
 
 /// Radial resolution dR, inches (0.001 in = 2.54e-3 cm).
 pub const DR_IN: f64 = 0.001;
