@@ -2,6 +2,7 @@
 //! single-axis step events), the listing's start-point method, drive limits and pole placement.
 //! Lengths in inches (`_in`) like the thesis's listing; SI where the thesis's dynamics use it.
 
+pub mod bench;
 pub mod contour;
 pub mod digitize;
 pub mod drive;
