@@ -6,6 +6,7 @@ pub mod bench;
 pub mod contour;
 pub mod digitize;
 pub mod drive;
+pub mod dump;
 pub mod listing;
 pub mod pole;
 pub mod segments;
