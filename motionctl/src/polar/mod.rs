@@ -3,6 +3,7 @@
 //! Lengths in inches (`_in`) like the thesis's listing; SI where the thesis's dynamics use it.
 
 pub mod bench;
+pub mod cli;
 pub mod contour;
 pub mod digitize;
 pub mod drive;
