@@ -255,6 +255,63 @@ impl<'a> Block<'a> {
     }
 }
 
+/// One payload item as encoded: a single event (`count == 1`, `add == 0`) or a run of `count`
+/// events on one code with dts `first_dt, first_dt + add, ...`. For readable dumps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Item {
+    pub code: u8,
+    pub first_dt: u32,
+    pub count: u32,
+    pub add: i32,
+}
+
+impl<'a> Block<'a> {
+    /// The block's payload items without expanding runs; stops after the first error.
+    pub fn items(&self) -> BlockItems<'a> {
+        BlockItems { payload: self.payload, pos: 0, done: false }
+    }
+
+    /// Payload bytes (for size reports).
+    pub fn payload_len(&self) -> usize {
+        self.payload.len()
+    }
+}
+
+/// Iterator over one block's payload items.
+#[derive(Clone, Debug)]
+pub struct BlockItems<'a> {
+    payload: &'a [u8],
+    pos: usize,
+    done: bool,
+}
+
+impl Iterator for BlockItems<'_> {
+    type Item = Result<Item, StreamError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done || self.pos >= self.payload.len() {
+            return None;
+        }
+        let r = (|| {
+            let v = get_varint(self.payload, &mut self.pos)?;
+            let (code, first_dt) = ((v & 3) as u8, v >> 3);
+            if v & 4 == 0 {
+                return Ok(Item { code, first_dt, count: 1, add: 0 });
+            }
+            let count = get_varint(self.payload, &mut self.pos)?;
+            let add = unzigzag(get_varint(self.payload, &mut self.pos)?);
+            if count < 2 {
+                return Err(StreamError::BadRun);
+            }
+            Ok(Item { code, first_dt, count, add })
+        })();
+        if r.is_err() {
+            self.done = true;
+        }
+        Some(r)
+    }
+}
+
 /// Iterator over one block's events (expands runs lazily, no allocation).
 #[derive(Clone, Debug)]
 pub struct BlockEvents<'a> {

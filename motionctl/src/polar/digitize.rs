@@ -177,9 +177,12 @@ pub fn digitize<C: Contour + ?Sized>(
     };
     let span = u1 - u0;
     let mut h = span * 1e-4;
-    let mut events: Vec<(f64, u8, bool)> = Vec::new();
+    let mut events: Vec<(f64, u8, bool)> = Vec::with_capacity(1024);
+    // The path at the current sample, carried over from the step that accepted it (one curve
+    // evaluation per accepted sample instead of two).
+    let mut at = polar(u0);
     while cur.u < u1 {
-        let (r, _, x, dx, kappa) = polar(cur.u);
+        let (r, _, x, dx, kappa) = at;
         // Concave curvature tighter than the tool radius folds the offset path.
         let g = 1.0 + setup.tool_radius_in * kappa;
         if g <= 0.0 {
@@ -201,13 +204,20 @@ pub fn digitize<C: Contour + ?Sized>(
             .min(h * 4.0);
         let mut un = (cur.u + h).min(u1);
         let next = loop {
-            let (rn, thn_w, ..) = polar(un);
+            let ev = polar(un);
+            let (rn, thn_w, _, dxn, _) = ev;
             let mut dthw = thn_w - cur.th.rem_euclid(2.0 * PI);
             dthw = (dthw + PI).rem_euclid(2.0 * PI) - PI;
             let thn = cur.th + dthw;
             let ok = (ir(rn) - ri).abs() <= 1 && (jt(thn) - tj).abs() <= 1;
             if ok || un - cur.u < span * 1e-14 {
-                let s = cur.s + gauss4(cur.u, un, speed);
+                // Simpson on the sample step, reusing both end speeds: one evaluation instead of
+                // Gauss-Legendre's four. The step is under half a resolution on each axis, so
+                // the h^5 error term is ~1e-15 in per step (the accuracy tests compare against
+                // 4-point Gauss-Legendre on a 200000-point grid).
+                let mid = speed((cur.u + un) / 2.0);
+                let s = cur.s + (un - cur.u) / 6.0 * (sp + 4.0 * mid + dxn[0].hypot(dxn[1]));
+                at = ev;
                 break Sample { u: un, s, r: rn, th: thn };
             }
             un = cur.u + (un - cur.u) / 2.0;

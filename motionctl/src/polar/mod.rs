@@ -2,11 +2,15 @@
 //! single-axis step events), the listing's start-point method, drive limits and pole placement.
 //! Lengths in inches (`_in`) like the thesis's listing; SI where the thesis's dynamics use it.
 
+pub mod bench;
+pub mod cli;
 pub mod contour;
 pub mod digitize;
 pub mod drive;
+pub mod dump;
 pub mod listing;
 pub mod pole;
+pub mod segments;
 
 /// Radial resolution dR, inches (0.001 in = 2.54e-3 cm).
 pub const DR_IN: f64 = 0.001;

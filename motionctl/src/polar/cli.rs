@@ -1,0 +1,241 @@
+//! `motionctl polar ...`: digitize a contour into a step-event stream file, dump a stream, and
+//! optimise the machine pole. Lengths in inches, angles in radians (the thesis's listing units).
+//! The lead wires [`PolarCmd`] into the main command line.
+
+use super::contour::{serpentine, witch, Circle, Contour, Limacon, Polar, Spline};
+use super::digitize::{digitize, Setup};
+use super::pole::{self, Constraints, HookeJeeves, Pole, MM2_PER_IN2};
+use super::{Resolution, DR_IN, DTHETA_RAD};
+use anyhow::{bail, Context};
+use motion::polar::stream::BlockEncoder;
+
+/// Default event tick (the playback's DDA tick).
+pub const DEFAULT_TICK_HZ: u32 = motion::polar::scenario::TICK_HZ;
+
+/// Which contour, parsed from a spec: `circle:A`, `limacon:B,A` (r1 = B + A cos), `witch:A,X0,X1`,
+/// `serpentine:A,B,X0,X1`, or a path to a CSV of Cartesian points `x,y` per line (an open cubic
+/// spline through them; `#` comments and a non-numeric header line are skipped).
+pub fn parse_contour(spec: &str) -> anyhow::Result<Box<dyn Contour>> {
+    let nums = |rest: &str, n: usize| -> anyhow::Result<Vec<f64>> {
+        let v: Vec<f64> = rest
+            .split(',')
+            .map(|t| t.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("bad numbers in {spec:?}"))?;
+        if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+            bail!("{spec:?}: expected {n} finite numbers");
+        }
+        Ok(v)
+    };
+    if let Some((name, rest)) = spec.split_once(':') {
+        match name {
+            "circle" => {
+                let v = nums(rest, 1)?;
+                return Ok(Box::new(Polar::closed(Circle { a: v[0] })));
+            }
+            "limacon" => {
+                let v = nums(rest, 2)?;
+                return Ok(Box::new(Polar::closed(Limacon { b: v[0], a: v[1] })));
+            }
+            "witch" => {
+                let v = nums(rest, 3)?;
+                return Ok(Box::new(witch(v[0], v[1], v[2])));
+            }
+            "serpentine" => {
+                let v = nums(rest, 4)?;
+                return Ok(Box::new(serpentine(v[0], v[1], v[2], v[3])));
+            }
+            _ => {}
+        }
+    }
+    let text = std::fs::read_to_string(spec)
+        .with_context(|| format!("{spec:?} is neither a built-in contour nor a readable CSV"))?;
+    let mut pts = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut f = line.split(',').map(|t| t.trim().parse::<f64>());
+        match (f.next(), f.next()) {
+            (Some(Ok(x)), Some(Ok(y))) if x.is_finite() && y.is_finite() => pts.push([x, y]),
+            _ if pts.is_empty() && i == 0 => continue,
+            _ => bail!("{spec}:{}: expected x,y", i + 1),
+        }
+    }
+    match Spline::new(&pts) {
+        Some(s) => Ok(Box::new(s)),
+        None => bail!("{spec}: need at least 3 points, no two consecutive equal"),
+    }
+}
+
+/// Machine resolutions and pole options shared by the subcommands.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ResArgs {
+    /// Radial resolution dR, in.
+    #[arg(long, default_value_t = DR_IN)]
+    pub dr: f64,
+    /// Angular resolution dTheta, rad (default 2 pi / 16000).
+    #[arg(long, default_value_t = DTHETA_RAD)]
+    pub dtheta: f64,
+}
+
+impl ResArgs {
+    fn res(&self) -> anyhow::Result<Resolution> {
+        if !(self.dr > 0.0 && self.dtheta > 0.0) {
+            bail!("resolutions must be > 0");
+        }
+        Ok(Resolution { dr_in: self.dr, dtheta_rad: self.dtheta })
+    }
+}
+
+/// `motionctl polar ...`
+#[derive(clap::Subcommand, Debug)]
+pub enum PolarCmd {
+    /// Digitize a contour into timed single-axis step events and write the stream file.
+    Digitize {
+        /// circle:A | limacon:B,A | witch:A,X0,X1 | serpentine:A,B,X0,X1 | points.csv (in).
+        contour: String,
+        /// Machine pole distance C from the contour pole, in (Table 4.1's C).
+        #[arg(long)]
+        pole_c: f64,
+        /// Machine pole angle beta in the contour frame, rad (Table 4.1's beta).
+        #[arg(long)]
+        pole_beta: f64,
+        /// Tool radius, in.
+        #[arg(long, default_value_t = 0.0)]
+        tool_radius: f64,
+        /// Tangential speed Vt of the tool centre, in/s.
+        #[arg(long)]
+        vt: f64,
+        #[command(flatten)]
+        res: ResArgs,
+        /// Event time quantum, Hz.
+        #[arg(long, default_value_t = DEFAULT_TICK_HZ)]
+        tick_hz: u32,
+        /// Only warn above the curvature speed limit (default: slow down to it, with a warning).
+        #[arg(long)]
+        no_cap: bool,
+        /// Stream file to write.
+        #[arg(long, short)]
+        out: Option<std::path::PathBuf>,
+    },
+    /// Print a stream file: block headers, one line per event or run with cumulative time.
+    Dump {
+        file: std::path::PathBuf,
+        #[arg(long, default_value_t = DEFAULT_TICK_HZ)]
+        tick_hz: u32,
+    },
+    /// Find the machine pole that minimises F1 within the work area (pole outside a closed
+    /// contour), and print its area error.
+    Pole {
+        contour: String,
+        #[command(flatten)]
+        res: ResArgs,
+        /// Bound only the pole's coordinates to +-HALF in (the thesis program's limits) instead of
+        /// the work area.
+        #[arg(long, value_name = "HALF")]
+        box_only: Option<f64>,
+    },
+}
+
+/// Runs one `polar` subcommand, printing to stdout.
+pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
+    match cmd {
+        PolarCmd::Digitize {
+            contour,
+            pole_c,
+            pole_beta,
+            tool_radius,
+            vt,
+            res,
+            tick_hz,
+            no_cap,
+            out,
+        } => {
+            let c = parse_contour(&contour)?;
+            let (pole_r_in, pole_angle_rad) =
+                Pole { c_in: pole_c, beta_rad: pole_beta }.digitizer_pole();
+            let setup = Setup {
+                pole_r_in,
+                pole_angle_rad,
+                tool_radius_in: tool_radius,
+                vt_in_per_s: vt,
+                res: res.res()?,
+                tick_hz,
+                cap_speed: !no_cap,
+            };
+            let d = digitize(c.as_ref(), &setup)?;
+            let ticks: u64 = d.events.iter().map(|e| e.dt_ticks as u64).sum();
+            let radial = d.events.iter().filter(|e| e.axis == 1).count();
+            println!(
+                "{} events ({radial} radial, {} angular), path {:.4} in, duration {:.4} s at Vt {:.4} in/s, min radius of curvature {:.4} in",
+                d.events.len(),
+                d.events.len() - radial,
+                d.length_in,
+                ticks as f64 / tick_hz as f64,
+                d.vt_in_per_s,
+                d.min_rho_in
+            );
+            for w in &d.warnings {
+                println!("warning: {w}");
+            }
+            if let Some(path) = out {
+                let mut bytes = Vec::new();
+                let mut enc = BlockEncoder::new();
+                for &e in &d.events {
+                    enc.push(e, &mut |b: &[u8]| bytes.extend_from_slice(b))
+                        .map_err(|e| anyhow::anyhow!("encoding: {e:?}"))?;
+                }
+                enc.finish(&mut |b: &[u8]| bytes.extend_from_slice(b));
+                std::fs::write(&path, &bytes)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                println!(
+                    "wrote {} ({} bytes, {} blocks)",
+                    path.display(),
+                    bytes.len(),
+                    enc.blocks()
+                );
+            }
+            Ok(())
+        }
+        PolarCmd::Dump { file, tick_hz } => {
+            let bytes =
+                std::fs::read(&file).with_context(|| format!("reading {}", file.display()))?;
+            let mut text = String::new();
+            let r = super::dump::dump(&bytes, tick_hz, &mut text);
+            print!("{text}");
+            r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
+        }
+        PolarCmd::Pole { contour, res, box_only } => {
+            let c = parse_contour(&contour)?;
+            let res = res.res()?;
+            let constraints = match box_only {
+                Some(half_in) => Constraints::Box { centre: [0.0, 0.0], half_in },
+                None => Constraints::WorkArea,
+            };
+            let Some(o) = pole::optimise(c.as_ref(), &res, constraints, &HookeJeeves::default())
+            else {
+                bail!("no feasible pole found for {contour}");
+            };
+            let area = pole::area_error_in2(c.as_ref(), o.pole.xy(), &res, 4);
+            println!(
+                "pole C = {:.4} in ({:.3} cm), beta = {:.4} rad; F1 = {:.5} (F_dif {:.1}, F_sum {:.1}, {} evaluations)",
+                o.pole.c_in,
+                o.pole.c_in * super::CM_PER_IN,
+                o.pole.beta_rad,
+                o.f1.f1,
+                o.f1.f_dif,
+                o.f1.f_sum,
+                o.evals
+            );
+            println!(
+                "area error {:.6} in^2 = {:.3} mm^2; constraints: {:?}",
+                area,
+                area * MM2_PER_IN2,
+                pole::check(c.as_ref(), o.pole.xy())
+            );
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,70 @@
+//! The stream dump: one line per item with cumulative times that match the events', block
+//! headers, and an error line for a corrupted block.
+
+use motion::polar::stream::BlockEncoder;
+use motion::polar::StepEvent;
+use motionctl::polar::dump::dump;
+
+fn encode(events: &[StepEvent]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut enc = BlockEncoder::new();
+    for &e in events {
+        enc.push(e, &mut |b: &[u8]| out.extend_from_slice(b)).unwrap();
+    }
+    enc.finish(&mut |b: &[u8]| out.extend_from_slice(b));
+    out
+}
+
+fn ev(dt: u32, axis: u8, negative: bool) -> StepEvent {
+    StepEvent { dt_ticks: dt, axis, negative }
+}
+
+#[test]
+fn dump_lines_carry_cumulative_time() {
+    // A run of 50 radial steps with growing dt, a simultaneous pair, then enough scattered
+    // events for several blocks.
+    let mut evs: Vec<StepEvent> = (0..50).map(|i| ev(100 + 3 * i, 1, false)).collect();
+    evs.push(ev(40, 0, true));
+    evs.push(ev(0, 1, true));
+    evs.extend((0..400u32).map(|i| ev(i * 7919 % 3000, (i % 2) as u8, i % 3 == 0)));
+    let bytes = encode(&evs);
+    let mut text = String::new();
+    let sum = dump(&bytes, 100_000, &mut text).unwrap();
+    print!("{}", text.lines().take(8).collect::<Vec<_>>().join("\n"));
+    println!("\n...\n{}", text.lines().last().unwrap());
+    let total: u64 = evs.iter().map(|e| e.dt_ticks as u64).sum();
+    assert_eq!(sum.events, evs.len() as u64);
+    assert_eq!(sum.end_ticks, total);
+    assert!(sum.blocks >= 2, "{sum:?}");
+    assert_eq!(text.lines().filter(|l| l.starts_with("block ")).count() as u32, sum.blocks);
+    // Every item line's time is the cumulative time of an event, in order.
+    let mut cum = Vec::new();
+    let mut t = 0u64;
+    for e in &evs {
+        t += e.dt_ticks as u64;
+        cum.push(t);
+    }
+    let mut k = 0usize;
+    let mut item_lines = 0;
+    for line in text.lines().filter(|l| l.starts_with("  t ")) {
+        item_lines += 1;
+        let first: u64 = line[4..].split(' ').next().unwrap().parse().unwrap();
+        assert_eq!(first, cum[k], "{line}");
+        k += line
+            .split("run ")
+            .nth(1)
+            .map_or(1, |r| r.split(' ').next().unwrap().parse::<usize>().unwrap());
+        if let Some(last) = line.split("last at t ").nth(1) {
+            assert_eq!(last.parse::<u64>().unwrap(), cum[k - 1], "{line}");
+        }
+    }
+    assert_eq!(k, evs.len());
+    assert_eq!(item_lines as u64, sum.items);
+    assert!(sum.items < evs.len() as u64, "the run is one line");
+    // A flipped payload bit: the dump stops with an error line.
+    let mut bad = bytes.clone();
+    bad[9] ^= 0x40;
+    let mut text = String::new();
+    assert!(dump(&bad, 100_000, &mut text).is_err());
+    assert!(text.lines().last().unwrap().starts_with("error: Crc"), "{text}");
+}
