@@ -211,5 +211,166 @@ pub fn run(c: &CycleCounter, port: &mut StepPort) {
     }
     dda_only.print("dda_tick_instr");
     with_apply.print("tick_apply_instr");
+    kernels(c);
     defmt::println!("bench done");
+}
+
+/// Cost of one call of each capability's interrupt-rate kernel, measured like the tick: the
+/// state advances between calls so every branch the run takes is counted. Prints
+/// `bench kernel_<name>_instr=<max>` and `_mean`.
+pub fn kernels(c: &CycleCounter) {
+    let mut overhead = u32::MAX;
+    for _ in 0..100 {
+        overhead = overhead.min(measure(c, || black_box(0u32)).1);
+    }
+    zslide_kernels(c, overhead);
+    force_kernels(c, overhead);
+    polar_kernels(c, overhead);
+}
+
+/// Max and mean (tenths) of `n` measured calls of `f`, printed under `name`.
+fn kernel(c: &CycleCounter, overhead: u32, name: &str, n: u32, mut f: impl FnMut(u32)) {
+    kernel_prepared(c, overhead, name, n, &mut (), |_, _| {}, |_, i, ()| f(i));
+}
+
+/// [`kernel`] over a `state` both steps share, with `prepare` run before each call outside the
+/// measurement; its result is the call's input.
+fn kernel_prepared<S, T>(
+    c: &CycleCounter,
+    overhead: u32,
+    name: &str,
+    n: u32,
+    state: &mut S,
+    mut prepare: impl FnMut(&mut S, u32) -> T,
+    mut f: impl FnMut(&mut S, u32, T),
+) {
+    let mut s = Stat::EMPTY;
+    for i in 0..n {
+        let input = prepare(state, i);
+        let ((), k) = measure(c, || f(state, i, input));
+        s.add(k.saturating_sub(overhead));
+    }
+    print_stat(name, &s);
+}
+
+fn print_stat(name: &str, s: &Stat) {
+    let mean10 = (s.sum * 10 + s.n as u64 / 2) / s.n.max(1) as u64;
+    defmt::println!("bench kernel_{=str}_instr={=u32}", name, s.max);
+    defmt::println!("bench kernel_{=str}_instr_mean={=u64}.{=u64}", name, mean10 / 10, mean10 % 10);
+}
+
+fn zslide_kernels(c: &CycleCounter, overhead: u32) {
+    use motion::spindle::encoder::QuadratureEncoder;
+    use motion::spindle::resolver::Resolver;
+    use motion::spindle::SpindleSource;
+    use motion::zslide::command::ZCommand;
+    use motion::zslide::douglass_table::DOUGLASS_POWER;
+    use motion::zslide::scenario::{command_config, encoder_config, resolver_config, speed_at_rpm};
+    use motion::zslide::table::{CoefficientTable, Interp, TableForm};
+
+    let speed = speed_at_rpm(360);
+    let mut cmd = defmt::unwrap!(ZCommand::new(&DOUGLASS_POWER, command_config(), 0).ok());
+    defmt::unwrap!(cmd.start(0, speed, 0).ok());
+    // X from 0 to 8 in over the calls, the angle at 360 rpm.
+    let mut angle = 0u32;
+    kernel(c, overhead, "zslide_update_power_cubic", 4_000, |i| {
+        angle = angle.wrapping_add(speed as u32);
+        let x_in_q24 = (i as i32) << 15;
+        black_box(cmd.update(black_box(x_in_q24), angle, speed, None));
+    });
+    // The harmonic form at its largest order: the table's size, not its values, sets the cost.
+    const ORDER: u8 = 8;
+    const WIDTH: usize = 2 * ORDER as usize + 1;
+    static HARMONIC: CoefficientTable<81, WIDTH> = match CoefficientTable::try_new(
+        TableForm::Harmonic { order: ORDER },
+        0,
+        1 << 24 >> 3,
+        81,
+        [[1_000; WIDTH]; 81],
+    ) {
+        Ok(t) => t,
+        Err(_) => panic!("a valid table"),
+    };
+    let mut h = defmt::unwrap!(ZCommand::new(&HARMONIC, command_config(), 0).ok());
+    defmt::unwrap!(h.start(0, speed, 0).ok());
+    let mut angle = 0u32;
+    kernel(c, overhead, "zslide_update_harmonic8_cubic", 4_000, |i| {
+        angle = angle.wrapping_add(speed as u32);
+        let x_in_q24 = (i as i32) << 15;
+        black_box(h.update(black_box(x_in_q24), angle, speed, None));
+    });
+    kernel(c, overhead, "zslide_eval_power_cubic", 4_000, |i| {
+        let x_in_q24 = (i as i32) << 15;
+        black_box(DOUGLASS_POWER.eval(black_box(x_in_q24), i.wrapping_mul(1 << 20), Interp::Cubic));
+    });
+    let mut enc = defmt::unwrap!(QuadratureEncoder::new(encoder_config(), 0).ok());
+    kernel(c, overhead, "spindle_encoder_update", 4_000, |i| {
+        let index = (i % 1000 == 999).then_some(0u16);
+        enc.update(black_box((i * 3) as u16), index);
+    });
+    let res = defmt::unwrap!(Resolver::new(resolver_config()).ok());
+    // Samples from the scenario's simulated spindle at 360 rpm, taken outside the measurement.
+    let mut state = (res, motion::spindle::sim::SimSpindle::new(0), 1u32);
+    kernel_prepared(
+        c,
+        overhead,
+        "spindle_resolver_update",
+        4_000,
+        &mut state,
+        |(_, sim, seed), _| {
+            sim.advance(speed as u32);
+            sim.resolver(1800, 2, seed)
+        },
+        |(res, _, _), _, (sin, cos)| res.update(black_box(sin), black_box(cos)),
+    );
+    defmt::unwrap!(state.0.fault().is_none().then_some(()));
+}
+
+fn force_kernels(c: &CycleCounter, overhead: u32) {
+    use motion::force::chain::ForceChain;
+    use motion::force::control::{ControlInput, ForceController};
+    use motion::force::scenario::{chain_config, control_params, SPINDLE_MREV_S};
+
+    let mut chain = defmt::unwrap!(ForceChain::new(chain_config()).ok());
+    // Counts with some noise so the stuck detector never trips; every 5th call decimates.
+    kernel(c, overhead, "force_chain_sample", 5_000, |i| {
+        let n = (i * 7 % 13) as u16;
+        let counts = [2_500 + n, 2_400 + n, 2_300 + n];
+        black_box(chain.sample(black_box(&counts), SPINDLE_MREV_S, false));
+    });
+    let mut ctl = defmt::unwrap!(ForceController::new(control_params(18_000_000)).ok());
+    kernel(c, overhead, "force_control_update", 2_000, |i| {
+        black_box(ctl.update(&ControlInput {
+            force_mn: black_box(3_000_000 + (i % 400) * 5_000),
+            tooth_updates: 60,
+            position_steps: i as i64 * 6,
+            spindle_mrev_s: SPINDLE_MREV_S,
+            chain_fault: None,
+        }));
+    });
+}
+
+fn polar_kernels(c: &CycleCounter, overhead: u32) {
+    use motion::polar::playback::{Playback, SizeScale};
+    use motion::polar::{StepEvent, AXIS_R, AXIS_THETA};
+
+    // The queue is kept full outside the measurement: events 3 ticks apart, both axes.
+    let mut state = (Playback::new(SizeScale::ONE), 0u32);
+    kernel_prepared(
+        c,
+        overhead,
+        "polar_playback_tick",
+        4_000,
+        &mut state,
+        |(p, n), _| {
+            while p.free() > 0 {
+                let axis = if n.is_multiple_of(3) { AXIS_R } else { AXIS_THETA };
+                let _ = p.push(StepEvent { dt_ticks: 3, axis, negative: *n % 50 < 25 });
+                *n += 1;
+            }
+        },
+        |(p, _), _, ()| {
+            black_box(p.tick());
+        },
+    );
 }

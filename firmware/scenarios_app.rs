@@ -21,6 +21,9 @@ compile_error!("select exactly one board feature");
 #[allow(dead_code, unused_imports)]
 mod board;
 
+#[path = "panic.rs"]
+mod panic;
+
 /// Under QEMU the timer does not pace the scenario: the runner pends the TIM2 interrupt itself and
 /// each interrupt runs a batch of ticks and pends the next, so ticks run back to back and the CPU
 /// never sleeps. QEMU (`-icount`, `sleep=off`) spends far more wall time delivering a timer
@@ -214,22 +217,4 @@ mod app {
         defmt::println!("scenarios done");
         board::exit(ok);
     }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    defmt::error!("{}", defmt::Display2Format(info));
-    board::exit(false)
-}
-
-#[cortex_m_rt::exception]
-unsafe fn HardFault(ef: &cortex_m_rt::ExceptionFrame) -> ! {
-    defmt::error!(
-        "HardFault: pc={=u32:#010x} lr={=u32:#010x} xpsr={=u32:#010x}",
-        ef.pc(),
-        ef.lr(),
-        ef.xpsr()
-    );
-    board::exit(false)
 }

@@ -21,6 +21,9 @@ compile_error!("select a board: --features board-netduinoplus2 or --features boa
 #[cfg_attr(feature = "board-f405-motion", path = "../boards/f405_motion/mod.rs")]
 mod board;
 
+#[path = "../firmware/panic.rs"]
+mod panic;
+
 #[cfg(all(feature = "bench", feature = "link"))]
 compile_error!("`bench` and `link` both replace the demo job: pick one");
 
@@ -453,22 +456,4 @@ mod app {
             }
         }
     }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    defmt::error!("{}", defmt::Display2Format(info));
-    board::exit(false)
-}
-
-#[cortex_m_rt::exception]
-unsafe fn HardFault(ef: &cortex_m_rt::ExceptionFrame) -> ! {
-    defmt::error!(
-        "HardFault: pc={=u32:#010x} lr={=u32:#010x} xpsr={=u32:#010x}",
-        ef.pc(),
-        ef.lr(),
-        ef.xpsr()
-    );
-    board::exit(false)
 }

@@ -43,6 +43,16 @@ pub enum Cmd {
         #[arg(long, value_name = "MS", default_value_t = runner::DEFAULT_STATUS_PERIOD_MS)]
         status_ms: u16,
     },
+    /// Polar contouring (Fahim): digitize contours into step-event streams, dump streams,
+    /// place the machine pole.
+    #[command(subcommand)]
+    Polar(crate::polar::cli::PolarCmd),
+    /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables.
+    #[command(subcommand)]
+    Fourier(crate::cli_capabilities::FourierCmd),
+    /// 4-axis wire manipulator (Bhatti): continuous constant area-rate jobs.
+    #[command(subcommand)]
+    Wire(crate::cli_capabilities::WireCmd),
     /// Parse and plan a job offline and run it through the host model of the firmware.
     Plan {
         #[command(flatten)]
@@ -362,6 +372,9 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Run { job, link, log_csv, yes, status_ms } => {
             run_job(&job, &link, log_csv.as_deref(), yes, status_ms)
         }
+        Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
+        Cmd::Fourier(cmd) => crate::cli_capabilities::run_fourier(cmd),
+        Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),
         Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),
         Cmd::Hold { link } => one_request(&link, RequestBody::Hold, "hold"),
         Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),

@@ -6,6 +6,7 @@
 //! [`link`], [`runner`]) or the host model ([`plan::simulate`]).
 
 pub mod cli;
+pub mod cli_capabilities;
 pub mod convert;
 pub mod csv_log;
 pub mod fourier;

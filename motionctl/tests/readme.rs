@@ -15,3 +15,21 @@ fn readme_error_tables_match_the_code() {
         panic!("README.md's error-code tables are out of date; put this between the markers:\n{rendered}");
     }
 }
+
+const MACHINE_BEGIN: &str = "<!-- machine:begin (generated from motion::machine::markdown) -->\n";
+const MACHINE_END: &str = "<!-- machine:end -->";
+
+#[test]
+fn readme_machine_states_and_faults_match_the_code() {
+    let readme = include_str!("../../README.md");
+    let mut rendered = String::new();
+    motion::machine::markdown(&mut rendered).unwrap();
+    let start = readme.find(MACHINE_BEGIN).expect("README has the machine:begin marker")
+        + MACHINE_BEGIN.len();
+    let end = readme.find(MACHINE_END).expect("README has the machine:end marker");
+    if readme[start..end].trim() != rendered.trim() {
+        panic!(
+            "README.md's machine tables are out of date; put this between the markers:\n{rendered}"
+        );
+    }
+}

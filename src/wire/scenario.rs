@@ -128,6 +128,35 @@ impl WireRun {
     }
 }
 
+/// Both scenarios are a [`WireRun`] under a name of their own.
+macro_rules! wire_scenario {
+    ($t:ident) => {
+        impl Scenario for $t {
+            fn name(&self) -> &'static str {
+                self.0.name
+            }
+            fn tick_hz(&self) -> u32 {
+                machine::TICK_HZ
+            }
+            fn tick(&mut self) -> bool {
+                self.0.step()
+            }
+            fn wants_background(&self) -> bool {
+                self.0.wants_background()
+            }
+            fn background(&mut self) {
+                self.0.background()
+            }
+            fn report(&self) -> ScenarioReport {
+                self.0.report()
+            }
+        }
+    };
+}
+
+wire_scenario!(WireJobScenario);
+wire_scenario!(WireStallScenario);
+
 /// (a) The whole circle -> complex job, continuous, no stall.
 pub struct WireJobScenario(WireRun);
 
@@ -135,27 +164,6 @@ impl WireJobScenario {
     pub fn new() -> Result<Self, ConfigError> {
         let stall = (u64::MAX, u64::MAX);
         WireRun::new("wire_job", &table::SEGMENTS, stall, table::TIME_RULED_US).map(Self)
-    }
-}
-
-impl Scenario for WireJobScenario {
-    fn name(&self) -> &'static str {
-        self.0.name
-    }
-    fn tick_hz(&self) -> u32 {
-        machine::TICK_HZ
-    }
-    fn tick(&mut self) -> bool {
-        self.0.step()
-    }
-    fn wants_background(&self) -> bool {
-        self.0.wants_background()
-    }
-    fn background(&mut self) {
-        self.0.background()
-    }
-    fn report(&self) -> ScenarioReport {
-        self.0.report()
     }
 }
 
@@ -171,27 +179,6 @@ impl WireStallScenario {
     /// Where the shortened job ends, relative to its start.
     pub fn job_end() -> [i64; 4] {
         total_steps(table::SEGMENTS.get(STALL_JOB).unwrap_or(&[]))
-    }
-}
-
-impl Scenario for WireStallScenario {
-    fn name(&self) -> &'static str {
-        self.0.name
-    }
-    fn tick_hz(&self) -> u32 {
-        machine::TICK_HZ
-    }
-    fn tick(&mut self) -> bool {
-        self.0.step()
-    }
-    fn wants_background(&self) -> bool {
-        self.0.wants_background()
-    }
-    fn background(&mut self) {
-        self.0.background()
-    }
-    fn report(&self) -> ScenarioReport {
-        self.0.report()
     }
 }
 

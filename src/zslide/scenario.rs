@@ -70,35 +70,53 @@ const fn speed(rpm: u64) -> i32 {
     speed_turn_q32_per_tick(rpm * 1000, TICK_HZ)
 }
 
+/// The scenario's spindle encoder (also used by the benchmarks).
+pub const fn encoder_config() -> EncoderConfig {
+    EncoderConfig {
+        counts_per_rev: CPR,
+        index_tolerance_counts: 0,
+        window_log2: 8,
+        stop_counts_per_window: 16,
+    }
+}
+
+/// The scenario's resolver (also used by the benchmarks).
+pub const fn resolver_config() -> ResolverConfig {
+    ResolverConfig {
+        tick_hz: TICK_HZ,
+        amplitude_lsb: 1800,
+        amplitude_min_lsb: 1200,
+        amplitude_max_lsb: 2300,
+        loss_ticks: 4,
+        bandwidth_hz: 100,
+        stop_speed_turn_q32_per_tick: 1000,
+    }
+}
+
+/// The scenario's Z command setup (also used by the benchmarks).
+pub const fn command_config() -> ZCommandConfig {
+    ZCommandConfig {
+        tick_hz: TICK_HZ,
+        interp: Interp::Cubic,
+        advance_ticks_q16: 1 << 16,
+        engage_ticks: TICK_HZ / 20,
+        blend_start_x_in_q24: X_BLEND_IN_Q24,
+        blend_end_x_in_q24: X_END_IN_Q24,
+        max_velocity_uin_per_s: 500_000,
+        max_accel_uin_per_s2: 100_000_000,
+        min_speed_turn_q32_per_tick: speed(60) as u32,
+    }
+}
+
+/// Spindle speed at `rpm`, in the source's unit at the scenario's tick rate.
+pub const fn speed_at_rpm(rpm: u64) -> i32 {
+    speed(rpm)
+}
+
 impl ZSlideScenario {
     pub fn new(variant: ZSlideVariant) -> Self {
         let sim = SimSpindle::new(0x4000_0000);
-        let enc_cfg = EncoderConfig {
-            counts_per_rev: CPR,
-            index_tolerance_counts: 0,
-            window_log2: 8,
-            stop_counts_per_window: 16,
-        };
-        let res_cfg = ResolverConfig {
-            tick_hz: TICK_HZ,
-            amplitude_lsb: 1800,
-            amplitude_min_lsb: 1200,
-            amplitude_max_lsb: 2300,
-            loss_ticks: 4,
-            bandwidth_hz: 100,
-            stop_speed_turn_q32_per_tick: 1000,
-        };
-        let cfg = ZCommandConfig {
-            tick_hz: TICK_HZ,
-            interp: Interp::Cubic,
-            advance_ticks_q16: 1 << 16,
-            engage_ticks: TICK_HZ / 20,
-            blend_start_x_in_q24: X_BLEND_IN_Q24,
-            blend_end_x_in_q24: X_END_IN_Q24,
-            max_velocity_uin_per_s: 500_000,
-            max_accel_uin_per_s2: 100_000_000,
-            min_speed_turn_q32_per_tick: speed(60) as u32,
-        };
+        let (enc_cfg, res_cfg, cfg) = (encoder_config(), resolver_config(), command_config());
         // Constants known valid: the fallbacks are never taken (checked by the tests).
         let encoder = match QuadratureEncoder::new(enc_cfg, sim.encoder(CPR).0) {
             Ok(e) => e,
