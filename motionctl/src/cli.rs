@@ -394,17 +394,37 @@ fn run_job(
     yes: bool,
     status_ms: u16,
 ) -> Result<()> {
-    if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
-        bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
-    }
     // Check the whole job, and learn where it must end, before touching the link.
     let (parsed, program, summary) = plan_job(job)?;
     let outputs: Vec<plan::Output> = plan::Stream::new(&program)
         .collect::<Result<_, _>>()
         .with_context(|| job.job.display().to_string())?;
+    let mut expected = [0i64; motion::MAX_AXES];
+    expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
+    let label = job.job.display().to_string();
+    stream(&label, &parsed, &program, &outputs, &expected, link, log_csv, yes, status_ms)
+}
+
+/// Streams planned `outputs` to the board and checks the result against `expected` (the host
+/// model's final positions): the end of `motionctl run` and of the capability `run` commands.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn stream(
+    label: &str,
+    parsed: &Job,
+    program: &Program,
+    outputs: &[plan::Output],
+    expected: &[i64; motion::MAX_AXES],
+    link: &LinkArgs,
+    log_csv: Option<&Path>,
+    yes: bool,
+    status_ms: u16,
+) -> Result<()> {
+    if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
+        bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
+    }
     let target = link.target()?;
     let host = link.host_config(&target);
-    let axes = runner::axes_of(&parsed);
+    let axes = runner::axes_of(parsed);
     let csv = match log_csv {
         Some(p) => Some(crate::csv_log::CsvLog::create(p, axes.clone())?),
         None => None,
@@ -426,14 +446,9 @@ fn run_job(
         progress: true,
         interrupt: Some(interrupt),
     };
-    let mut expected = [0i64; motion::MAX_AXES];
-    expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
-    println!(
-        "job        {} ({} segments) on {target}",
-        job.job.display(),
-        summary.plan.segments.len()
-    );
-    let result = runner::run(&mut t, &parsed, &program, &outputs, &expected, opts);
+    let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
+    println!("job        {label} ({segments} segments) on {target}");
+    let result = runner::run(&mut t, parsed, program, outputs, expected, opts);
     let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
     drop(qemu_guard);
     let report = match result {

@@ -71,22 +71,71 @@ pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
     }
 }
 
+#[derive(clap::Args, Debug)]
+pub struct WirePlanArgs {
+    /// Area rate, mm^2/min.
+    #[arg(long, default_value_t = 800.0)]
+    fr: f64,
+    /// Largest horizontal distance of the wire from the designed ruling line, mm.
+    #[arg(long, default_value_t = 0.01)]
+    tolerance: f64,
+}
+
 #[derive(Subcommand, Debug)]
 pub enum WireCmd {
     /// Plan the circle -> complex die (Bhatti Table 11) as one continuous 4-axis job and run it
     /// through the host model of the firmware.
     Plan {
-        /// Area rate, mm^2/min.
-        #[arg(long, default_value_t = 800.0)]
-        fr: f64,
-        /// Largest horizontal distance of the wire from the designed ruling line, mm.
-        #[arg(long, default_value_t = 0.01)]
-        tolerance: f64,
+        #[command(flatten)]
+        plan: WirePlanArgs,
+    },
+    /// Plan the circle -> complex die and stream it to the board (4 axes: X, Y in mm; beta,
+    /// alpha in degrees), checked against the host model at the end.
+    Run {
+        #[command(flatten)]
+        plan: WirePlanArgs,
+        #[command(flatten)]
+        link: crate::cli::LinkArgs,
+        /// Write every board status report to this CSV file.
+        #[arg(long, value_name = "FILE")]
+        log_csv: Option<PathBuf>,
     },
 }
 
+/// The wire manipulator as a job's machine: the DDA's axes 0..3 with their step scales
+/// (src/wire/machine.rs); rotary axes in degrees. Soft limits from the thesis's travel.
+fn wire_job_machine(cfg: &motion::MachineConfig) -> crate::job::Job {
+    use crate::wire::ik::{STEPS_PER_DEG_ALPHA, STEPS_PER_DEG_BETA, STEPS_PER_MM_XY};
+    use motion::wire::machine as m;
+    let axis = |name: &str, steps_per_unit: f64, min: f64, max: f64| crate::job::Axis {
+        name: name.into(),
+        steps_per_mm: steps_per_unit,
+        max_rate_mm_s: m::MAX_RATE_HZ as f64 / steps_per_unit,
+        accel_mm_s2: m::ACCEL_STEPS_PER_S2 as f64 / steps_per_unit,
+        junction_jerk_mm_s: m::JUNCTION_JERK_HZ as f64 / steps_per_unit,
+        min_mm: min,
+        max_mm: max,
+    };
+    crate::job::Job {
+        machine: crate::job::Machine {
+            tick_hz: cfg.tick_hz,
+            timing: cfg.timing,
+            axes: vec![
+                axis("X", STEPS_PER_MM_XY, -50.0, 50.0),
+                axis("Y", STEPS_PER_MM_XY, -60.0, 60.0),
+                axis("B", STEPS_PER_DEG_BETA, -65.0, 65.0),
+                axis("A", STEPS_PER_DEG_ALPHA, -70.0, 70.0),
+            ],
+        },
+        items: Vec::new(),
+        feed_commands: Vec::new(),
+    }
+}
+
 pub fn run_wire(cmd: WireCmd) -> Result<()> {
-    let WireCmd::Plan { fr, tolerance } = cmd;
+    let (WireCmd::Plan { plan: WirePlanArgs { fr, tolerance } }
+    | WireCmd::Run { plan: WirePlanArgs { fr, tolerance }, .. }) = &cmd;
+    let (fr, tolerance) = (*fr, *tolerance);
     let path = continuous::circle_complex_path()?;
     let cfg = motion::wire::machine::config();
     let prm = ContinuousParams { tol_mm: tolerance, fr_mm2_per_min: fr, ..Default::default() };
@@ -108,5 +157,29 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         report.segments,
         &report.positions[..4]
     );
-    Ok(())
+    let WireCmd::Run { link, log_csv, .. } = cmd else { return Ok(()) };
+    let parsed = wire_job_machine(&cfg);
+    let mut final_steps = [0i64; motion::MAX_AXES];
+    final_steps.copy_from_slice(&report.positions[..motion::MAX_AXES]);
+    let program = crate::convert::Program {
+        config: cfg,
+        steps_per_mm: parsed.machine.axes.iter().map(|a| a.steps_per_mm).collect(),
+        items: Vec::new(),
+        commands: Vec::new(),
+        final_steps,
+        skipped_moves: 0,
+    };
+    let outputs: Vec<crate::plan::Output> =
+        job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
+    crate::cli::stream(
+        "circle -> complex (wire)",
+        &parsed,
+        &program,
+        &outputs,
+        &final_steps,
+        &link,
+        log_csv.as_deref(),
+        true,
+        crate::runner::DEFAULT_STATUS_PERIOD_MS,
+    )
 }
