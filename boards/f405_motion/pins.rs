@@ -48,7 +48,9 @@ const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
 
 const LOW: Mode = Mode::Output { high: false };
 
-pub const PINS: [Pin; 22] = [
+const IN: Mode = Mode::InputPullUp;
+
+pub const PINS: [Pin; 41] = [
     pin("STEP0", Port::C, 0, LOW),
     pin("STEP1", Port::C, 1, LOW),
     pin("STEP2", Port::C, 2, LOW),
@@ -71,7 +73,43 @@ pub const PINS: [Pin; 22] = [
     pin("FORCE3", Port::A, 3, Mode::Analog),                                // ADC1_IN3
     pin("HOST_TX", Port::A, 9, Mode::Alternate { af: 7, pull_up: false }),  // USART1_TX
     pin("HOST_RX", Port::A, 10, Mode::Alternate { af: 7, pull_up: true }),  // USART1_RX
+    // Spindle encoder index: TIM4_CH3 input capture latches the count at the index edge.
+    pin("SPINDLE_INDEX", Port::B, 8, Mode::Alternate { af: 2, pull_up: true }),
+    pin("RESOLVER_SIN", Port::A, 5, Mode::Analog), // ADC1_IN5
+    pin("RESOLVER_COS", Port::A, 6, Mode::Analog), // ADC1_IN6
+    pin("Z_DAC", Port::A, 4, Mode::Analog),        // DAC1_OUT1: voice-coil Z slide command
+    // Outputs that power the process start off: nothing cuts before the firmware says so.
+    pin("SPINDLE_EN", Port::B, 0, LOW),
+    pin("WIRE_POWER", Port::B, 1, LOW),
+    pin("WIRE_STALL", Port::A, 8, IN), // the wire-lag micro-switch, closed to ground = stalled
+    // Limit switches, normally closed to ground: open (high) = tripped or a broken wire.
+    pin("LIMIT_MIN0", Port::B, 3, IN),
+    pin("LIMIT_MIN1", Port::B, 4, IN),
+    pin("LIMIT_MIN2", Port::B, 9, IN),
+    pin("LIMIT_MIN3", Port::B, 10, IN),
+    pin("LIMIT_MIN4", Port::B, 11, IN),
+    pin("LIMIT_MIN5", Port::B, 13, IN),
+    pin("LIMIT_MAX0", Port::B, 14, IN),
+    pin("LIMIT_MAX1", Port::B, 15, IN),
+    pin("LIMIT_MAX2", Port::A, 11, IN),
+    pin("LIMIT_MAX3", Port::A, 12, IN),
+    pin("LIMIT_MAX4", Port::A, 15, IN),
+    pin("LIMIT_MAX5", Port::C, 12, IN),
 ];
+
+/// No pin is assigned twice (checked at compile time).
+const _: () = {
+    let mut i = 0;
+    while i < PINS.len() {
+        let mut j = i + 1;
+        while j < PINS.len() {
+            let same_port = PINS[i].port as u8 == PINS[j].port as u8;
+            assert!(!(same_port && PINS[i].pin == PINS[j].pin), "a pin is assigned twice");
+            j += 1;
+        }
+        i += 1;
+    }
+};
 
 /// Force-sensor ADC channels, in FORCE0.. order.
 pub const FORCE_CHANNELS: [u8; 4] = [0, 1, 2, 3];
