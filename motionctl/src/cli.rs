@@ -50,6 +50,9 @@ pub enum Cmd {
     /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables.
     #[command(subcommand)]
     Fourier(crate::cli_capabilities::FourierCmd),
+    /// Constant-force milling (Elbestawi): simulate a milling job's force loop, plot it.
+    #[command(subcommand)]
+    Milling(crate::cli_capabilities::MillingCmd),
     /// 4-axis wire manipulator (Bhatti): continuous constant area-rate jobs.
     #[command(subcommand)]
     Wire(crate::cli_capabilities::WireCmd),
@@ -375,6 +378,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
         Cmd::Fourier(cmd) => crate::cli_capabilities::run_fourier(cmd),
         Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),
+        Cmd::Milling(cmd) => crate::cli_capabilities::run_milling(cmd),
         Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),
         Cmd::Hold { link } => one_request(&link, RequestBody::Hold, "hold"),
         Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),

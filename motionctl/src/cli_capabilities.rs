@@ -82,6 +82,63 @@ pub struct WirePlanArgs {
 }
 
 #[derive(Subcommand, Debug)]
+pub enum MillingCmd {
+    /// Run a milling job (Fnom, thresholds, gains, impact strategy; see
+    /// motionctl/examples/case_a_milling.toml) through the closed-loop force simulation: the
+    /// firmware's force chain and control law, the DDA and the eq 4.17 milling plant.
+    Simulate {
+        job: PathBuf,
+        /// Plot force, feed and override against time to this PNG.
+        #[arg(long, value_name = "FILE")]
+        png: Option<PathBuf>,
+        /// Write the trace (one row per control update) to this CSV.
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+    },
+}
+
+pub fn run_milling(cmd: MillingCmd) -> Result<()> {
+    use crate::milling::{job, simulate};
+    let MillingCmd::Simulate { job: path, png, csv } = cmd;
+    let src =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let job = job::parse(&src).with_context(|| path.display().to_string())?;
+    let (report, trace) = simulate::run(&job)?;
+    println!("{} control updates over {:.3} s", trace.len(), trace.last().map_or(0.0, |p| p.t_s));
+    println!(
+        "fault      {}",
+        if report.fault == 0 { "none".to_string() } else { fault_name(report.fault) }
+    );
+    for f in &report.figures {
+        println!("  {:<28} {}", f.name, f.value);
+    }
+    if let Some(p) = csv {
+        simulate::write_csv(&p, &trace)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = png {
+        let labelled = simulate::write_png(&p, &trace, job.control.fnom_mn as f64 / 1e3)?;
+        println!(
+            "wrote {}{}",
+            p.display(),
+            if labelled {
+                ""
+            } else {
+                " (no system font: unlabelled; force red, feed blue, override green)"
+            }
+        );
+    }
+    Ok(())
+}
+
+fn fault_name(code: u8) -> String {
+    motion::protocol::FaultCode::TABLE
+        .iter()
+        .find(|(c, _, _)| *c == code)
+        .map_or_else(|| format!("code {code}"), |(c, name, _)| format!("{name} ({c})"))
+}
+
+#[derive(Subcommand, Debug)]
 pub enum WireCmd {
     /// Plan the circle -> complex die (Bhatti Table 11) as one continuous 4-axis job and run it
     /// through the host model of the firmware.

@@ -236,6 +236,8 @@ pub struct ForceScenario {
     x_hist: [i64; 256],
     hist_at: u8,
     s: Stats,
+    /// (tick, force, override, X) at the latest control update.
+    last: (u64, u32, u32, i64),
 }
 
 /// A scenario setup failed (a bug in the constants above; tests build every variant).
@@ -244,11 +246,6 @@ pub struct SetupError;
 
 impl ForceScenario {
     pub fn new(variant: Variant) -> Result<Self, SetupError> {
-        let cfg = machine();
-        let mut dda = Dda::new(&cfg).map_err(|_| SetupError)?;
-        let mut prep = Preparer::new(&cfg).map_err(|_| SetupError)?;
-        let p = prep.prepare(&segment()).map_err(|_| SetupError)?;
-        dda.push(&p).map_err(|_| SetupError)?;
         let trip = if variant == Variant::AboveTrip { 12_000_000 } else { 18_000_000 };
         let mut params = control_params(trip);
         params.contact = match variant {
@@ -262,15 +259,33 @@ impl ForceScenario {
             },
             _ => params.contact,
         };
+        let plant = if variant.is_impact() {
+            PlantParams { b_before_um: 10_000, ..plant_params() }
+        } else {
+            plant_params()
+        };
+        Self::with_params(variant, params, plant)
+    }
+
+    /// The Case A run with another control setup and cut (a milling job's parameters).
+    pub fn custom(params: ControlParams, plant: PlantParams) -> Result<Self, SetupError> {
+        Self::with_params(Variant::CaseA, params, plant)
+    }
+
+    fn with_params(
+        variant: Variant,
+        params: ControlParams,
+        plant: PlantParams,
+    ) -> Result<Self, SetupError> {
+        let cfg = machine();
+        let mut dda = Dda::new(&cfg).map_err(|_| SetupError)?;
+        let mut prep = Preparer::new(&cfg).map_err(|_| SetupError)?;
+        let p = prep.prepare(&segment()).map_err(|_| SetupError)?;
+        dda.push(&p).map_err(|_| SetupError)?;
         Ok(ForceScenario {
             variant,
             dda,
-            plant: MillingPlant::new(if variant.is_impact() {
-                PlantParams { b_before_um: 10_000, ..plant_params() }
-            } else {
-                plant_params()
-            })
-            .map_err(|_| SetupError)?,
+            plant: MillingPlant::new(plant).map_err(|_| SetupError)?,
             // True zeros off the calibration's guess; force along (0.48, 0.64, 0.60).
             adc: SimAdc::new([2085, 2036, 2053], [31_457, 41_943, 39_322], 9_770),
             chain: ForceChain::new(chain_config()).map_err(|_| SetupError)?,
@@ -287,7 +302,14 @@ impl ForceScenario {
             x_hist: [0; 256],
             hist_at: 0,
             s: Stats { late_min_mn: u32::MAX, min_after_step_mn: u32::MAX, ..Stats::default() },
+            last: (0, 0, 0, 0),
         })
+    }
+
+    /// The latest control update: (tick, force mN, override Q30, X steps), and how many updates
+    /// there were. A host loop polls it after every tick to record a trace.
+    pub fn last_update(&self) -> (u64, (u64, u32, u32, i64)) {
+        (self.s.control_updates, self.last)
     }
 
     /// The DDA (for the tests' position checks).
@@ -375,6 +397,7 @@ impl ForceScenario {
             self.dda.apply(Command::SetOverride(o.feed));
         }
         self.ovr_bits = o.feed.to_bits();
+        self.last = (self.ticks, force_mn, self.ovr_bits, self.x_steps);
     }
 }
 

@@ -3,6 +3,8 @@
 //! tests can compare them with the printed values (digest: shared/digest/elbestawi-adaptive-force.md).
 
 pub mod case_a;
+pub mod job;
 pub mod pass_growth;
 pub mod rapid_feed;
 pub mod root_locus;
+pub mod simulate;
