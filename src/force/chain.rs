@@ -204,21 +204,10 @@ impl ForceChain {
 mod tests {
     use super::*;
 
+    /// The Case A chain with a round 10 N per count.
     pub(crate) fn cfg() -> ChainConfig {
         let cal = ChannelCal { zero_counts: 2048, mn_per_count_q16: 10_000 << 16 };
-        ChainConfig {
-            channels: 3,
-            cal: [cal; MAX_CHANNELS],
-            adc_max_counts: 4095,
-            rail_margin_counts: 2,
-            saturated_samples: 3,
-            stuck_samples: 200,
-            tare_shift: 6,
-            coeffs: BiquadCoeffs::BUTTERWORTH_FS_OVER_20,
-            teeth: 4,
-            control_hz: 2000,
-            nominal_spindle_mrev_s: 8333,
-        }
+        ChainConfig { cal: [cal; MAX_CHANNELS], ..crate::force::scenario::chain_config() }
     }
 
     fn run(

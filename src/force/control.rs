@@ -347,26 +347,8 @@ mod tests {
     use super::*;
 
     fn params(contact: ContactStrategy) -> ControlParams {
-        ControlParams {
-            fnom_mn: 4_100_000,
-            contact_mn: 45_000,
-            trip_mn: 18_000_000,
-            air_after_ms: 50,
-            tare_ms: 10,
-            control_hz: 2000,
-            steps_per_s_at_one: 12_700,
-            kp_dec_q16: 1 << 15,
-            kp_inc_q16: 1 << 15,
-            ki_dec_per_s_q16: 40 << 16,
-            ki_inc_per_s_q16: 20 << 16,
-            normalise: true,
-            fixed_scale_q16: 6_554,
-            feed_min: Rate::lit("0.01"),
-            feed_max: Rate::ONE,
-            feed_air: Rate::ONE,
-            contact,
-            min_spindle_mrev_s: 2000,
-        }
+        // The Case A setup, with a shorter tare so the unit tests reach the cut sooner.
+        ControlParams { tare_ms: 10, contact, ..crate::force::scenario::control_params(18_000_000) }
     }
 
     /// A plant at control rate: the feed moves the axis at once (no ramp), force is
