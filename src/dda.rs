@@ -236,7 +236,7 @@ impl Preparer {
         }
         // Rate reached after one virtual tick of acceleration from rest: moves start there
         // instead of creeping, and decelerations never stall short of the segment end.
-        p.floor = (isqrt_u64(2 * p.dr as u64 * ONE as u64) as u32).max(p.dr).min(p.cap);
+        p.floor = isqrt_u64(2 * p.dr as u64 * ONE as u64).max(p.dr).min(p.cap);
         let exit = p.exit_rate.min(p.cap) as u64;
         p.exit_sq = (exit * exit) >> RATE_FRAC_BITS;
         p.carry = if self.prev_exit == 0 {

@@ -20,6 +20,7 @@ pub mod scenarios;
 pub mod segment;
 pub mod spindle;
 pub mod trace;
+pub mod trig;
 pub mod wire;
 pub mod zslide;
 

@@ -5,6 +5,8 @@
 
 use core::fmt::Write;
 
+pub use crate::trace::TraceHash;
+
 /// Most named figures one report carries.
 pub const MAX_FIGURES: usize = 24;
 /// Longest report line (`scenario ...` or one `scenario_fig ...`).
@@ -88,56 +90,6 @@ impl ScenarioReport {
             let _ = write!(l, "scenario_fig name={} {}={}", self.name, f.name, f.value);
             emit(&l);
         }
-    }
-}
-
-/// FNV-1a, 64 bit: the trace hash every scenario folds its per-tick outputs into.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TraceHash(u64);
-
-impl Default for TraceHash {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl TraceHash {
-    const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-    const PRIME: u64 = 0x0000_0100_0000_01b3;
-
-    pub const fn new() -> Self {
-        TraceHash(Self::OFFSET)
-    }
-
-    #[inline]
-    pub fn bytes(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ b as u64).wrapping_mul(Self::PRIME);
-        }
-    }
-
-    #[inline]
-    pub fn u32(&mut self, v: u32) {
-        self.bytes(&v.to_le_bytes());
-    }
-
-    #[inline]
-    pub fn i32(&mut self, v: i32) {
-        self.bytes(&v.to_le_bytes());
-    }
-
-    #[inline]
-    pub fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-
-    #[inline]
-    pub fn i64(&mut self, v: i64) {
-        self.bytes(&v.to_le_bytes());
-    }
-
-    pub const fn value(&self) -> u64 {
-        self.0
     }
 }
 

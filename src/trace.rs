@@ -5,12 +5,60 @@
 use crate::config::MAX_AXES;
 use crate::dda::StepOutput;
 
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+/// FNV-1a, 64 bit: the hash of the step trace and of every scenario's per-tick
+/// outputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceHash(u64);
+
+impl Default for TraceHash {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl TraceHash {
+    const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+
+    pub const fn new() -> Self {
+        TraceHash(Self::OFFSET)
+    }
+
+    #[inline]
+    pub fn bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(Self::PRIME);
+        }
+    }
+
+    #[inline]
+    pub fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    #[inline]
+    pub fn i32(&mut self, v: i32) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    #[inline]
+    pub fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    #[inline]
+    pub fn i64(&mut self, v: i64) {
+        self.bytes(&v.to_le_bytes());
+    }
+
+    pub const fn value(&self) -> u64 {
+        self.0
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepRecorder {
-    hash: u64,
+    hash: TraceHash,
     /// Rising edges per axis.
     pub steps: [u64; MAX_AXES],
     /// Net steps per axis (+1 positive, -1 negative), as the DIR pins said at each edge.
@@ -50,7 +98,7 @@ impl StepRecorder {
             window_start: 0,
             window_steps: [0; MAX_AXES],
             peak_window_steps: [0; MAX_AXES],
-            hash: FNV_OFFSET,
+            hash: TraceHash::new(),
             steps: [0; MAX_AXES],
             net: [0; MAX_AXES],
             min_interval_ticks: [u64::MAX; MAX_AXES],
@@ -99,15 +147,14 @@ impl StepRecorder {
                 self.min_interval_ticks[i] = self.min_interval_ticks[i].min(tick - prev);
             }
             self.last_rise[i] = Some(tick);
-            for byte in tick.to_le_bytes().into_iter().chain([i as u8, negative as u8]) {
-                self.hash = (self.hash ^ byte as u64).wrapping_mul(FNV_PRIME);
-            }
+            self.hash.u64(tick);
+            self.hash.bytes(&[i as u8, negative as u8]);
         }
     }
 
     /// FNV-1a over (tick as 8 LE bytes, axis, dir) of every rising edge in order.
     pub fn hash(&self) -> u64 {
-        self.hash
+        self.hash.value()
     }
 
     /// Peak step rate per axis: the busiest window's steps over the window's duration, Hz.

@@ -3,8 +3,8 @@
 //! hold; saturation and stuck-channel detection.
 
 use super::biquad::{Biquad, BiquadCoeffs};
-use super::intmath::isqrt_u64;
 use super::peak::{PeakHold, ToothClock};
+use crate::fixed_math::isqrt_u64;
 use crate::protocol::errors::FaultCode;
 
 /// Force channels the chain can carry (Fx, Fy, Fz).

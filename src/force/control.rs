@@ -19,7 +19,7 @@
 use crate::protocol::errors::FaultCode;
 use crate::segment::Rate;
 
-use super::intmath::ratio_u64;
+use crate::fixed_math::ratio_u64;
 
 /// Positions kept for the feed-per-tooth measure: tooth periods up to 255 updates.
 const POS_RING: usize = 256;

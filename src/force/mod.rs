@@ -9,7 +9,6 @@
 pub mod biquad;
 pub mod chain;
 pub mod control;
-pub mod intmath;
 pub mod peak;
 pub mod plant;
 pub mod scenario;

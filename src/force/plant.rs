@@ -108,23 +108,11 @@ impl MillingPlant {
         if self.p.periodic {
             self.tooth_phase = self.tooth_phase.wrapping_add(self.tooth_inc);
             // 1 + sin, Q15: 0..2.
-            let m = (32_768 + sin_q15(self.tooth_phase)) as u64;
+            let m = (32_768 + (crate::trig::sin_q30(self.tooth_phase) >> 15)) as u64;
             f = (f * m) >> 15;
         }
         f.min(u32::MAX as u64) as u32
     }
-}
-
-/// sin(2 pi phase / 2^32) in Q15: a parabola with one correction term (|error| < 0.0011).
-pub const fn sin_q15(phase: u32) -> i32 {
-    // X in [-1, 1) as Q15; sin(pi X) ~ 4 X (1 - |X|).
-    let x = (phase as i32 >> 16) as i64;
-    let ax = if x < 0 { -x } else { x };
-    let y = (4 * x * (32_768 - ax)) >> 15;
-    let ay = if y < 0 { -y } else { y };
-    // y + 0.225 (y |y| - y).
-    let y = y + ((7_373 * (((y * ay) >> 15) - y)) >> 15);
-    y as i32
 }
 
 /// Spindle compliance across passes: pass n cuts the nominal chip plus what the previous pass's
@@ -277,16 +265,6 @@ mod tests {
         // Steady: K a b * 300 steps of 1 um at b = 2.5 mm = 3075 N; peak twice that.
         assert!((peak as i64 - 6_150_000).abs() < 10_000, "{peak}");
         assert!(((sum / n) as i64 - 3_075_000).abs() < 5_000, "{}", sum / n);
-    }
-
-    #[test]
-    fn sine_is_close() {
-        for k in 0..1000u64 {
-            let ph = (k << 32) / 1000;
-            let s = sin_q15(ph as u32) as f64 / 32768.0;
-            let e = (2.0 * core::f64::consts::PI * k as f64 / 1000.0).sin();
-            assert!((s - e).abs() < 0.0015, "{k}: {s} vs {e}");
-        }
     }
 
     /// Pass growth (digest oracle 8): mu = 1 gives 0.5, 0.75, 0.875; mu = 0.5 gives 0.667, 0.889.

@@ -11,7 +11,7 @@
 
 use super::SpindleSource;
 use crate::protocol::errors::FaultCode;
-use crate::zslide::trig::{cos_q30, sin_q30};
+use crate::trig::{cos_q30, sin_q30};
 
 /// Resolver setup.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

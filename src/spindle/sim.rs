@@ -1,7 +1,7 @@
 //! A simulated spindle for tests and scenarios: exact angle (turns + `u32` fraction) advanced by
 //! a commanded speed each tick, and what an encoder timer and a resolver's ADC would read.
 
-use crate::zslide::trig::{cos_q30, sin_q30};
+use crate::trig::{cos_q30, sin_q30};
 
 /// The true spindle: whole turns and a `u32` fraction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -11,7 +11,6 @@ pub mod output;
 pub mod plant;
 pub mod scenario;
 pub mod table;
-pub mod trig;
 
 pub use command::{ZCommand, ZCommandConfig, ZConfigError, ZState, ZUpdate};
 pub use output::{DacScale, StepFollower, StepScale};

@@ -12,7 +12,7 @@
 //! Everything here is integer and division-free after [`CoefficientTable::try_new`]; every
 //! product is bounded by the checks made there (|coefficient| <= [`MAX_COEFF_IN_Q32`]).
 
-use super::trig::{cos_q30, sin_q30, TWO_PI_Q29};
+use crate::trig::{cos_q30, sin_q30, TWO_PI_Q29};
 
 /// Highest harmonic order of the harmonic form.
 pub const MAX_ORDER: usize = 8;
