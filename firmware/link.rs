@@ -1,34 +1,37 @@
-//! The host link (feature `link`): the machine side of [`BoardLink`] on top of the RTIC
-//! resources, and the USART1 transmit queue.
+//! The host link's machine side (link firmware): the protocol state machine ([`BoardLink`]) over
+//! [`Machine`], the one state machine and fault model of `motion::machine`.
 //!
-//! * [`Link`] (shared by the USART1 task, the feeder and the status task, ceiling priority 2):
-//!   the protocol state machine plus [`Machine`], the segment queue between the host and the
-//!   feeder, the preparer, the configuration and the fault latch.
-//! * [`Target`] implements [`LinkTarget`] for one request over a `&mut Machine` and the DDA
-//!   resource (locked per access, so the tick is only ever held off for a few loads or one
-//!   command).
-//! * [`HostPort`] (shared by the USART1 task and the status task): the serial driver and the
-//!   transmit byte queue.
+//! * [`Motion`] (shared by the tick, the USART task, the feeder and the status task; ceiling =
+//!   the tick's priority): the DDA and the [`Machine`] wrapped around it. The tick calls
+//!   [`Machine::tick`], never `Dda::tick` directly, so every e-stop, limit, sensor, link and
+//!   overrun input reaches the fault latch the same tick.
+//! * [`Link`] (USART task, feeder, status task): the protocol session, the segment queue between
+//!   the host and the feeder, the preparer and the link watchdog.
+//! * [`Target`] implements [`LinkTarget`] for one request: every machine command goes through
+//!   [`Machine::command`], which consults the one command table; the link only adds its queue.
+//! * [`HostPort`]: the serial driver and the transmit byte queue.
 //!
-//! Job life cycle: segments queued while Idle wait in the queue (state Idle, `queue_depth` > 0)
-//! until `Start`; then the feeder moves them into the DDA as it has room, and segments queued
-//! while the job runs follow without another Start. Once every segment fed since the Start has
-//! finished and the queue is empty, the job is over: the state is Idle again and the next
-//! segments wait for the next Start. `Abort` stops at once, drops the queue and ends the job.
+//! Job life cycle, as the machine's table has it: SetConfig (Idle), Home (-> Homing -> Ready),
+//! QueueSegments (Ready/Running/Holding), Start (Ready -> Running); the job ends (Running ->
+//! Ready) when every admitted segment has finished and the DDA is at rest. `Abort` stops at
+//! once and drops the queue; a fault latches, reacts (kill/stop/hold) and waits for ClearFault.
 
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
 use heapless::Deque;
 use motion::config::MAX_AXES;
 use motion::dda::{Command, MotionState, Prepared, Preparer};
+use motion::machine::{
+    BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal, WatchdogGate,
+};
 use motion::protocol::{
-    encode_frame, AxisScale, BoardLink, ErrorCode, FaultCode, FrameError, LinkTarget, Response,
+    encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
     Status, WireConfig, WireState, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SOFT_LIMITS,
     CAP_STATUS_STREAM, MAX_FRAME_WIRE, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
-use motion::{demo_job, Dda};
+use motion::Dda;
 use rtic::Mutex;
 
 use crate::board;
@@ -40,111 +43,53 @@ pub const TX_BUFFER: usize = 1024;
 /// How often the status task runs, as a fraction of a second: 1 ms, so a status period of P ms
 /// is met to the millisecond.
 const POLLS_PER_SECOND: u32 = 1_000;
+/// A job (Running or Holding) with no valid frame from the host for this long is a lost link:
+/// the machine holds and latches `LinkLost`. motionctl sends at least every 250 ms during a job.
+pub const LINK_TIMEOUT_MS: u64 = 1_000;
+/// Watchdog timeout (nominal LSI) and how often the status task offers to feed it.
+pub const WATCHDOG_TIMEOUT_MS: u32 = 100;
+pub const WATCHDOG_POLL_MS: u64 = 10;
 
 /// DDA ticks between two runs of the status task; the tick counts down from it (no division in
 /// the tick). Rewritten when SetConfig changes the tick rate.
-pub static WAKE_TICKS: AtomicU32 = AtomicU32::new(demo_job::TICK_HZ / POLLS_PER_SECOND);
+pub static WAKE_TICKS: AtomicU32 = AtomicU32::new(1);
+/// The host link is alive, as the status task judged it; read by the tick.
+pub static LINK_OK: AtomicBool = AtomicBool::new(true);
+/// The e-stop interrupt saw the loop open: the tick latches EStop even if the level is gone.
+pub static ESTOP_EDGE: AtomicBool = AtomicBool::new(false);
+/// Fed only when the tick and the status task both ran since the last feed.
+pub static WATCHDOG: WatchdogGate = WatchdogGate::new();
 
 /// What the board announces in `HelloInfo::capabilities`.
 pub const CAPABILITIES: u32 =
     CAP_DDA | CAP_STATUS_STREAM | CAP_OVERRIDE | CAP_HOLD_RESUME | CAP_SOFT_LIMITS;
 
-/// The configuration before any SetConfig: the demo machine, 1 step per user unit, no soft limits.
-pub fn initial_config() -> WireConfig {
-    let scale = AxisScale { steps_per_unit_milli: 1_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    WireConfig { machine: demo_job::config(), scale: [scale; MAX_AXES] }
-}
-
-/// The protocol state machine and the machine it drives.
-pub struct Link {
-    pub board: BoardLink,
+/// The DDA and the machine around it: one resource, so the tick takes one lock.
+pub struct Motion {
+    pub dda: Dda,
     pub machine: Machine,
 }
 
-/// Everything the link owns besides the DDA.
-pub struct Machine {
-    queue: Deque<Segment, SEGMENT_QUEUE>,
-    preparer: Preparer,
-    config: WireConfig,
-    tick_rate: board::TickRate,
-    /// Position after every accepted segment: DDA position at the last abort (or zero with a
-    /// new DDA) plus the steps of every segment queued since.
-    planned: [i64; MAX_AXES],
-    /// Start was given and the job has not ended (see the module docs).
-    started: bool,
-    /// The feeder took a segment since the last Start.
-    fed: bool,
-    /// Segments queued since the DDA was created, less those dropped by an abort: with the
-    /// DDA's `segments_done`, the segments queued and not yet finished.
-    accepted: u32,
-    /// Latched faults, bit n = `FaultCode` n. The only source so far: a DDA queue underrun.
-    faults: u32,
-    underruns_seen: u32,
-    /// Milliseconds of DDA time before the current DDA was created (SetConfig restarts its
-    /// clock), so the status clock never goes back.
-    clock_base_ms: u64,
-}
-
-impl Link {
-    /// `firmware` is reported in `HelloInfo`; `cfg` must be valid.
-    pub fn new(firmware: &str, cfg: WireConfig, tick_rate: board::TickRate) -> Option<Self> {
-        let preparer = Preparer::new(&cfg.machine).ok()?;
-        cfg.validate().ok()?;
-        WAKE_TICKS.store(wake_ticks(cfg.machine.tick_hz), Relaxed);
-        Some(Link {
-            board: BoardLink::new(firmware, CAPABILITIES),
-            machine: Machine {
-                queue: Deque::new(),
-                preparer,
-                config: cfg,
-                tick_rate,
-                planned: [0; MAX_AXES],
-                started: false,
-                fed: false,
-                accepted: 0,
-                faults: 0,
-                underruns_seen: 0,
-                clock_base_ms: 0,
-            },
-        })
+impl Motion {
+    /// Boots the machine with `loaded` (the flash record; QEMU has none) and builds the DDA from
+    /// the config it ends up with (safe defaults when missing or corrupt).
+    pub fn boot(loaded: Result<BoardConfig, BootConfig>) -> Option<(Self, Preparer)> {
+        let mut machine = Machine::new();
+        machine.boot(loaded);
+        let cfg = machine.config().wire.machine;
+        let dda = Dda::new(&cfg).ok()?;
+        let preparer = Preparer::new(&cfg).ok()?;
+        WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
+        Some((Motion { dda, machine }, preparer))
     }
 
-    /// Handles one frame from the decoder; the response must be sent. The flag is true when the
-    /// feeder has new work (Start, or segments queued into a started job).
-    pub fn on_frame(
-        &mut self,
-        frame: Result<&[u8], FrameError>,
-        dda: &mut impl Mutex<T = Dda>,
-    ) -> (Response, bool) {
-        let mut t = Target::new(&mut self.machine, dda);
-        let resp = self.board.on_frame(frame, &mut t);
-        (resp, t.wake_feeder)
-    }
-
-    /// The status task's periodic work: latch faults, and the periodic Status when one is due.
-    /// Returns the frames to send (a `Fault` first).
-    pub fn poll(&mut self, dda: &mut impl Mutex<T = Dda>) -> [Option<Response>; 2] {
-        let fault = self.machine.check_faults(dda);
-        let now_ms = self.machine.now_ms(dda);
-        let t = Target::new(&mut self.machine, dda);
-        [fault, self.board.poll(now_ms, &t)]
-    }
-
-    /// The next segment for the DDA, prepared; `None` when the queue is empty or the job has not
-    /// been started. Called by the feeder only, which pushes it into the DDA before anything
-    /// else can run at its priority.
-    pub fn next_prepared(&mut self) -> Option<Result<Prepared, (u32, SegmentError)>> {
-        let m = &mut self.machine;
-        if !m.started {
-            return None;
+    /// The state as the link reports it: started with segments still to feed counts as
+    /// moving (the feeder is about to run).
+    fn wire_state(&self) -> WireState {
+        match (self.machine.state(), self.dda.state()) {
+            (MachineState::Running, MotionState::Idle) => WireState::Moving,
+            _ => self.machine.wire_state(&self.dda),
         }
-        let seg = m.queue.pop_front()?;
-        m.fed = true;
-        Some(m.preparer.prepare(&seg).map_err(|e| (seg.id, e)))
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.machine.queue.is_empty()
     }
 }
 
@@ -153,79 +98,191 @@ fn wake_ticks(tick_hz: u32) -> u32 {
     (tick_hz / POLLS_PER_SECOND).max(1)
 }
 
-impl Machine {
-    fn wire_state(&self, dda: MotionState) -> WireState {
-        if self.faults != 0 {
-            return WireState::Faulted;
+/// The protocol session and everything the link owns besides [`Motion`].
+pub struct Link {
+    pub board: BoardLink,
+    feed: Feed,
+    /// Status clock of the last valid frame from the host.
+    last_frame_ms: u64,
+    next_watchdog_ms: u64,
+}
+
+/// What a [`Target`] changes besides `Motion`: the segment queue and what rebuilding the DDA
+/// needs.
+struct Feed {
+    queue: Deque<Segment, SEGMENT_QUEUE>,
+    preparer: Preparer,
+    tick_rate: board::TickRate,
+    /// Milliseconds of DDA time before the current DDA was created (SetConfig restarts its
+    /// clock), so the status clock never goes back.
+    clock_base_ms: u64,
+    /// Latched faults already announced with a `Fault` frame.
+    announced: u32,
+}
+
+impl Link {
+    /// `firmware` is reported in `HelloInfo`.
+    pub fn new(firmware: &str, preparer: Preparer, tick_rate: board::TickRate) -> Self {
+        Link {
+            board: BoardLink::new(firmware, CAPABILITIES),
+            feed: Feed { queue: Deque::new(), preparer, tick_rate, clock_base_ms: 0, announced: 0 },
+            last_frame_ms: 0,
+            next_watchdog_ms: 0,
         }
-        match dda {
-            // Started with segments still to feed: moving as soon as the feeder runs.
-            MotionState::Idle if self.started && !self.queue.is_empty() => WireState::Moving,
-            s => s.into(),
+    }
+
+    /// Handles one frame from the decoder; the response must be sent. The flag is true when the
+    /// feeder has work (a Start, segments for a running job, or machine background work).
+    pub fn on_frame(
+        &mut self,
+        frame: Result<&[u8], FrameError>,
+        motion: &mut impl Mutex<T = Motion>,
+    ) -> (Response, bool) {
+        if frame.is_ok() {
+            self.last_frame_ms = self.now_ms(motion);
         }
+        let mut t = Target::new(&mut self.feed, motion);
+        let resp = self.board.on_frame(frame, &mut t);
+        (resp, t.wake_feeder)
+    }
+
+    /// The status task's periodic work: judge the link, announce a newly latched fault, send
+    /// the periodic Status when one is due. Returns the frames to send (a `Fault` first) and
+    /// whether the watchdog may be fed now.
+    pub fn poll(&mut self, motion: &mut impl Mutex<T = Motion>) -> ([Option<Response>; 2], bool) {
+        let now_ms = self.now_ms(motion);
+        let (state, latched, first, tick) = motion.lock(|m| {
+            let f = m.machine.faults();
+            (m.machine.state(), f.mask(), f.first(), m.dda.now())
+        });
+        let job = matches!(state, MachineState::Running | MachineState::Holding);
+        LINK_OK.store(!job || now_ms.saturating_sub(self.last_frame_ms) < LINK_TIMEOUT_MS, Relaxed);
+        let fresh = latched & !self.feed.announced;
+        self.feed.announced = latched;
+        let fault = match first {
+            Some(code) if fresh != 0 => {
+                let code = if fresh & code.bit() != 0 { code } else { lowest(fresh) };
+                Some(Response::Fault { code, tick })
+            }
+            _ => None,
+        };
+        let feed = now_ms >= self.next_watchdog_ms;
+        if feed {
+            self.next_watchdog_ms = now_ms + WATCHDOG_POLL_MS;
+        }
+        let t = Target::new(&mut self.feed, motion);
+        let status = self.board.poll(now_ms, &t);
+        ([fault, status], feed)
+    }
+
+    /// The feeder's work: the machine's background (abort after an immediate stop, homing
+    /// moves), then the next segment for the DDA, prepared; `None` when there is nothing to feed.
+    /// The divisions of preparing happen here, outside the `Motion` lock.
+    pub fn next_prepared(
+        &mut self,
+        motion: &mut impl Mutex<T = Motion>,
+    ) -> Option<Result<Prepared, (u32, SegmentError)>> {
+        let prep = &mut self.feed.preparer;
+        let may_feed = motion.lock(|m| {
+            if m.machine.wants_background() {
+                m.machine.background(&mut m.dda, prep);
+            }
+            m.machine.may_feed() && m.dda.ready_free() > 0
+        });
+        if !may_feed {
+            return None;
+        }
+        let seg = self.feed.queue.pop_front()?;
+        Some(self.feed.preparer.prepare(&seg).map_err(|e| (seg.id, e)))
     }
 
     /// Milliseconds of DDA time since boot (division: never call from the tick).
-    fn now_ms(&self, dda: &mut impl Mutex<T = Dda>) -> u64 {
-        let now = dda.lock(|d| d.now());
-        self.clock_base_ms + now * 1_000 / self.config.machine.tick_hz as u64
-    }
-
-    /// Stops at once and drops every queued segment; the job is over.
-    fn stop_all(&mut self, dda: &mut impl Mutex<T = Dda>) {
-        let (positions, done) = dda.lock(|d| {
-            d.abort();
-            (d.positions(), d.segments_done())
-        });
-        self.planned = positions;
-        self.accepted = done;
-        self.queue.clear();
-        self.preparer.reset_junction();
-        self.started = false;
-        self.fed = false;
-    }
-
-    /// Latches a queue underrun the DDA reported since the last check: motion stops, the queue
-    /// is dropped, and the host gets a `Fault` frame.
-    fn check_faults(&mut self, dda: &mut impl Mutex<T = Dda>) -> Option<Response> {
-        let (underruns, tick) = dda.lock(|d| (d.underruns(), d.now()));
-        if underruns == self.underruns_seen {
-            return None;
-        }
-        self.underruns_seen = underruns;
-        self.faults |= FaultCode::QueueUnderrun.bit();
-        self.stop_all(dda);
-        Some(Response::Fault { code: FaultCode::QueueUnderrun, tick })
+    fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
+        let (now, tick_hz) =
+            motion.lock(|m| (m.dda.now(), m.machine.config().wire.machine.tick_hz));
+        self.feed.clock_base_ms + now * 1_000 / tick_hz.max(1) as u64
     }
 }
 
-/// [`LinkTarget`] for one request: the machine plus the DDA resource. `LinkTarget` reads through
-/// `&self`, and an RTIC lock needs `&mut`, hence the `RefCell` (never borrowed twice: no method
-/// calls another while it holds the DDA).
-pub struct Target<'a, D: Mutex<T = Dda>> {
-    m: &'a mut Machine,
-    dda: RefCell<&'a mut D>,
-    /// The feeder has new work.
+fn lowest(bits: u32) -> FaultCode {
+    FaultCode::ALL.iter().copied().find(|f| bits & f.bit() != 0).unwrap_or(FaultCode::SensorFault)
+}
+
+/// [`LinkTarget`] for one request: the link plus the `Motion` resource. `LinkTarget` reads
+/// through `&self`, and an RTIC lock needs `&mut`, hence the `RefCell` (never borrowed twice: no
+/// method calls another while it holds the lock).
+pub struct Target<'a, M: Mutex<T = Motion>> {
+    link: &'a mut Feed,
+    motion: RefCell<&'a mut M>,
+    /// The feeder has work.
     pub wake_feeder: bool,
 }
 
-impl<'a, D: Mutex<T = Dda>> Target<'a, D> {
-    pub fn new(m: &'a mut Machine, dda: &'a mut D) -> Self {
-        Target { m, dda: RefCell::new(dda), wake_feeder: false }
+impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
+    fn new(link: &'a mut Feed, motion: &'a mut M) -> Self {
+        Target { link, motion: RefCell::new(motion), wake_feeder: false }
     }
 
-    fn with_dda<R>(&self, f: impl FnOnce(&mut Dda) -> R) -> R {
-        self.dda.borrow_mut().lock(f)
+    fn with<R>(&self, f: impl FnOnce(&mut Motion) -> R) -> R {
+        self.motion.borrow_mut().lock(f)
+    }
+
+    /// One machine command; a refusal changes nothing and becomes the NAK code.
+    fn command(&mut self, cmd: MachineCommand<'_>) -> Result<MachineState, ErrorCode> {
+        let r = self.motion.get_mut().lock(|m| m.machine.command(cmd, &mut m.dda));
+        r.map_err(|e: Refusal| e.error_code())
+    }
+
+    /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
+    /// machine's background (the abort of the frozen DDA).
+    fn drop_job(&mut self) {
+        self.link.queue.clear();
+        self.wake_feeder = true;
+    }
+
+    /// Installs `cfg` (a validated board config): the machine first (it refuses out of state),
+    /// then a DDA and preparer for a changed machine config, retimed in one critical section.
+    fn install(&mut self, cfg: &BoardConfig) -> Result<(), ErrorCode> {
+        let preparer = Preparer::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?;
+        let old = self.with(|m| m.machine.config().wire.machine);
+        let tick_hz = cfg.wire.machine.tick_hz;
+        let fresh = if cfg.wire.machine == old {
+            None
+        } else {
+            if !self.link.tick_rate.supports(tick_hz) {
+                return Err(ErrorCode::InvalidConfig);
+            }
+            Some(Dda::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?)
+        };
+        self.command(MachineCommand::SetConfig(cfg))?;
+        self.drop_job();
+        let Some(mut fresh) = fresh else { return Ok(()) };
+        let tick_rate = &mut self.link.tick_rate;
+        // The swap and the retiming in one critical section: no tick sees a half-done change.
+        // The machine froze the DDA (SetConfig stops at once); the background aborts the new one.
+        self.motion.get_mut().lock(|m| {
+            core::mem::swap(&mut m.dda, &mut fresh);
+            tick_rate.set(tick_hz)
+        });
+        // `fresh` now holds the old DDA.
+        self.link.clock_base_ms += fresh.now() * 1_000 / old.tick_hz.max(1) as u64;
+        self.link.preparer = preparer;
+        WAKE_TICKS.store(wake_ticks(tick_hz), Relaxed);
+        Ok(())
     }
 }
 
-impl<D: Mutex<T = Dda>> LinkTarget for Target<'_, D> {
+impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn state(&self) -> WireState {
-        self.m.wire_state(self.with_dda(|d| d.state()))
+        self.with(|m| m.wire_state())
+    }
+
+    fn machine_state(&self) -> MachineState {
+        self.with(|m| m.machine.state())
     }
 
     fn credits(&self) -> u16 {
-        (SEGMENT_QUEUE - self.m.queue.len()) as u16
+        (SEGMENT_QUEUE - self.link.queue.len()) as u16
     }
 
     fn queue_capacity(&self) -> u16 {
@@ -233,131 +290,100 @@ impl<D: Mutex<T = Dda>> LinkTarget for Target<'_, D> {
     }
 
     fn config(&self) -> WireConfig {
-        self.m.config
+        self.with(|m| m.machine.config().wire)
     }
 
     fn planned_position(&self) -> [i64; MAX_AXES] {
-        self.m.planned
+        self.with(|m| m.machine.planned_end())
     }
 
     fn status(&self) -> Status {
-        // One lock: positions, tick and counters are one consistent snapshot.
-        let (mut s, dda_state) = self.with_dda(|d| {
-            let s = Status {
+        // One lock: positions, tick, state and counters are one consistent snapshot.
+        self.with(|m| {
+            let (d, mc) = (&m.dda, &m.machine);
+            Status {
                 tick: d.now(),
-                positions: d.positions(),
+                positions: mc.positions(),
+                state: m.wire_state(),
                 override_bits: d.feed_override().to_bits(),
+                queue_depth: mc.in_flight(d).min(u16::MAX as u32) as u16,
                 segments_done: d.segments_done(),
                 last_done_id: d.last_done_id(),
                 done_hash: d.done_hash(),
+                faults: mc.faults().mask(),
+                sensors: [0; SENSOR_CHANNELS],
+                machine: mc.state(),
+                causes: mc.active_causes(),
+                homed: mc.is_homed(),
                 ..Status::default()
-            };
-            (s, d.state())
-        });
-        s.state = self.m.wire_state(dda_state);
-        s.queue_depth = self.m.accepted.wrapping_sub(s.segments_done).min(u16::MAX as u32) as u16;
-        s.faults = self.m.faults;
-        s.sensors = [0; SENSOR_CHANNELS];
-        s
+            }
+        })
     }
 
     fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
-        let preparer = Preparer::new(&cfg.machine).map_err(|_| ErrorCode::InvalidConfig)?;
-        if cfg.machine == self.m.config.machine {
-            // Same machine, new scale or soft limits: the DDA, its clock and positions stay.
-            self.m.config = *cfg;
-            return Ok(());
-        }
-        let tick_hz = cfg.machine.tick_hz;
-        if !self.m.tick_rate.supports(tick_hz) {
-            return Err(ErrorCode::InvalidConfig);
-        }
-        let mut fresh = Dda::new(&cfg.machine).map_err(|_| ErrorCode::InvalidConfig)?;
-        let (dda, tick_rate) = (self.dda.get_mut(), &mut self.m.tick_rate);
-        // The swap and the retiming in one critical section: no tick sees a half-done change.
-        let swapped = dda.lock(|d| {
-            if !d.is_idle() {
-                return false;
-            }
-            core::mem::swap(d, &mut fresh);
-            tick_rate.set(tick_hz)
-        });
-        if !swapped {
-            return Err(ErrorCode::OutOfState);
-        }
-        // `fresh` now holds the old DDA.
-        let old_ms = fresh.now() * 1_000 / self.m.config.machine.tick_hz as u64;
-        let m = &mut *self.m;
-        m.clock_base_ms += old_ms;
-        m.preparer = preparer;
-        m.config = *cfg;
-        m.planned = [0; MAX_AXES];
-        m.accepted = 0;
-        m.underruns_seen = 0;
-        m.started = false;
-        m.fed = false;
-        WAKE_TICKS.store(wake_ticks(tick_hz), Relaxed);
-        Ok(())
+        let homing = self.with(|m| m.machine.config().homing());
+        self.install(&BoardConfig::with_homing(*cfg, &homing))
+    }
+
+    fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode> {
+        let wire = self.with(|m| m.machine.config().wire);
+        self.install(&BoardConfig::with_homing(wire, homing))
     }
 
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
-        if self.m.queue.is_full() {
+        if self.link.queue.is_full() {
             return Err(ErrorCode::QueueFull);
         }
-        if self.m.started && self.m.fed && self.m.queue.is_empty() && self.with_dda(|d| d.is_idle())
-        {
-            // Everything fed since the Start has finished: that job is over, this segment
-            // belongs to the next one and waits for its Start.
-            self.m.started = false;
-            self.m.fed = false;
-        }
+        let state = self.command(MachineCommand::Queue(seg))?;
         // Cannot fail: checked for room above.
-        let _ = self.m.queue.push_back(*seg);
-        for (p, &s) in self.m.planned.iter_mut().zip(seg.steps.iter()) {
-            *p += s as i64;
-        }
-        self.m.accepted = self.m.accepted.wrapping_add(1);
-        self.wake_feeder |= self.m.started;
+        let _ = self.link.queue.push_back(*seg);
+        self.wake_feeder |= state != MachineState::Ready;
         Ok(())
     }
 
     fn start(&mut self) -> Result<(), ErrorCode> {
-        self.m.started = true;
-        self.m.fed = false;
+        self.command(MachineCommand::Start)?;
         self.wake_feeder = true;
         Ok(())
     }
 
     fn hold(&mut self) -> Result<(), ErrorCode> {
-        let pending = self.m.started && !self.m.queue.is_empty();
-        // Checked in the same lock as the command: a hold must not outlive the job it was meant
-        // for (an idle DDA would keep it and start the next job held).
-        self.with_dda(|d| {
-            if d.is_idle() && !pending {
-                return Err(ErrorCode::OutOfState);
-            }
-            d.apply(Command::Hold);
-            Ok(())
-        })
+        // A hold must not outlive the job it was meant for: nothing moving and nothing to feed
+        // means there is nothing to hold.
+        let idle = self.with(|m| m.dda.is_idle());
+        if idle && self.link.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.command(MachineCommand::Hold).map(|_| ())
     }
 
     fn resume(&mut self) -> Result<(), ErrorCode> {
-        self.with_dda(|d| d.apply(Command::Resume));
+        self.command(MachineCommand::Resume)?;
+        self.wake_feeder = true;
         Ok(())
     }
 
     fn abort(&mut self) -> Result<(), ErrorCode> {
-        self.m.stop_all(&mut **self.dda.get_mut());
+        self.command(MachineCommand::Abort)?;
+        self.drop_job();
         Ok(())
     }
 
     fn set_override(&mut self, rate: Rate) -> Result<(), ErrorCode> {
-        self.with_dda(|d| d.apply(Command::SetOverride(rate)));
+        self.with(|m| m.dda.apply(Command::SetOverride(rate)));
         Ok(())
     }
 
     fn clear_fault(&mut self) -> Result<(), ErrorCode> {
-        self.m.faults = 0;
+        self.command(MachineCommand::ClearFault)?;
+        self.link.announced = 0;
+        self.drop_job();
+        Ok(())
+    }
+
+    fn home(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::Home)?;
+        self.drop_job();
         Ok(())
     }
 }

@@ -1,14 +1,12 @@
 //! The motion board firmware: an RTIC 2 app that runs the built-in demo job through the same
 //! planner, preparer and DDA as the host model, and prints position snapshots and the end-of-job
-//! report over defmt. With the `link` feature it serves the host link on USART1 instead
-//! (`src/protocol/PROTOCOL.md`, `firmware/link.rs`) and runs the jobs the host sends.
+//! report over defmt. With the `link` feature the app is `firmware/link_app.rs` instead: it
+//! serves the host link on USART1 (`src/protocol/PROTOCOL.md`) and runs the jobs the host sends
+//! through the machine's state machine and fault model (`src/machine/MACHINE.md`).
 //!
 //! Priorities: `tick` (TIM2, 3) steps the DDA and drives the step port; `feeder` (2) prepares
 //! queued segments (the divisions live here, never in the tick) and pushes them into the DDA;
 //! `job` (1) plans segments into the queue, prints snapshots and finally the report.
-//! Link builds: `usart1` (USART1, 2) turns received bytes into frames, runs them through
-//! `BoardLink` and queues the answers for transmission; `link_status` (1) replaces `job` and
-//! sends the periodic Status, woken by the tick every millisecond of DDA time.
 #![no_std]
 #![no_main]
 
@@ -35,72 +33,59 @@ mod bench;
 #[path = "../firmware/link.rs"]
 mod link;
 
+#[cfg(feature = "link")]
+#[path = "../firmware/link_app.rs"]
+mod link_app;
+
+#[cfg(not(feature = "link"))]
 use core::sync::atomic::AtomicBool;
 
 /// The job has handed its last segment to the queue.
+#[cfg(not(feature = "link"))]
 static JOB_DONE: AtomicBool = AtomicBool::new(false);
 /// Every segment is in the DDA: the first idle tick from now on ends the run.
+#[cfg(not(feature = "link"))]
 static ALL_FED: AtomicBool = AtomicBool::new(false);
 /// The feeder stopped because the DDA was full; the tick wakes it when a slot frees up.
+#[cfg(not(feature = "link"))]
 static FEEDER_BLOCKED: AtomicBool = AtomicBool::new(false);
 /// The tick stopped at the end of the job; the job task prints the report.
+#[cfg(not(feature = "link"))]
 static FINISHED: AtomicBool = AtomicBool::new(false);
 
+#[cfg(not(feature = "link"))]
 #[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2, SPI3])]
 mod app {
-    // RTIC names the resource types of every task, even one a feature leaves out: `Producer`,
-    // `DemoJob`, `FrameDecoder` and `MAX_FRAME` stay imported in every build.
-    #[cfg(feature = "link")]
-    use super::link;
     use super::{board, ALL_FED, FEEDER_BLOCKED, FINISHED, JOB_DONE};
     use core::sync::atomic::Ordering::{Acquire, Relaxed, Release};
     use heapless::spsc::Producer;
-    #[cfg(not(feature = "link"))]
     use heapless::spsc::{Consumer, Queue};
-    #[cfg(not(feature = "link"))]
     use motion::dda::{Prepared, Preparer};
-    #[cfg(not(feature = "link"))]
     use motion::demo_job;
     use motion::demo_job::DemoJob;
     use motion::demo_job::SNAPSHOT_PERIOD_TICKS;
-    #[cfg(feature = "link")]
-    use motion::protocol::MAX_FRAME_WIRE;
-    use motion::protocol::{FrameDecoder, MAX_FRAME};
-    #[cfg(not(any(feature = "bench", feature = "link")))]
+    #[cfg(not(feature = "bench"))]
     use motion::report::{Report, Snapshot};
-    #[cfg(not(feature = "link"))]
     use motion::segment::SegmentError;
     use motion::{Dda, Segment};
-    #[cfg(not(feature = "link"))]
     use rtic::mutex_prelude::*;
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
 
     /// Planned segments waiting to be prepared (demo job).
-    #[cfg(not(feature = "link"))]
     const QUEUE: usize = 16;
     type Wake = SignalWriter<'static, ()>;
     type Waiter = SignalReader<'static, ()>;
 
     /// Where the feeder takes its segments from: the demo job's queue, or the host's.
-    #[cfg(not(feature = "link"))]
     type Feed = DemoFeed;
-    #[cfg(feature = "link")]
-    type Feed = link::Link;
-    /// The host link's serial port; nothing in demo builds (RTIC cannot `cfg` shared resources).
-    #[cfg(not(feature = "link"))]
-    type HostPort = ();
-    #[cfg(feature = "link")]
-    type HostPort = link::HostPort;
 
     /// The demo job's side of the queue, with the preparer.
-    #[cfg(not(feature = "link"))]
     pub struct DemoFeed {
         consumer: Consumer<'static, Segment>,
         preparer: Preparer,
     }
 
-    #[cfg(not(feature = "link"))]
     impl DemoFeed {
         fn next_prepared(&mut self) -> Option<Result<Prepared, (u32, SegmentError)>> {
             let seg = self.consumer.dequeue()?;
@@ -117,7 +102,6 @@ mod app {
         dda: Dda,
         step_port: board::StepPort,
         feed: Feed,
-        host_port: HostPort,
     }
 
     #[local]
@@ -128,36 +112,22 @@ mod app {
         estop: board::EStop,
         feeder_waits: Waiter,
         feeder_wakes_job: Wake,
-        #[cfg(not(feature = "link"))]
         producer: Producer<'static, Segment>,
-        #[cfg(not(feature = "link"))]
         demo: DemoJob,
-        #[cfg(not(feature = "link"))]
         job_waits: Waiter,
-        #[cfg(not(feature = "link"))]
         job_wakes_feeder: Wake,
-        #[cfg(not(feature = "link"))]
         cycles: board::CycleCounter,
-        #[cfg(feature = "link")]
-        usart_wakes_feeder: Wake,
-        #[cfg(feature = "link")]
-        status_waits: Waiter,
     }
 
     #[init]
     fn init(cx: init::Context) -> (Shared, Local) {
-        #[cfg(not(feature = "link"))]
-        let resources = init_demo(cx);
-        #[cfg(feature = "link")]
-        let resources = init_link(cx);
-        resources
+        init_demo(cx)
     }
 
     /// Demo (and bench) build: the DDA filled with the start of the demo job.
-    #[cfg(not(feature = "link"))]
     fn init_demo(mut cx: init::Context) -> (Shared, Local) {
         let cfg = demo_job::config();
-        let board::Board { mut tick_timer, mut step_port, cycles, estop, host: _ } =
+        let board::Board { mut tick_timer, mut step_port, cycles, estop, .. } =
             board::init(cx.device, &mut cx.core, cfg.tick_hz);
         defmt::println!(
             "motion-board {=str} board={=str} tick_hz={=u32} axes={=u8}",
@@ -193,7 +163,7 @@ mod app {
         }
 
         (
-            Shared { dda, step_port, feed: DemoFeed { consumer, preparer }, host_port: () },
+            Shared { dda, step_port, feed: DemoFeed { consumer, preparer } },
             Local {
                 tick_timer,
                 tick_wakes_feeder: feeder_wake.clone(),
@@ -210,51 +180,6 @@ mod app {
         )
     }
 
-    /// Link build: an idle machine with the demo configuration, waiting for the host.
-    #[cfg(feature = "link")]
-    fn init_link(mut cx: init::Context) -> (Shared, Local) {
-        let cfg = link::initial_config();
-        let tick_hz = cfg.machine.tick_hz;
-        let board::Board { mut tick_timer, mut step_port, cycles: _, estop, host } =
-            board::init(cx.device, &mut cx.core, tick_hz);
-        defmt::println!(
-            "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud",
-            env!("CARGO_PKG_VERSION"),
-            board::NAME,
-            tick_hz,
-            board::HOST_BAUD
-        );
-        let mut name = heapless::String::<32>::new();
-        // Fits: both board names are short (the link cuts it to 24 bytes anyway).
-        let _ = core::fmt::write(
-            &mut name,
-            format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
-        );
-        let link = defmt::unwrap!(link::Link::new(&name, cfg, tick_timer.rate_control()));
-        let dda = defmt::unwrap!(Dda::new(&cfg.machine).ok());
-
-        let (feeder_wake, feeder_waits) = make_signal!(());
-        let (status_wake, status_waits) = make_signal!(());
-        defmt::unwrap!(feeder::spawn().ok());
-        defmt::unwrap!(link_status::spawn().ok());
-        step_port.enable();
-        tick_timer.start();
-
-        (
-            Shared { dda, step_port, feed: link, host_port: link::HostPort::new(host) },
-            Local {
-                tick_timer,
-                tick_wakes_feeder: feeder_wake.clone(),
-                tick_wakes_job: status_wake.clone(),
-                estop,
-                feeder_waits,
-                feeder_wakes_job: status_wake,
-                usart_wakes_feeder: feeder_wake,
-                status_waits,
-            },
-        )
-    }
-
     #[idle]
     fn idle(_: idle::Context) -> ! {
         loop {
@@ -264,11 +189,9 @@ mod app {
 
     /// One DDA tick at `tick_hz`: step, drive the pins, wake whoever has work.
     ///
-    /// `wake`: the demo job wakes at tick `wake` (every snapshot period); the link's status task
-    /// when the countdown `wake` runs out (every `link::WAKE_TICKS`, i.e. 1 ms: a countdown
-    /// because SetConfig restarts the DDA clock).
+    /// `wake`: the demo job wakes at tick `wake` (every snapshot period).
     #[task(binds = TIM2, priority = 3, shared = [dda, step_port],
-        local = [tick_timer, tick_wakes_feeder, tick_wakes_job, wake: u64 = SNAPSHOT_PERIOD_TICKS])]
+    local = [tick_timer, tick_wakes_feeder, tick_wakes_job, wake: u64 = SNAPSHOT_PERIOD_TICKS])]
     fn tick(cx: tick::Context) {
         let l = cx.local;
         l.tick_timer.clear_update();
@@ -285,17 +208,9 @@ mod app {
                 FEEDER_BLOCKED.store(false, Relaxed);
                 l.tick_wakes_feeder.write(());
             }
-            #[cfg(not(feature = "link"))]
             if now >= *l.wake {
                 *l.wake = now + SNAPSHOT_PERIOD_TICKS;
                 l.tick_wakes_job.write(());
-            }
-            #[cfg(feature = "link")]
-            if *l.wake <= 1 {
-                *l.wake = super::link::WAKE_TICKS.load(Relaxed) as u64;
-                l.tick_wakes_job.write(());
-            } else {
-                *l.wake -= 1;
             }
             if ALL_FED.load(Acquire) && dda.is_idle() {
                 l.tick_timer.stop();
@@ -358,9 +273,8 @@ mod app {
 
     /// Plans the demo job into the queue, prints snapshots, and the report at the end. In a
     /// `bench` build it runs the DDA micro-benchmarks instead.
-    #[cfg(not(feature = "link"))]
     #[task(priority = 1, shared = [dda, step_port],
-        local = [producer, demo, job_waits, job_wakes_feeder, cycles])]
+    local = [producer, demo, job_waits, job_wakes_feeder, cycles])]
     async fn job(cx: job::Context) {
         #[cfg(feature = "bench")]
         run_bench(cx);
@@ -368,14 +282,14 @@ mod app {
         run_demo(cx).await;
     }
 
-    #[cfg(all(feature = "bench", not(feature = "link")))]
+    #[cfg(feature = "bench")]
     fn run_bench(mut cx: job::Context) -> ! {
         let cycles = &*cx.local.cycles;
-        cx.shared.step_port.lock(|port| super::bench::run(cycles, port));
+        cx.shared.step_port.lock(|port| crate::bench::run(cycles, port));
         board::exit(true)
     }
 
-    #[cfg(not(any(feature = "bench", feature = "link")))]
+    #[cfg(not(feature = "bench"))]
     async fn run_demo(mut cx: job::Context<'_>) -> ! {
         let cfg = demo_job::config();
         let l = cx.local;
@@ -413,47 +327,6 @@ mod app {
                 defmt::println!("{=str}", snap.write_line(cfg.axis_count).as_str());
             }
             l.job_waits.wait().await;
-        }
-    }
-
-    /// Host link: received bytes into frames, frames through `BoardLink`, answers into the
-    /// transmit queue (dropped if it cannot hold them whole: the host retransmits); transmit
-    /// bytes out while the USART takes them.
-    #[cfg(feature = "link")]
-    #[task(binds = USART1, priority = 2, shared = [dda, feed, host_port],
-        local = [usart_wakes_feeder, decoder: FrameDecoder<MAX_FRAME> = FrameDecoder::new()])]
-    fn usart1(cx: usart1::Context) {
-        let l = cx.local;
-        let usart1::SharedResources { mut dda, feed, host_port, .. } = cx.shared;
-        (feed, host_port).lock(|link, port| {
-            while let Some(byte) = port.serial.read_byte() {
-                let Some(frame) = l.decoder.push(byte) else {
-                    continue;
-                };
-                let (response, wake_feeder) = link.on_frame(frame, &mut dda);
-                if wake_feeder {
-                    l.usart_wakes_feeder.write(());
-                }
-                port.send(&response);
-            }
-            port.pump();
-        });
-    }
-
-    /// Host link, every millisecond of DDA time: latch faults and send the periodic Status.
-    #[cfg(feature = "link")]
-    #[task(priority = 1, shared = [dda, feed, host_port], local = [status_waits])]
-    async fn link_status(cx: link_status::Context) {
-        let link_status::SharedResources { mut dda, mut feed, mut host_port, .. } = cx.shared;
-        loop {
-            cx.local.status_waits.wait().await;
-            for response in feed.lock(|link| link.poll(&mut dda)).iter().flatten() {
-                // Encoded outside the locks: the USART task keeps running meanwhile.
-                let mut buf = [0u8; MAX_FRAME_WIRE];
-                if let Some(frame) = link::encode(response, &mut buf) {
-                    host_port.lock(|port| port.queue_frame(frame));
-                }
-            }
         }
     }
 }

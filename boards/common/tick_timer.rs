@@ -47,7 +47,16 @@ impl TickTimer {
         self.tim.sr().write(|w| w.uif().clear());
     }
 
-    /// Stops ticking for good (end of job, e-stop).
+    /// The update flag is set again: read after the tick's work, a whole period passed during
+    /// it (an overrun; `motion::machine::OverrunDetector`).
+    #[inline(always)]
+    pub fn update_pending(&self) -> bool {
+        self.tim.sr().read().uif().bit_is_set()
+    }
+
+    /// Stops ticking for good (end of the demo job). The link firmware never stops its tick:
+    /// the machine keeps watching its inputs while idle.
+    #[cfg_attr(feature = "link", allow(dead_code))]
     pub fn stop(&mut self) {
         self.tim.cr1().modify(|_, w| w.cen().disabled());
         self.tim.dier().write(|w| w.uie().disabled());

@@ -9,7 +9,9 @@
 //! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2) |
 //! | ADC1 | force sensors |
 //! | USART1 | host link (`link` feature), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
-//! | EXTI12 | e-stop (EXTI15_10 interrupt) |
+//! | EXTI12 | e-stop (EXTI15_10 interrupt); the tick also reads its level |
+//! | GPIO | limit switches, wire stall (read every tick), spindle enable, wire power |
+//! | IWDG | watchdog (link firmware), ~100 ms, fed only while tick and control run |
 //! | DWT.CYCCNT | cycle counter for benchmarks |
 //! | RTT | defmt log frames (probe-rs) |
 
@@ -19,15 +21,24 @@ mod cycles;
 mod host_serial;
 mod io;
 mod log;
+#[cfg(feature = "link")]
+mod machine_io;
 mod pins;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
+#[cfg(feature = "link")]
+#[path = "../common/watchdog.rs"]
+mod watchdog;
 
 pub use cycles::CycleCounter;
 pub use host_serial::HostSerial;
 pub use io::EStop;
+#[cfg(feature = "link")]
+pub use machine_io::MachineIo;
 pub use step_port::StepPort;
+#[cfg(feature = "link")]
+pub use watchdog::Watchdog;
 // The demo firmware never changes its tick rate.
 #[allow(unused_imports)]
 pub use tick_timer::TickRate;
@@ -49,6 +60,12 @@ pub struct Board {
     /// USART1, configured, interrupts off (only `link` builds use it).
     #[cfg_attr(not(feature = "link"), allow(dead_code))]
     pub host: HostSerial,
+    /// E-stop, limit and wire-stall inputs; spindle and wire-power outputs (`link` builds).
+    #[cfg(feature = "link")]
+    pub io: MachineIo,
+    /// The independent watchdog, not started (the link firmware starts it).
+    #[cfg(feature = "link")]
+    pub iwdg: pac::IWDG,
 }
 
 pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -63,6 +80,10 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         cycles: CycleCounter::new(core),
         estop: EStop::new(dp.EXTI, &dp.SYSCFG),
         host: HostSerial::new(dp.USART1, clocks.pclk2_hz, HOST_BAUD),
+        #[cfg(feature = "link")]
+        io: MachineIo::new(),
+        #[cfg(feature = "link")]
+        iwdg: dp.IWDG,
     }
 }
 

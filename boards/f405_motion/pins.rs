@@ -42,6 +42,17 @@ pub const DRV_EN_N: u32 = 5;
 /// E-stop loop on GPIOB (EXTI line 12): closed to ground = run, open (high) = stop.
 pub const ESTOP: u32 = 12;
 
+/// Limit switches per axis (min, max), normally closed to ground: open (high) = tripped.
+pub const LIMIT_MIN: [(Port, u8); 6] =
+    [(Port::B, 3), (Port::B, 4), (Port::B, 9), (Port::B, 10), (Port::B, 11), (Port::B, 13)];
+pub const LIMIT_MAX: [(Port, u8); 6] =
+    [(Port::B, 14), (Port::B, 15), (Port::A, 11), (Port::A, 12), (Port::A, 15), (Port::C, 12)];
+/// Spindle enable and wire power on GPIOB, active high.
+pub const SPINDLE_EN: u32 = 0;
+pub const WIRE_POWER: u32 = 1;
+/// Wire-lag micro-switch on GPIOA, closed to ground = stalled.
+pub const WIRE_STALL: u32 = 8;
+
 const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
     Pin { name, port, pin, mode }
 }
@@ -79,22 +90,22 @@ pub const PINS: [Pin; 41] = [
     pin("RESOLVER_COS", Port::A, 6, Mode::Analog), // ADC1_IN6
     pin("Z_DAC", Port::A, 4, Mode::Analog),        // DAC1_OUT1: voice-coil Z slide command
     // Outputs that power the process start off: nothing cuts before the firmware says so.
-    pin("SPINDLE_EN", Port::B, 0, LOW),
-    pin("WIRE_POWER", Port::B, 1, LOW),
-    pin("WIRE_STALL", Port::A, 8, IN), // the wire-lag micro-switch, closed to ground = stalled
+    pin("SPINDLE_EN", Port::B, SPINDLE_EN as u8, LOW),
+    pin("WIRE_POWER", Port::B, WIRE_POWER as u8, LOW),
+    pin("WIRE_STALL", Port::A, WIRE_STALL as u8, IN),
     // Limit switches, normally closed to ground: open (high) = tripped or a broken wire.
-    pin("LIMIT_MIN0", Port::B, 3, IN),
-    pin("LIMIT_MIN1", Port::B, 4, IN),
-    pin("LIMIT_MIN2", Port::B, 9, IN),
-    pin("LIMIT_MIN3", Port::B, 10, IN),
-    pin("LIMIT_MIN4", Port::B, 11, IN),
-    pin("LIMIT_MIN5", Port::B, 13, IN),
-    pin("LIMIT_MAX0", Port::B, 14, IN),
-    pin("LIMIT_MAX1", Port::B, 15, IN),
-    pin("LIMIT_MAX2", Port::A, 11, IN),
-    pin("LIMIT_MAX3", Port::A, 12, IN),
-    pin("LIMIT_MAX4", Port::A, 15, IN),
-    pin("LIMIT_MAX5", Port::C, 12, IN),
+    pin("LIMIT_MIN0", LIMIT_MIN[0].0, LIMIT_MIN[0].1, IN),
+    pin("LIMIT_MIN1", LIMIT_MIN[1].0, LIMIT_MIN[1].1, IN),
+    pin("LIMIT_MIN2", LIMIT_MIN[2].0, LIMIT_MIN[2].1, IN),
+    pin("LIMIT_MIN3", LIMIT_MIN[3].0, LIMIT_MIN[3].1, IN),
+    pin("LIMIT_MIN4", LIMIT_MIN[4].0, LIMIT_MIN[4].1, IN),
+    pin("LIMIT_MIN5", LIMIT_MIN[5].0, LIMIT_MIN[5].1, IN),
+    pin("LIMIT_MAX0", LIMIT_MAX[0].0, LIMIT_MAX[0].1, IN),
+    pin("LIMIT_MAX1", LIMIT_MAX[1].0, LIMIT_MAX[1].1, IN),
+    pin("LIMIT_MAX2", LIMIT_MAX[2].0, LIMIT_MAX[2].1, IN),
+    pin("LIMIT_MAX3", LIMIT_MAX[3].0, LIMIT_MAX[3].1, IN),
+    pin("LIMIT_MAX4", LIMIT_MAX[4].0, LIMIT_MAX[4].1, IN),
+    pin("LIMIT_MAX5", LIMIT_MAX[5].0, LIMIT_MAX[5].1, IN),
 ];
 
 /// No pin is assigned twice (checked at compile time).

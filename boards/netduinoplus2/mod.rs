@@ -6,6 +6,7 @@
 //! | --- | --- |
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
+//! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
 //! | USART1 | host link (`link` feature), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
@@ -17,6 +18,9 @@ mod log;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
+#[cfg(feature = "link")]
+#[path = "../common/watchdog.rs"]
+mod watchdog;
 
 pub use cycles::CycleCounter;
 pub use host_serial::HostSerial;
@@ -25,6 +29,8 @@ pub use step_port::StepPort;
 #[allow(unused_imports)]
 pub use tick_timer::TickRate;
 pub use tick_timer::TickTimer;
+#[cfg(feature = "link")]
+pub use watchdog::Watchdog;
 
 use stm32f4::stm32f405 as pac;
 
@@ -42,6 +48,12 @@ pub struct Board {
     /// USART1, configured, interrupts off (only `link` builds use it).
     #[cfg_attr(not(feature = "link"), allow(dead_code))]
     pub host: HostSerial,
+    /// No switches under QEMU: every input reads "all clear".
+    #[cfg(feature = "link")]
+    pub io: MachineIo,
+    /// QEMU ignores the IWDG; started anyway so the link firmware is the same code.
+    #[cfg(feature = "link")]
+    pub iwdg: pac::IWDG,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -52,6 +64,10 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         cycles: CycleCounter::new(dp.TIM5),
         estop: EStop,
         host: HostSerial::new(dp.USART1, clocks.pclk2_hz, HOST_BAUD),
+        #[cfg(feature = "link")]
+        io: MachineIo,
+        #[cfg(feature = "link")]
+        iwdg: dp.IWDG,
     }
 }
 
@@ -63,6 +79,31 @@ pub fn exit(ok: bool) -> ! {
     loop {
         cortex_m::asm::wfi();
     }
+}
+
+/// Levels read in one tick (see the real board's `machine_io.rs`).
+#[cfg(feature = "link")]
+#[derive(Clone, Copy, Default)]
+pub struct RawInputs {
+    pub estop: bool,
+    pub limit_min: u8,
+    pub limit_max: u8,
+}
+
+/// QEMU models no GPIO: no switch is ever open, and the outputs go nowhere. The fault paths
+/// these inputs drive are exercised by the scenario firmware's `fault_*` scenarios instead.
+#[cfg(feature = "link")]
+pub struct MachineIo;
+
+#[cfg(feature = "link")]
+impl MachineIo {
+    #[inline]
+    pub fn read(&mut self) -> RawInputs {
+        RawInputs::default()
+    }
+
+    #[inline]
+    pub fn write(&mut self, _o: &motion::machine::Outputs) {}
 }
 
 /// QEMU has no e-stop input: the interrupt is never raised.

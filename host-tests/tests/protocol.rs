@@ -6,6 +6,7 @@ use std::collections::{HashSet, VecDeque};
 use std::time::Instant;
 
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
+use motion::machine::MachineState;
 use motion::protocol::*;
 use motion::segment::{Rate, Segment};
 
@@ -123,6 +124,8 @@ fn all_requests() -> Vec<Request> {
         RequestBody::GetStatus,
         RequestBody::SetStatusPeriod { ms: 250 },
         RequestBody::ClearFault,
+        RequestBody::Home,
+        RequestBody::SetHoming(HomingConfig::NONE),
     ]
     .into_iter()
     .enumerate()
@@ -144,6 +147,9 @@ fn all_responses() -> Vec<Response> {
         faults: FaultCode::EStop.bit() | FaultCode::SensorFault.bit(),
         sensors: [i32::MIN, 0, 5, i32::MAX],
         next_seq: 1234,
+        machine: MachineState::Holding,
+        causes: FaultCode::EStop.bit(),
+        homed: true,
     };
     let hello = HelloInfo {
         version: PROTOCOL_VERSION,
@@ -172,7 +178,7 @@ fn all_responses() -> Vec<Response> {
         NakDetail::Segment { index: 2, reason: SegmentReason::AxisRate, axis: Some(1) },
         NakDetail::Segment { index: 0, reason: SegmentReason::Duration, axis: None },
         NakDetail::Config { field: FixedStr::truncated("accel_steps_per_s2"), axis: Some(4) },
-        NakDetail::State(WireState::Held),
+        NakDetail::State(MachineState::Holding),
     ];
     for (i, &code) in ErrorCode::ALL.iter().enumerate() {
         v.push(Response::Nak {
@@ -208,7 +214,7 @@ fn every_message_round_trips_through_frames() {
     }
     // The kinds are all covered.
     let kinds: HashSet<u8> = reqs.iter().map(|r| r.body.kind()).collect();
-    assert_eq!(kinds.len(), 12);
+    assert_eq!(kinds.len(), 14);
 }
 
 #[test]
@@ -547,7 +553,13 @@ fn refusals_in_every_state_change_nothing() {
     );
     assert_refused(&mut board, &mut t, next(), q(&[seg(1, [11_000_000, 0, 0])]), InvalidSegment);
     // A refused Hello does not consume a seq (nor end the session).
-    assert_refused(&mut board, &mut t, 0, RequestBody::Hello { version: 2, nonce: 1 }, Version);
+    assert_refused(
+        &mut board,
+        &mut t,
+        0,
+        RequestBody::Hello { version: PROTOCOL_VERSION + 1, nonce: 1 },
+        Version,
+    );
     // Moving.
     for _ in 0..2 {
         assert!(matches!(
@@ -660,7 +672,7 @@ fn random_request(rng: &mut Rng, next_seq: u32) -> Request {
         _ => next_seq.wrapping_add(rng.below(2) as u32),
     };
     let small = |rng: &mut Rng| (rng.below(400) as i32 - 200) * (rng.below(4) != 0) as i32;
-    let body = match rng.below(13) {
+    let body = match rng.below(15) {
         0 if rng.chance(0.9) => RequestBody::GetConfig,
         0 => RequestBody::Hello {
             version: if rng.chance(0.9) { PROTOCOL_VERSION } else { rng.next() as u16 },
@@ -705,6 +717,14 @@ fn random_request(rng: &mut Rng, next_seq: u32) -> Request {
         }
         10 => RequestBody::SetOverride { rate_bits: rng.next() as u32 >> rng.below(4) },
         11 => RequestBody::SetStatusPeriod { ms: rng.next() as u16 >> rng.below(16) },
+        12 => RequestBody::Home,
+        13 => {
+            let mut h = HomingConfig::NONE;
+            h.count = rng.below(3) as u8;
+            h.order[0] = rng.below(4) as u8;
+            h.axes[h.order[0] as usize].search_hz = rng.below(100_000) as u32;
+            RequestBody::SetHoming(h)
+        }
         _ => RequestBody::ClearFault,
     };
     Request { seq, body }

@@ -9,7 +9,7 @@ use crate::plan::{self, Summary};
 use crate::qemu::{self, Qemu};
 use crate::runner::{self, RunOptions};
 use crate::transport::{self, LinkTarget, Transport};
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use motion::protocol::{HostConfig, Reply, RequestBody, MAX_OVERRIDE_BITS};
 use std::io::IsTerminal;
@@ -81,6 +81,16 @@ pub enum Cmd {
         #[command(flatten)]
         link: LinkArgs,
     },
+    /// Run the homing sequence and wait until the board is homed.
+    Home {
+        #[command(flatten)]
+        link: LinkArgs,
+    },
+    /// Unlatch the board's faults (refused while a cause is still present).
+    ClearFault {
+        #[command(flatten)]
+        link: LinkArgs,
+    },
     /// Set the feed override factor (0..=2).
     Override {
         #[arg(value_parser = parse_override)]
@@ -111,9 +121,14 @@ pub struct LinkArgs {
     /// Serial speed (8N1).
     #[arg(long, value_name = "N", default_value_t = transport::DEFAULT_BAUD)]
     pub baud: u32,
-    /// Start the link firmware in QEMU (netduinoplus2) and talk to it (`run` only).
+    /// Start the link firmware in QEMU (netduinoplus2) and talk to it (`run` only; implies
+    /// --home: the simulated machine has no switches).
     #[arg(long, conflicts_with = "tcp")]
     pub qemu: bool,
+    /// Home the board before the job if it is not homed (`run` only); without it an unhomed
+    /// board is an error.
+    #[arg(long)]
+    pub home: bool,
     /// With --qemu: the firmware ELF [default: target/fw-netduinoplus2-link/firmware, built
     /// with `cargo xtask build --board netduinoplus2 --link` when missing].
     #[arg(long, value_name = "PATH", requires = "qemu")]
@@ -383,6 +398,8 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Hold { link } => one_request(&link, RequestBody::Hold, "hold"),
         Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),
         Cmd::Abort { link } => one_request(&link, RequestBody::Abort, "abort"),
+        Cmd::ClearFault { link } => one_request(&link, RequestBody::ClearFault, "clear-fault"),
+        Cmd::Home { link } => home_board(&link),
         Cmd::Override { factor, link } => {
             let rate_bits = ((factor * (1u64 << 30) as f64).round() as u32).min(MAX_OVERRIDE_BITS);
             one_request(&link, RequestBody::SetOverride { rate_bits }, "override")
@@ -449,6 +466,7 @@ pub(crate) fn stream(
         csv,
         progress: true,
         interrupt: Some(interrupt),
+        home: link.home || link.qemu || link.sim,
     };
     let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
     println!("job        {label} ({segments} segments) on {target}");
@@ -471,6 +489,18 @@ pub(crate) fn stream(
 }
 
 /// `status`, `hold`, `resume`, `abort`, `override`: one request, its answer printed.
+/// `home`: Home, then wait for the board to report itself homed.
+fn home_board(link: &LinkArgs) -> Result<()> {
+    if link.qemu {
+        bail!("--qemu starts a fresh board for `run` only (which homes it); use --tcp HOST:PORT");
+    }
+    let target = link.target()?;
+    let (mut t, _guard) = link.open()?;
+    let mut s = Session::new(&mut t, link.host_config(&target));
+    s.connect()?;
+    runner::home(&mut s, &|m: &str| println!("motionctl: {m}")).map_err(|e| anyhow!("{e}"))
+}
+
 fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
     if link.qemu {
         bail!(
@@ -490,7 +520,13 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
         Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
         Ok(Reply::Status(st)) => {
             println!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
-            println!("state      {:?}, tick {}", st.state, st.tick);
+            println!(
+                "state      {:?} ({}), motion {:?}, tick {}",
+                st.machine,
+                if st.homed { "homed" } else { "not homed" },
+                st.state,
+                st.tick
+            );
             for i in 0..info.axes as usize {
                 let spm = scale
                     .map(|c| c.scale[i].steps_per_unit_milli as f64 / 1000.0)
@@ -515,6 +551,17 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
                     .map(|f| f.name())
                     .collect();
                 println!("faults     {}", names.join(", "));
+            }
+            if st.causes != 0 {
+                let names: Vec<&str> = motion::protocol::FaultCode::ALL
+                    .iter()
+                    .filter(|f| st.causes & f.bit() != 0)
+                    .map(|f| f.name())
+                    .collect();
+                println!(
+                    "causes     {} (present now: clear-fault waits for them)",
+                    names.join(", ")
+                );
             }
         }
         Ok(_) => println!("{what}: ok"),

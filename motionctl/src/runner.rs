@@ -17,9 +17,10 @@ use crate::plan::Output;
 use crate::progress::Progress;
 use crate::transport::Transport;
 use motion::dda::Command;
+use motion::machine::MachineState;
 use motion::protocol::{
     AxisScale, ErrorCode, FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    Status, WireConfig, WireState, MAX_SEGMENTS_PER_FRAME,
+    Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::{order_hash, Segment};
 use motion::MAX_AXES;
@@ -43,6 +44,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Set by Ctrl-C: abort the board and stop.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// Home the board first if it is not homed (else such a board refuses the job).
+    pub home: bool,
 }
 
 impl Default for RunOptions {
@@ -55,6 +58,7 @@ impl Default for RunOptions {
             csv: None,
             progress: false,
             interrupt: None,
+            home: false,
         }
     }
 }
@@ -252,6 +256,9 @@ enum Pending {
 
 /// Shortest interval between credit polls.
 const POLL_EVERY: Duration = Duration::from_millis(10);
+/// Longest the host stays silent during a job: the board holds the job and latches LinkLost
+/// after `LINK_TIMEOUT_MS` (1 s of machine time) without a valid frame.
+pub const HEARTBEAT_EVERY: Duration = Duration::from_millis(250);
 
 fn status_of(reply: Reply) -> Option<Status> {
     match reply {
@@ -262,6 +269,60 @@ fn status_of(reply: Reply) -> Option<Status> {
 
 fn link_err(e: LinkFailure) -> RunError {
     err(e.to_string())
+}
+
+/// Longest a homing sequence may take (board time is not visible here: wall clock).
+pub const HOMING_TIMEOUT: Duration = Duration::from_secs(120);
+
+/// Sends `Home` and waits until the board is `Ready` (homed), polling its status.
+pub fn home(s: &mut Session, say: &dyn Fn(&str)) -> Result<(), RunError> {
+    match s.request(RequestBody::Home).map_err(link_err)? {
+        Ok(_) => say("homing"),
+        Err(r) => return Err(err(format!("Home refused: {}", describe_rejection(&r)))),
+    }
+    let t0 = Instant::now();
+    loop {
+        let st = match s.request(RequestBody::GetStatus).map_err(link_err)? {
+            Ok(Reply::Status(st)) => st,
+            Ok(_) => return Err(err("the board answered GetStatus without a status")),
+            Err(r) => return Err(err(format!("GetStatus refused: {}", describe_rejection(&r)))),
+        };
+        match st.machine {
+            MachineState::Ready => {
+                say(&format!("homed at {:?} steps", &st.positions[..]));
+                return Ok(());
+            }
+            MachineState::Homing => {}
+            m => {
+                return Err(err(format!(
+                    "homing ended in {m:?} (faults: {})",
+                    fault_names(st.faults).if_empty("none")
+                )))
+            }
+        }
+        if t0.elapsed() > HOMING_TIMEOUT {
+            let _ = s.request(RequestBody::Abort);
+            return Err(err(format!(
+                "homing took longer than {} s: aborted",
+                HOMING_TIMEOUT.as_secs()
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+trait IfEmpty {
+    fn if_empty(self, alt: &str) -> String;
+}
+
+impl IfEmpty for String {
+    fn if_empty(self, alt: &str) -> String {
+        if self.is_empty() {
+            alt.to_string()
+        } else {
+            self
+        }
+    }
 }
 
 /// Connects, configures and streams `outputs`; `expected_steps` = the host model's final
@@ -304,21 +365,27 @@ pub fn run(
     };
     let st = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
         .ok_or_else(|| err("the board answered GetStatus without a status"))?;
-    if st.faults != 0 || st.state == WireState::Faulted {
+    // A board without a stored config boots with ConfigMissing latched; sending the job's
+    // config removes that cause, so that one fault (alone) is cleared here. Any other fault is
+    // the operator's to look at.
+    let config_missing = FaultCode::ConfigMissing.bit();
+    if st.faults & !config_missing != 0 {
         return Err(err(format!(
-            "the board has faults latched ({}): clear them (motionctl abort) first",
+            "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
             fault_names(st.faults)
         )));
     }
-    if st.state != WireState::Idle || st.queue_depth != 0 {
+    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault)
+        || st.queue_depth != 0
+    {
         return Err(err(format!(
             "the board is busy (state {:?}, {} segments queued): run `motionctl abort` first",
-            st.state, st.queue_depth
+            st.machine, st.queue_depth
         )));
     }
     let want = wire_config(job, program);
     let have = query(&mut s, RequestBody::GetConfig, "GetConfig")?;
-    if have == Reply::Config(want) {
+    if have == Reply::Config(want) && st.faults == 0 {
         say(&progress, "the board already has the job's machine config");
     } else {
         match s.request(RequestBody::SetConfig(want)).map_err(link_err)? {
@@ -331,6 +398,21 @@ pub fn run(
                 )));
             }
         }
+    }
+    if st.faults == config_missing {
+        query(&mut s, RequestBody::ClearFault, "ClearFault")?;
+        say(&progress, "cleared ConfigMissing (the board had no stored config)");
+    }
+    let st = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
+        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
+    if st.machine != MachineState::Ready {
+        if !opts.home {
+            return Err(err(format!(
+                "the board is not homed (state {:?}): home it (`motionctl home`) or pass --home",
+                st.machine
+            )));
+        }
+        home(&mut s, &|m| say(&progress, m))?;
     }
     query(&mut s, RequestBody::SetStatusPeriod { ms: opts.status_period_ms }, "SetStatusPeriod")?;
     s.streaming = opts.status_period_ms > 0;
@@ -379,6 +461,7 @@ pub fn run(
     let mut pause_wait: Option<mpsc::Receiver<()>> = None;
     let mut finished_at: Option<Instant> = None;
     let mut poll_in_flight = false;
+    let mut last_tx = (s.host.sent_frames, Instant::now());
     let mut last_poll = Instant::now();
     let job_done = |st: &Status| st.segments_done.wrapping_sub(base.segments_done);
 
@@ -599,6 +682,20 @@ pub fn run(
             last_poll = Instant::now();
         }
 
+        // Heartbeat: a job the host has gone quiet on (everything sent, long segments running)
+        // still hears from it, so the board does not take the silence for a lost link.
+        if s.host.sent_frames != last_tx.0 {
+            last_tx = (s.host.sent_frames, Instant::now());
+        } else if last_tx.1.elapsed() >= HEARTBEAT_EVERY
+            && !poll_in_flight
+            && s.host.window_free() > 0
+        {
+            let seq = s.send(RequestBody::GetStatus).map_err(link_err)?;
+            pending.insert(seq, Pending::Poll);
+            poll_in_flight = true;
+            last_poll = Instant::now();
+        }
+
         // Start: first once the queue is full or everything before the next event is queued;
         // again whenever a fresh status shows the board idle with segments waiting.
         let waiting = report.acked > job_done(&latest);
@@ -606,7 +703,8 @@ pub fn run(
         let nothing_more = !matches!(outputs.get(next_out), Some(Output::Segment(_)));
         let ready = ever_started
             || (report.acked == sent_segs && (s.host.segment_credits() == 0 || nothing_more));
-        if start_seq.is_none() && waiting && fresh && latest.state == WireState::Idle && ready {
+        if start_seq.is_none() && waiting && fresh && latest.machine == MachineState::Ready && ready
+        {
             let seq = s.send(RequestBody::Start).map_err(link_err)?;
             pending.insert(seq, Pending::Start);
             start_seq = Some(seq);
@@ -640,7 +738,7 @@ pub fn run(
         if all_sent
             && after_batches
             && job_done(&latest) == total
-            && latest.state == WireState::Idle
+            && latest.machine == MachineState::Ready
             && latest.queue_depth == 0
         {
             finished_at.get_or_insert_with(Instant::now);

@@ -48,7 +48,9 @@ fn prepare(src: &str) -> Prepared {
 }
 
 fn opts(rto_ms: u64) -> RunOptions {
-    RunOptions { host: HostConfig { rto_ms, window: 8 }, ..RunOptions::default() }
+    // The simulated board has no switches: homing takes it where it stands (`--sim` implies
+    // `--home` too).
+    RunOptions { host: HostConfig { rto_ms, window: 8 }, home: true, ..RunOptions::default() }
 }
 
 fn run(p: &Prepared, t: &mut dyn Transport, o: RunOptions) -> Result<RunReport, String> {
@@ -144,5 +146,18 @@ fn a_board_of_another_protocol_version_is_named() {
     let p = prepare(&zigzag_job(10));
     let mut t = OtherVersion { dec: FrameDecoder::new(), out: Vec::new() };
     let e = run(&p, &mut t, opts(20)).unwrap_err();
-    assert!(e.contains("does not speak protocol v1"), "{e}");
+    let want = format!("does not speak protocol v{}", motion::protocol::PROTOCOL_VERSION);
+    assert!(e.contains(&want), "{e}");
+}
+
+#[test]
+fn an_unhomed_board_refuses_the_job_unless_asked_to_home() {
+    let p = prepare(&zigzag_job(10));
+    let mut board = SimBoard::new(SIM_CAPACITY, 100.0);
+    let e = run(&p, &mut board, RunOptions { home: false, ..opts(20) }).unwrap_err();
+    assert!(e.contains("not homed"), "{e}");
+    assert_eq!(board.target.segments_done, 0, "nothing ran");
+    let r = run(&p, &mut board, opts(20)).unwrap();
+    assert!(r.ok(), "{:?}", r.problems);
+    assert!(board.target.homed);
 }

@@ -73,6 +73,20 @@ impl BoardConfig {
         }
     }
 
+    /// `wire` with the homing parameters of `h` (validate before use).
+    pub fn with_homing(wire: WireConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
+        BoardConfig { wire, home_order: h.order, home_count: h.count, home: h.axes }
+    }
+
+    /// The homing parameters, as the link carries them.
+    pub fn homing(&self) -> crate::protocol::HomingConfig {
+        crate::protocol::HomingConfig {
+            order: self.home_order,
+            count: self.home_count,
+            axes: self.home,
+        }
+    }
+
     /// Every check of [`WireConfig::validate`] plus the homing parameters; the error names the
     /// field (and axis).
     pub fn validate(&self) -> Result<(), ConfigError> {

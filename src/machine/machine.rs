@@ -511,7 +511,9 @@ impl Machine {
         }
     }
 
-    fn in_flight(&self, dda: &Dda) -> u32 {
+    /// Segments admitted since the last stop and not finished yet (queued in the link, in the
+    /// DDA's ready queue, or running).
+    pub fn in_flight(&self, dda: &Dda) -> u32 {
         self.admitted.wrapping_sub(dda.segments_done().wrapping_sub(self.done_base))
     }
 

@@ -6,11 +6,14 @@
 use core::fmt::Write;
 
 /// Where the machine is in its life cycle.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum MachineState {
     /// Power-up: loading the persisted configuration. Leaves by itself.
+    #[default]
     Boot = 0,
     /// Configured, not homed: positions mean nothing yet, so no job may run.
     Idle = 1,

@@ -8,9 +8,10 @@ use super::bounded::{FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
 use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTiming, MAX_AXES};
 use crate::dda::MotionState;
+use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -54,7 +55,7 @@ pub enum RequestBody {
         nonce: u32,
     },
     GetConfig,
-    /// Only while idle with an empty queue.
+    /// In `Idle`, `Ready` (loses homing) or `Fault`, with an empty queue.
     SetConfig(WireConfig),
     /// All-or-nothing: every segment is checked (and credits counted) before any is queued.
     QueueSegments(SegmentBatch),
@@ -72,6 +73,25 @@ pub enum RequestBody {
         ms: u16,
     },
     ClearFault,
+    /// Run the homing sequence (`Idle` or `Ready`); the machine reports `Homing`, then `Ready`.
+    Home,
+    /// Replace the homing parameters (a `SetConfig` that keeps the machine config; loses homing).
+    SetHoming(HomingConfig),
+}
+
+/// How the machine homes: `order[..count]` are the axes homed in turn (0 = home where it
+/// stands), each with its `axes[axis]` parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HomingConfig {
+    pub order: [u8; MAX_AXES],
+    pub count: u8,
+    pub axes: [HomeAxis; MAX_AXES],
+}
+
+impl HomingConfig {
+    /// No switches: `Home` takes the current position as it is.
+    pub const NONE: HomingConfig =
+        HomingConfig { order: [0; MAX_AXES], count: 0, axes: [HomeAxis::UNUSED; MAX_AXES] };
 }
 
 impl RequestBody {
@@ -90,6 +110,8 @@ impl RequestBody {
             RequestBody::GetStatus => 9,
             RequestBody::SetStatusPeriod { .. } => 10,
             RequestBody::ClearFault => 11,
+            RequestBody::Home => 12,
+            RequestBody::SetHoming(_) => 13,
         }
     }
 
@@ -148,8 +170,9 @@ pub enum NakDetail {
         field: FixedStr<FIELD_NAME_LEN>,
         axis: Option<u8>,
     },
-    /// `OutOfState`: the state the board is in.
-    State(WireState),
+    /// `OutOfState`: the machine state the board is in (see the command table in
+    /// `src/machine/MACHINE.md`).
+    State(MachineState),
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -215,6 +238,13 @@ pub struct Status {
     pub sensors: [i32; SENSOR_CHANNELS],
     /// Board's next expected seq (filled in by `BoardLink`); `credits` hold after `next_seq - 1`.
     pub next_seq: u32,
+    /// The machine's state (`src/machine/MACHINE.md`): `state` says how the axes move, this
+    /// says what the board accepts.
+    pub machine: MachineState,
+    /// Fault causes present now (`FaultCode` bits): `ClearFault` is refused while one is.
+    pub causes: u32,
+    /// The homing is trusted (positions are machine coordinates).
+    pub homed: bool,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

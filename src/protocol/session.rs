@@ -18,23 +18,27 @@
 //! `Hello` with the current session's seq and nonce is a retransmission; any other valid
 //! Hello starts a new session. Hello never touches the machine.
 //!
-//! # States in which each request is accepted (else `OutOfState`)
+//! # States in which each request is accepted
 //!
-//! | Request | Accepted when |
+//! One table decides: the machine's command table ([`crate::machine::state::TABLE`], rendered in
+//! `src/machine/MACHINE.md`). A request whose command the table refuses in the target's
+//! [`LinkTarget::machine_state`] gets `OutOfState` with `NakDetail::State` and changes nothing.
+//! Requests that are not machine commands (Hello, GetConfig, GetStatus, SetStatusPeriod,
+//! SetOverride) are accepted in every state. On top of the table the link asks:
+//!
+//! | Request | Also needs |
 //! |---|---|
-//! | Hello, GetConfig, GetStatus, SetStatusPeriod, SetOverride, Abort | always |
-//! | SetConfig | Idle with an empty queue |
-//! | QueueSegments | not Faulted (and the config valid, else `InvalidConfig`) |
-//! | Start | Idle (and the config valid, else `InvalidConfig`) |
-//! | Hold | Moving |
-//! | Resume | Stopping or Held |
-//! | ClearFault | Faulted |
+//! | SetConfig, SetHoming | an empty queue (else `OutOfState`), a valid config (`InvalidConfig` naming the field) |
+//! | QueueSegments | credits for the whole batch, every segment valid and inside the soft limits |
+//! | Hold | motion to hold (the target refuses an idle DDA with nothing to feed) |
+//! | ClearFault | no fault cause still active (the target refuses with `OutOfState`) |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
 use super::frame::FrameError;
 use super::messages::*;
 use crate::config::{ConfigError, MAX_AXES};
+use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::segment::{Rate, Segment};
 
 /// Outcomes remembered for retransmissions; the host's window must not exceed it.
@@ -42,7 +46,10 @@ pub const RESULT_MEMORY: usize = 32;
 
 /// What the board's link drives. Every method that returns `Err` must have changed nothing.
 pub trait LinkTarget {
+    /// How the axes move.
     fn state(&self) -> WireState;
+    /// Where the machine is in its life cycle: what the command table checks.
+    fn machine_state(&self) -> MachineState;
     /// Free slots in the segment queue.
     fn credits(&self) -> u16;
     fn queue_capacity(&self) -> u16;
@@ -63,6 +70,29 @@ pub trait LinkTarget {
     /// `rate` is within 0..=2.0.
     fn set_override(&mut self, rate: Rate) -> Result<(), ErrorCode>;
     fn clear_fault(&mut self) -> Result<(), ErrorCode>;
+    fn home(&mut self) -> Result<(), ErrorCode>;
+    /// Called with homing parameters validated against the current config, only with an empty
+    /// queue.
+    fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode>;
+}
+
+/// The machine command a request is, if it is one (queries and link settings are not).
+pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
+    Some(match body {
+        RequestBody::SetConfig(_) | RequestBody::SetHoming(_) => CommandKind::SetConfig,
+        RequestBody::Home => CommandKind::Home,
+        RequestBody::QueueSegments(_) => CommandKind::Queue,
+        RequestBody::Start => CommandKind::Start,
+        RequestBody::Hold => CommandKind::Hold,
+        RequestBody::Resume => CommandKind::Resume,
+        RequestBody::Abort => CommandKind::Abort,
+        RequestBody::ClearFault => CommandKind::ClearFault,
+        RequestBody::Hello { .. }
+        | RequestBody::GetConfig
+        | RequestBody::GetStatus
+        | RequestBody::SetOverride { .. }
+        | RequestBody::SetStatusPeriod { .. } => return None,
+    })
 }
 
 type Outcome = Result<(), (ErrorCode, NakDetail)>;
@@ -308,26 +338,39 @@ impl BoardLink {
         req: &Request,
         t: &mut impl LinkTarget,
     ) -> Result<Reply, (ErrorCode, NakDetail)> {
-        let state = t.state();
-        let out_of_state = Err((ErrorCode::OutOfState, NakDetail::State(state)));
+        let machine = t.machine_state();
+        let out_of_state = Err((ErrorCode::OutOfState, NakDetail::State(machine)));
+        if let Some(kind) = command_kind(&req.body) {
+            if cell(machine, kind) == Cell::Refused {
+                return out_of_state;
+            }
+        }
         let plain = |code: ErrorCode| (code, NakDetail::None);
+        let queue_empty = t.credits() == t.queue_capacity();
         match &req.body {
             // Handled before sequencing; never reaches here.
             RequestBody::Hello { .. } => Err(plain(ErrorCode::Internal)),
             RequestBody::GetConfig => Ok(Reply::Config(t.config())),
             RequestBody::GetStatus => Ok(Reply::Status(self.status(t))),
             RequestBody::SetConfig(cfg) => {
-                if state != WireState::Idle || t.credits() != t.queue_capacity() {
+                if !queue_empty {
                     return out_of_state;
                 }
                 cfg.validate().map_err(config_nak)?;
                 t.set_config(cfg).map_err(plain)?;
                 Ok(Reply::None)
             }
-            RequestBody::QueueSegments(batch) => {
-                if state == WireState::Faulted {
+            RequestBody::SetHoming(h) => {
+                if !queue_empty {
                     return out_of_state;
                 }
+                crate::machine::BoardConfig::with_homing(t.config(), h)
+                    .validate()
+                    .map_err(config_nak)?;
+                t.set_homing(h).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::QueueSegments(batch) => {
                 if batch.len() > t.credits() as usize {
                     return Err(plain(ErrorCode::QueueFull));
                 }
@@ -358,29 +401,24 @@ impl BoardLink {
                 Ok(Reply::None)
             }
             RequestBody::Start => {
-                if state != WireState::Idle {
-                    return out_of_state;
-                }
                 t.config().validate().map_err(config_nak)?;
                 t.start().map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::Hold => {
-                if state != WireState::Moving {
-                    return out_of_state;
-                }
                 t.hold().map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::Resume => {
-                if !matches!(state, WireState::Stopping | WireState::Held) {
-                    return out_of_state;
-                }
                 t.resume().map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::Abort => {
                 t.abort().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::Home => {
+                t.home().map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::SetOverride { rate_bits } => {
@@ -399,10 +437,10 @@ impl BoardLink {
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {
-                if state != WireState::Faulted {
-                    return out_of_state;
-                }
-                t.clear_fault().map_err(plain)?;
+                t.clear_fault().map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
                 Ok(Reply::None)
             }
         }

@@ -1,12 +1,17 @@
 //! A hardware-free [`LinkTarget`]: a segment queue and a motion state, enough to exercise the link
 //! in tests, in the fuzzers and in `motionctl`'s loopback mode. No allocation.
+//!
+//! Its machine state follows the machine's command table ([`crate::machine::cell`]) with two
+//! simplifications: homing completes at once, and a job ends when the queue runs dry after a
+//! segment that ends at rest.
 
 use heapless::Deque;
 
 use super::errors::{ErrorCode, FaultCode};
-use super::messages::{Status, WireConfig, WireState};
+use super::messages::{HomingConfig, Status, WireConfig, WireState};
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
+use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::segment::{Rate, Segment};
 
 /// Largest queue a `SimTarget` can have.
@@ -16,6 +21,9 @@ pub const SIM_QUEUE_MAX: usize = 64;
 #[derive(Clone, Debug)]
 pub struct SimTarget {
     pub config: WireConfig,
+    pub homing: HomingConfig,
+    pub machine: MachineState,
+    pub homed: bool,
     queue: Deque<Segment, SIM_QUEUE_MAX>,
     capacity: u16,
     pub running: bool,
@@ -39,6 +47,7 @@ pub struct SimTarget {
 impl PartialEq for SimTarget {
     fn eq(&self, o: &Self) -> bool {
         self.config == o.config
+            && (self.homing, self.machine, self.homed) == (o.homing, o.machine, o.homed)
             && self.queue.iter().eq(o.queue.iter())
             && (self.capacity, self.running, self.held) == (o.capacity, o.running, o.held)
             && (self.override_bits, self.faults, self.tick) == (o.override_bits, o.faults, o.tick)
@@ -50,10 +59,14 @@ impl PartialEq for SimTarget {
 }
 
 impl SimTarget {
-    /// `capacity` is clamped to [`SIM_QUEUE_MAX`].
+    /// Homed and `Ready` (the state after SetConfig and Home); `capacity` is clamped to
+    /// [`SIM_QUEUE_MAX`].
     pub fn new(config: WireConfig, capacity: u16) -> Self {
         SimTarget {
             config,
+            homing: HomingConfig::NONE,
+            machine: MachineState::Ready,
+            homed: true,
             queue: Deque::new(),
             capacity: capacity.min(SIM_QUEUE_MAX as u16),
             running: false,
@@ -89,6 +102,11 @@ impl SimTarget {
         self.last_done_id = Some(seg.id);
         self.done_hash = crate::segment::order_hash(self.done_hash, seg.id);
         self.tick += seg.duration_ticks as u64;
+        if self.queue.is_empty() && seg.exit_rate.to_bits() == 0 {
+            // The job ended at rest.
+            self.running = false;
+            self.machine = MachineState::Ready;
+        }
         Some(seg)
     }
 
@@ -99,6 +117,26 @@ impl SimTarget {
         self.planned = self.positions;
         self.running = false;
         self.held = false;
+        self.machine = MachineState::Fault;
+    }
+
+    /// The table's transition for an accepted command (`BoardLink` checked it was allowed).
+    fn take(&mut self, cmd: CommandKind) {
+        self.machine = match cell(self.machine, cmd) {
+            // Instant homing: there are no axes to move.
+            Cell::To(MachineState::Homing) => {
+                self.homed = true;
+                MachineState::Ready
+            }
+            Cell::To(s) => s,
+            Cell::Recover if self.homed => MachineState::Ready,
+            Cell::Recover => MachineState::Idle,
+            Cell::Stay | Cell::Refused => self.machine,
+        };
+        if cmd == CommandKind::SetConfig {
+            self.homed = false;
+        }
+        self.mutations += 1;
     }
 }
 
@@ -113,6 +151,10 @@ impl LinkTarget for SimTarget {
         } else {
             WireState::Idle
         }
+    }
+
+    fn machine_state(&self) -> MachineState {
+        self.machine
     }
 
     fn credits(&self) -> u16 {
@@ -145,12 +187,26 @@ impl LinkTarget for SimTarget {
             faults: self.faults,
             sensors: [0; 4],
             next_seq: 0,
+            machine: self.machine,
+            causes: 0,
+            homed: self.homed,
         }
     }
 
     fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
         self.config = *cfg;
-        self.mutations += 1;
+        self.take(CommandKind::SetConfig);
+        Ok(())
+    }
+
+    fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode> {
+        self.homing = *homing;
+        self.take(CommandKind::SetConfig);
+        Ok(())
+    }
+
+    fn home(&mut self) -> Result<(), ErrorCode> {
+        self.take(CommandKind::Home);
         Ok(())
     }
 
@@ -170,19 +226,19 @@ impl LinkTarget for SimTarget {
 
     fn start(&mut self) -> Result<(), ErrorCode> {
         self.running = true;
-        self.mutations += 1;
+        self.take(CommandKind::Start);
         Ok(())
     }
 
     fn hold(&mut self) -> Result<(), ErrorCode> {
         self.held = true;
-        self.mutations += 1;
+        self.take(CommandKind::Hold);
         Ok(())
     }
 
     fn resume(&mut self) -> Result<(), ErrorCode> {
         self.held = false;
-        self.mutations += 1;
+        self.take(CommandKind::Resume);
         Ok(())
     }
 
@@ -191,7 +247,7 @@ impl LinkTarget for SimTarget {
         self.planned = self.positions;
         self.running = false;
         self.held = false;
-        self.mutations += 1;
+        self.take(CommandKind::Abort);
         Ok(())
     }
 
@@ -203,7 +259,9 @@ impl LinkTarget for SimTarget {
 
     fn clear_fault(&mut self) -> Result<(), ErrorCode> {
         self.faults = 0;
-        self.mutations += 1;
+        self.queue.clear();
+        self.planned = self.positions;
+        self.take(CommandKind::ClearFault);
         Ok(())
     }
 }

@@ -73,6 +73,9 @@ fn extreme_status() -> Status {
         faults: u32::MAX,
         sensors: [i32::MIN; SENSOR_CHANNELS],
         next_seq: u32::MAX,
+        machine: crate::machine::MachineState::Fault,
+        causes: u32::MAX,
+        homed: true,
     }
 }
 
@@ -100,6 +103,19 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         RequestBody::GetStatus,
         RequestBody::SetStatusPeriod { ms: u16::MAX },
         RequestBody::ClearFault,
+        RequestBody::Home,
+        RequestBody::SetHoming(HomingConfig {
+            order: [u8::MAX; MAX_AXES],
+            count: u8::MAX,
+            axes: [crate::machine::HomeAxis {
+                toward_max: true,
+                search_hz: u32::MAX,
+                latch_hz: u32::MAX,
+                backoff_steps: u32::MAX,
+                max_travel_steps: u32::MAX,
+                home_pos_steps: i64::MIN,
+            }; MAX_AXES],
+        }),
     ]
     .into_iter()
     .map(|body| Request { seq, body })
@@ -139,7 +155,7 @@ pub(crate) fn extreme_responses() -> Vec<Response> {
             field: FixedStr::truncated("abcdefghijklmnopqrstuvwxyz"),
             axis: Some(u8::MAX),
         },
-        NakDetail::State(WireState::Faulted),
+        NakDetail::State(crate::machine::MachineState::Fault),
     ];
     for detail in details {
         for &code in ErrorCode::ALL {
@@ -358,7 +374,7 @@ fn refusals_change_nothing() {
         &r,
         Response::Nak {
             code: ErrorCode::OutOfState,
-            detail: NakDetail::State(WireState::Idle),
+            detail: NakDetail::State(crate::machine::MachineState::Ready),
             ..
         }
     ));

@@ -1,0 +1,252 @@
+//! The link firmware (feature `link`): an RTIC 2 app that serves the host link on USART1
+//! (`src/protocol/PROTOCOL.md`) and runs what the host sends through `motion::machine::Machine`,
+//! the one state machine and fault model (`src/machine/MACHINE.md`).
+//!
+//! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
+//! homing, job end) and drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
+//! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
+//! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
+//! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
+//! sends the periodic Status and feeds the watchdog, woken by the tick every millisecond.
+
+use core::sync::atomic::AtomicBool;
+
+/// The feeder stopped because the DDA was full; the tick wakes it when a slot frees up.
+static FEEDER_BLOCKED: AtomicBool = AtomicBool::new(false);
+
+#[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2, SPI3])]
+mod app {
+    use super::FEEDER_BLOCKED;
+    use crate::board;
+    use crate::link::{self, Link, Motion, ESTOP_EDGE, LINK_OK, WAKE_TICKS, WATCHDOG};
+    use core::sync::atomic::Ordering::Relaxed;
+    use motion::machine::{BootConfig, Inputs, OverrunDetector};
+    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
+    use rtic_sync::make_signal;
+    use rtic_sync::signal::{SignalReader, SignalWriter};
+
+    type Wake = SignalWriter<'static, ()>;
+    type Waiter = SignalReader<'static, ()>;
+
+    #[shared]
+    struct Shared {
+        motion: Motion,
+        step_port: board::StepPort,
+        link: Link,
+        host_port: link::HostPort,
+    }
+
+    #[local]
+    struct Local {
+        tick_timer: board::TickTimer,
+        io: board::MachineIo,
+        tick_wakes_feeder: Wake,
+        tick_wakes_status: Wake,
+        estop: board::EStop,
+        feeder_waits: Waiter,
+        usart_wakes_feeder: Wake,
+        status_waits: Waiter,
+        watchdog: board::Watchdog,
+    }
+
+    #[init]
+    fn init(mut cx: init::Context) -> (Shared, Local) {
+        // No flash record yet (QEMU's flash is read-only; the real board's record is written by
+        // `motion::machine::persist` once a flash driver lands): the machine boots in Fault with
+        // ConfigMissing and safe defaults until the host sends a config.
+        let (motion, preparer) = defmt::unwrap!(Motion::boot(Err(BootConfig::Missing)));
+        let tick_hz = motion.machine.config().wire.machine.tick_hz;
+        let board::Board { mut tick_timer, mut step_port, cycles: _, estop, host, io, iwdg } =
+            board::init(cx.device, &mut cx.core, tick_hz);
+        defmt::println!(
+            "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud; \
+             machine {=u8} (faults {=u32:#x})",
+            env!("CARGO_PKG_VERSION"),
+            board::NAME,
+            tick_hz,
+            board::HOST_BAUD,
+            motion.machine.state() as u8,
+            motion.machine.faults().mask()
+        );
+        let mut name = heapless::String::<32>::new();
+        // Fits: both board names are short (the link cuts it to 24 bytes anyway).
+        let _ = core::fmt::write(
+            &mut name,
+            format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
+        );
+        let link = Link::new(&name, preparer, tick_timer.rate_control());
+        let watchdog = board::Watchdog::start(iwdg, link::WATCHDOG_TIMEOUT_MS);
+
+        let (feeder_wake, feeder_waits) = make_signal!(());
+        let (status_wake, status_waits) = make_signal!(());
+        defmt::unwrap!(feeder::spawn().ok());
+        defmt::unwrap!(link_status::spawn().ok());
+        step_port.enable();
+        tick_timer.start();
+
+        (
+            Shared { motion, step_port, link, host_port: link::HostPort::new(host) },
+            Local {
+                tick_timer,
+                io,
+                tick_wakes_feeder: feeder_wake.clone(),
+                tick_wakes_status: status_wake,
+                estop,
+                feeder_waits,
+                usart_wakes_feeder: feeder_wake,
+                status_waits,
+                watchdog,
+            },
+        )
+    }
+
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// One machine tick at `tick_hz`: read the inputs, tick the machine (and through it the
+    /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
+    /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
+    #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
+        local = [tick_timer, io, tick_wakes_feeder, tick_wakes_status,
+            wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
+            overran: bool = false, drivers_on: bool = true])]
+    fn tick(cx: tick::Context) {
+        let l = cx.local;
+        l.tick_timer.clear_update();
+        let raw = l.io.read();
+        let inputs = Inputs {
+            estop: raw.estop || ESTOP_EDGE.swap(false, Relaxed),
+            limit_min: raw.limit_min,
+            limit_max: raw.limit_max,
+            sensor_faults: 0,
+            link_ok: LINK_OK.load(Relaxed),
+            tick_overrun: *l.overran,
+        };
+        (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
+            let out = m.machine.tick(&mut m.dda, &inputs);
+            port.apply(m.dda.now(), &out.step);
+            l.io.write(&out.outputs);
+            // The drivers stay off from an e-stop until its fault is cleared.
+            let drivers_on = !m.machine.faults().has(FaultCode::EStop);
+            if drivers_on != *l.drivers_on {
+                *l.drivers_on = drivers_on;
+                if drivers_on {
+                    port.enable();
+                } else {
+                    port.disable();
+                }
+            }
+            let room = FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0;
+            if room || m.machine.wants_background() {
+                FEEDER_BLOCKED.store(false, Relaxed);
+                l.tick_wakes_feeder.write(());
+            }
+        });
+        if *l.wake <= 1 {
+            *l.wake = WAKE_TICKS.load(Relaxed);
+            l.tick_wakes_status.write(());
+        } else {
+            *l.wake -= 1;
+        }
+        WATCHDOG.tick_alive();
+        *l.overran = l.overrun.after_tick(l.tick_timer.update_pending());
+    }
+
+    /// E-stop edge: drivers off at once; the tick latches the fault (even if the loop closed
+    /// again meanwhile) and stops the machine.
+    #[task(binds = EXTI15_10, priority = 3, shared = [step_port], local = [estop])]
+    fn estop(mut cx: estop::Context) {
+        if cx.local.estop.clear() {
+            ESTOP_EDGE.store(true, Relaxed);
+            cx.shared.step_port.lock(|port| port.disable());
+        }
+    }
+
+    /// The machine's background work, then queued segments prepared into the DDA while it has
+    /// room and the machine lets it feed.
+    #[task(priority = 2, shared = [motion, link], local = [feeder_waits])]
+    async fn feeder(cx: feeder::Context) {
+        let feeder::SharedResources { mut motion, mut link, .. } = cx.shared;
+        loop {
+            cx.local.feeder_waits.wait().await;
+            loop {
+                let full = motion.lock(|m| {
+                    let full = m.dda.ready_free() == 0;
+                    FEEDER_BLOCKED.store(full, Relaxed);
+                    full
+                });
+                if full {
+                    break;
+                }
+                let Some(next) = link.lock(|l| l.next_prepared(&mut motion)) else {
+                    break;
+                };
+                // Segments were checked against this config when queued: a refusal is a bug.
+                let prepared = match next {
+                    Ok(p) => p,
+                    Err((id, e)) => {
+                        defmt::panic!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e))
+                    }
+                };
+                // Only this task pushes, and there was room.
+                defmt::unwrap!(motion.lock(|m| m.dda.push(&prepared)).ok());
+            }
+        }
+    }
+
+    /// Host link: received bytes into frames, frames through `BoardLink`, answers into the
+    /// transmit queue (dropped if it cannot hold them whole: the host retransmits); transmit
+    /// bytes out while the USART takes them.
+    #[task(binds = USART1, priority = 2, shared = [motion, link, host_port],
+        local = [usart_wakes_feeder, decoder: FrameDecoder<MAX_FRAME> = FrameDecoder::new()])]
+    fn usart1(cx: usart1::Context) {
+        let l = cx.local;
+        let usart1::SharedResources { mut motion, link, host_port, .. } = cx.shared;
+        (link, host_port).lock(|link, port| {
+            while let Some(byte) = port.serial.read_byte() {
+                let Some(frame) = l.decoder.push(byte) else {
+                    continue;
+                };
+                let (response, wake_feeder) = link.on_frame(frame, &mut motion);
+                if wake_feeder {
+                    l.usart_wakes_feeder.write(());
+                }
+                port.send(&response);
+            }
+            port.pump();
+        });
+    }
+
+    /// Every millisecond of machine time: judge the link, announce faults, send the periodic
+    /// Status, and feed the watchdog when the tick and this task both ran.
+    #[task(priority = 1, shared = [motion, link, host_port], local = [status_waits, watchdog])]
+    async fn link_status(cx: link_status::Context) {
+        let link_status::SharedResources { mut motion, mut link, mut host_port, .. } = cx.shared;
+        let mut overruns_seen = 0;
+        loop {
+            cx.local.status_waits.wait().await;
+            let overruns = host_port.lock(|p| p.serial.overruns());
+            if overruns != overruns_seen {
+                // Lost bytes fail a frame's CRC; the host retransmits. Worth a line in the log.
+                defmt::warn!("USART1 receive overruns: {=u32}", overruns);
+                overruns_seen = overruns;
+            }
+            WATCHDOG.control_alive();
+            let (responses, feed) = link.lock(|l| l.poll(&mut motion));
+            if feed && WATCHDOG.poll() {
+                cx.local.watchdog.feed();
+            }
+            for response in responses.iter().flatten() {
+                // Encoded outside the locks: the USART task keeps running meanwhile.
+                let mut buf = [0u8; MAX_FRAME_WIRE];
+                if let Some(frame) = link::encode(response, &mut buf) {
+                    host_port.lock(|port| port.queue_frame(frame));
+                }
+            }
+        }
+    }
+}
