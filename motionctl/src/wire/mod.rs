@@ -15,6 +15,7 @@
 //! per point), [`path`] (machining area/time and joint-space targets per step).
 
 pub mod area;
+pub mod backlash;
 pub mod continuous;
 pub mod csv;
 pub mod gear;
