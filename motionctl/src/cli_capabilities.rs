@@ -73,12 +73,51 @@ pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
 
 #[derive(clap::Args, Debug)]
 pub struct WirePlanArgs {
-    /// Area rate, mm^2/min.
-    #[arg(long, default_value_t = 800.0)]
-    fr: f64,
-    /// Largest horizontal distance of the wire from the designed ruling line, mm.
-    #[arg(long, default_value_t = 0.01)]
-    tolerance: f64,
+    /// Wire job file (TOML, version 1: fr_mm2_per_min, tolerance_mm, [backlash] x_steps,
+    /// y_steps, beta_steps, alpha_steps); the flags below override it.
+    #[arg(long, value_name = "FILE")]
+    job: Option<PathBuf>,
+    /// Area rate, mm^2/min [default: 800].
+    #[arg(long)]
+    fr: Option<f64>,
+    /// Largest horizontal distance of the wire from the designed ruling line, mm [default: 0.01].
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Lash per axis in motor steps, in the wire segments' axis order X,Y,B,A (X, Y, beta,
+    /// alpha), e.g. 20,20,250,0: taken up by its own segment at every reversal [default: 0].
+    #[arg(long, value_name = "X,Y,B,A", value_parser = parse_backlash)]
+    backlash: Option<[u32; 4]>,
+}
+
+/// `--backlash X,Y,B,A`: four integers, each checked as a job file's `[backlash]` field is.
+fn parse_backlash(s: &str) -> Result<[u32; 4], String> {
+    let v = s
+        .split(',')
+        .map(|t| t.trim().parse::<i64>().map_err(|e| format!("`{t}`: {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let steps: [i64; 4] =
+        v.try_into().map_err(|v: Vec<i64>| format!("{} values, want 4 (X,Y,B,A)", v.len()))?;
+    crate::wire::backlash::validate(steps, ["backlash X", "backlash Y", "backlash B", "backlash A"])
+        .map_err(|e| e.to_string())
+}
+
+impl WirePlanArgs {
+    /// The planning parameters: the job file's (or the defaults), then the flags.
+    fn params(&self) -> Result<ContinuousParams> {
+        let mut prm = match &self.job {
+            Some(path) => {
+                let src = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                crate::wire::job_file::parse_spec(&src)
+                    .with_context(|| path.display().to_string())?
+            }
+            None => ContinuousParams::default(),
+        };
+        prm.fr_mm2_per_min = self.fr.unwrap_or(prm.fr_mm2_per_min);
+        prm.tol_mm = self.tolerance.unwrap_or(prm.tol_mm);
+        prm.backlash_steps = self.backlash.unwrap_or(prm.backlash_steps);
+        Ok(prm)
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -190,12 +229,11 @@ fn wire_job_machine(cfg: &motion::MachineConfig) -> crate::job::Job {
 }
 
 pub fn run_wire(cmd: WireCmd) -> Result<()> {
-    let (WireCmd::Plan { plan: WirePlanArgs { fr, tolerance } }
-    | WireCmd::Run { plan: WirePlanArgs { fr, tolerance }, .. }) = &cmd;
-    let (fr, tolerance) = (*fr, *tolerance);
+    let (WireCmd::Plan { plan } | WireCmd::Run { plan, .. }) = &cmd;
+    let prm = plan.params()?;
+    let (fr, tolerance) = (prm.fr_mm2_per_min, prm.tol_mm);
     let path = continuous::circle_complex_path()?;
     let cfg = motion::wire::machine::config();
-    let prm = ContinuousParams { tol_mm: tolerance, fr_mm2_per_min: fr, ..Default::default() };
     let job = continuous::plan(&path, &cfg, &prm)?;
     println!("circle -> complex die, ZT 39 mm, FR {fr} mm^2/min, tolerance {tolerance} mm");
     println!("  segments            {}", job.segments.len());
@@ -204,9 +242,12 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         job.area_ruled_mm2, job.area_trapezoid_mm2
     );
     println!("  60 A / FR           {:.3} s", job.time_ruled_s);
-    let mut segs = job.segments.clone().into_iter();
-    let report = motion::model::run(&cfg, || segs.next(), &[], u64::MAX, |_, _| {})
-        .map_err(|e| anyhow::anyhow!("the model refused a segment: {e:?}"))?;
+    let run_model = |segments: &[motion::segment::Segment]| {
+        let mut segs = segments.iter().copied();
+        motion::model::run(&cfg, || segs.next(), &[], u64::MAX, |_, _| {})
+            .map_err(|e| anyhow::anyhow!("the model refused a segment: {e:?}"))
+    };
+    let report = run_model(&job.segments)?;
     let t = report.ticks as f64 / cfg.tick_hz as f64;
     println!(
         "  host model          {t:.3} s ({:+.0} ppm), {} segments, final steps {:?}",
@@ -214,6 +255,22 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         report.segments,
         &report.positions[..4]
     );
+    if prm.backlash_steps != [0; 4] {
+        let takeups =
+            job.kinds.iter().filter(|k| **k == crate::wire::backlash::SegmentKind::TakeUp).count();
+        // The same job without compensation, for what the take-ups cost in machine time.
+        let bare =
+            continuous::plan(&path, &cfg, &ContinuousParams { backlash_steps: [0; 4], ..prm })?;
+        let bare_s = run_model(&bare.segments)?.ticks as f64 / cfg.tick_hz as f64;
+        println!(
+            "  backlash            {:?} steps (X, Y, beta, alpha): {takeups} take-up segments, \
+             {:.3} s nominal; +{:.3} s on the host model ({:.3} s without)",
+            prm.backlash_steps,
+            job.takeup_ticks as f64 / cfg.tick_hz as f64,
+            t - bare_s,
+            bare_s
+        );
+    }
     let WireCmd::Run { link, log_csv, .. } = cmd else { return Ok(()) };
     let parsed = wire_job_machine(&cfg);
     let mut final_steps = [0i64; motion::MAX_AXES];

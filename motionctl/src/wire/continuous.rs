@@ -11,6 +11,7 @@
 //! steps come from the corrected IK rounded to the nearest step at every piece end, so the sum
 //! of the segments' steps lands exactly on every point's IK target.
 
+use super::backlash::{insert_takeups, SegmentKind};
 use super::ik::{forward_mm, ik_exact, steps_rounded, Joints, Steps};
 use super::ik::{STEPS_PER_DEG_ALPHA, STEPS_PER_DEG_BETA, STEPS_PER_MM_XY};
 use super::path::{ruled_area_mm2, time_s, Path};
@@ -46,11 +47,21 @@ pub struct ContinuousParams {
     pub max_pieces: usize,
     /// Joint-linear samples checked inside each piece.
     pub samples_per_piece: usize,
+    /// Lash per axis (X, Y, beta, alpha), steps, taken up by its own segment at every reversal
+    /// ([`super::backlash`]); all zero plans exactly the uncompensated job. Checked with
+    /// [`super::backlash::validate`] by whoever reads it from a user.
+    pub backlash_steps: [u32; 4],
 }
 
 impl Default for ContinuousParams {
     fn default() -> Self {
-        Self { tol_mm: 0.01, fr_mm2_per_min: 800.0, max_pieces: 4096, samples_per_piece: 32 }
+        Self {
+            tol_mm: 0.01,
+            fr_mm2_per_min: 800.0,
+            max_pieces: 4096,
+            samples_per_piece: 32,
+            backlash_steps: [0; 4],
+        }
     }
 }
 
@@ -180,8 +191,14 @@ pub struct Piece {
 pub struct ContinuousJob {
     pub segments: Vec<Segment>,
     /// For each segment, the pieces it covers (first, last): a piece without any step is merged
-    /// into the next segment.
+    /// into the next segment. A take-up segment has `(p, p)` with `p` the last piece of the cutting
+    /// segment before it: the tool stays at that piece's end.
     pub segment_pieces: Vec<(usize, usize)>,
+    /// Cutting or lash take-up, per segment (all [`SegmentKind::Path`] without backlash).
+    pub kinds: Vec<SegmentKind>,
+    /// Sum of the take-up segments' nominal durations, ticks (the DDA ramps them from and to
+    /// rest, so they run in about twice this; the junctions around them slow down too).
+    pub takeup_ticks: u64,
     pub pieces: Vec<Piece>,
     /// Rounded IK steps of every path point (the exact targets the segments must sum to).
     pub point_steps: Vec<Steps>,
@@ -324,6 +341,26 @@ pub fn plan(
         cum_ticks = end_ticks;
         prev = p.end_steps;
     }
+    let (mut segments, kinds, origin) = insert_takeups(&segments, prm.backlash_steps, cfg);
+    let segment_pieces: Vec<(usize, usize)> = origin
+        .iter()
+        .zip(&kinds)
+        .map(|(&k, kind)| match kind {
+            SegmentKind::Path => segment_pieces[k],
+            // Before cutting segment k (never the first: a reversal needs an earlier move), the
+            // tool rests at the end of cutting segment k - 1.
+            SegmentKind::TakeUp => {
+                let p = segment_pieces[k.saturating_sub(1)].1;
+                (p, p)
+            }
+        })
+        .collect();
+    let takeup_ticks = segments
+        .iter()
+        .zip(&kinds)
+        .filter(|(_, k)| **k == SegmentKind::TakeUp)
+        .map(|(s, _)| s.duration_ticks as u64)
+        .sum();
     plan_rates(&mut segments, cfg);
     for (index, s) in segments.iter().enumerate() {
         s.check(cfg).map_err(|reason| match reason {
@@ -339,6 +376,8 @@ pub fn plan(
     Ok(ContinuousJob {
         segments,
         segment_pieces,
+        kinds,
+        takeup_ticks,
         pieces,
         point_steps,
         area_ruled_mm2,

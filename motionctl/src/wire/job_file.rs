@@ -1,10 +1,91 @@
-//! Renders a planned [`ContinuousJob`] as the no_std constant table the firmware links
-//! (`src/wire/circle_complex_job.rs`): per segment the step deltas, nominal ticks and the Q2.30
-//! entry, exit and acceleration rates, plus the job's reference figures as integers.
+//! The wire job's files: the versioned TOML a user writes for `motionctl wire plan|run --job`
+//! ([`parse_spec`]), and the no_std constant table the firmware links
+//! (`src/wire/circle_complex_job.rs`, [`render`]): per segment the step deltas, nominal ticks
+//! and the Q2.30 entry, exit and acceleration rates, plus the job's reference figures as
+//! integers.
+//!
+//! TOML, version 1 (every field but `version` optional):
+//!
+//! ```toml
+//! version = 1
+//! fr_mm2_per_min = 800     # area rate (default 800, Table 11)
+//! tolerance_mm = 0.01      # wire off the designed ruling line, at most (default 0.01)
+//! [backlash]               # lash per axis in motor steps, taken up at every reversal (default 0)
+//! x_steps = 20
+//! y_steps = 20
+//! beta_steps = 250         # the thesis's 1 deg of the 18:1 gearbox
+//! alpha_steps = 0
+//! ```
 
-use super::continuous::ContinuousJob;
+use super::backlash::{self, BacklashError};
+use super::continuous::{ContinuousJob, ContinuousParams};
 use motion::MachineConfig;
+use serde::Deserialize;
 use std::fmt::Write;
+
+/// Why a wire job file was refused.
+#[derive(Debug, PartialEq, thiserror::Error)]
+pub enum WireJobFileError {
+    #[error("{0}")]
+    Toml(String),
+    #[error("unsupported wire job version {0} (this motionctl reads version 1)")]
+    Version(u32),
+    #[error("{field} = {value}: must be a finite number > 0")]
+    Field { field: &'static str, value: f64 },
+    #[error(transparent)]
+    Backlash(#[from] BacklashError),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    version: u32,
+    fr_mm2_per_min: Option<f64>,
+    tolerance_mm: Option<f64>,
+    #[serde(default)]
+    backlash: BacklashTable,
+}
+
+// Signed, so that a negative lash is refused with the field's name rather than a type error.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct BacklashTable {
+    #[serde(default)]
+    x_steps: i64,
+    #[serde(default)]
+    y_steps: i64,
+    #[serde(default)]
+    beta_steps: i64,
+    #[serde(default)]
+    alpha_steps: i64,
+}
+
+/// Parses a wire job file into planning parameters (defaults from
+/// [`ContinuousParams::default`] for what it leaves out).
+pub fn parse_spec(src: &str) -> Result<ContinuousParams, WireJobFileError> {
+    let f: File = toml::from_str(src).map_err(|e| WireJobFileError::Toml(e.to_string()))?;
+    if f.version != 1 {
+        return Err(WireJobFileError::Version(f.version));
+    }
+    let mut prm = ContinuousParams::default();
+    for (field, value, slot) in [
+        ("fr_mm2_per_min", f.fr_mm2_per_min, &mut prm.fr_mm2_per_min),
+        ("tolerance_mm", f.tolerance_mm, &mut prm.tol_mm),
+    ] {
+        if let Some(v) = value {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(WireJobFileError::Field { field, value: v });
+            }
+            *slot = v;
+        }
+    }
+    let b = &f.backlash;
+    prm.backlash_steps = backlash::validate(
+        [b.x_steps, b.y_steps, b.beta_steps, b.alpha_steps],
+        backlash::FIELD_NAMES,
+    )?;
+    Ok(prm)
+}
 
 /// Rust source of the job table. `generator` names what produced it (for the header).
 pub fn render(

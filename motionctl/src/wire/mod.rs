@@ -12,9 +12,12 @@
 //! Files: [`shapes`] (circle, complex, crescent, prismatic, star), [`gear`] (Unwin spur gear),
 //! [`csv`] (MDI data files), [`area`] (sector and polygon areas, intermediate sections),
 //! [`ik`] (thesis and corrected inverse kinematics, steps, backlash), [`limits`] (joint limits
-//! per point), [`path`] (machining area/time and joint-space targets per step).
+//! per point), [`path`] (machining area/time and joint-space targets per step),
+//! [`continuous`] (the continuous constant area-rate job), [`backlash`] (its lash take-up
+//! segments and a dead-band model), [`job_file`] (the wire job TOML and the firmware table).
 
 pub mod area;
+pub mod backlash;
 pub mod continuous;
 pub mod csv;
 pub mod gear;
