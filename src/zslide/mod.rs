@@ -13,6 +13,6 @@ pub mod scenario;
 pub mod table;
 
 pub use command::{ZCommand, ZCommandConfig, ZConfigError, ZState, ZUpdate};
-pub use output::{DacScale, StepFollower, StepScale};
+pub use output::{CommandLead, DacScale, StepFollower, StepScale};
 pub use plant::{VoiceCoilMotor, VoiceCoilServo, VoiceCoilSlide};
 pub use table::{CoefficientTable, Interp, TableError, TableForm, ZPoint};
