@@ -56,7 +56,7 @@ mod app {
         // ConfigMissing and safe defaults until the host sends a config.
         let (motion, preparer) = defmt::unwrap!(Motion::boot(Err(BootConfig::Missing)));
         let tick_hz = motion.machine.config().wire.machine.tick_hz;
-        let board::Board { mut tick_timer, mut step_port, cycles: _, estop, host, io, iwdg } =
+        let board::Board { mut tick_timer, mut step_port, estop, host, io, iwdg, .. } =
             board::init(cx.device, &mut cx.core, tick_hz);
         defmt::println!(
             "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud; \

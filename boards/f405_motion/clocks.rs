@@ -39,9 +39,23 @@ pub fn init(rcc: &pac::RCC, pwr: &pac::PWR, flash: &pac::FLASH) -> Clocks {
 
 /// Clock gates of every peripheral the board uses.
 pub fn enable_peripherals(rcc: &pac::RCC) {
-    rcc.ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioben().set_bit().gpiocen().set_bit());
-    rcc.apb1enr().modify(|_, w| w.tim2en().set_bit().tim4en().set_bit());
-    rcc.apb2enr().modify(|_, w| w.usart1en().set_bit().adc1en().set_bit().syscfgen().set_bit());
+    rcc.ahb1enr().modify(|_, w| {
+        w.gpioaen().set_bit().gpioben().set_bit().gpiocen().set_bit();
+        // DMA2: stream 0 carries the force ADC's scans.
+        w.dma2en().set_bit()
+    });
+    rcc.apb1enr().modify(|_, w| {
+        w.tim2en().set_bit().tim4en().set_bit();
+        // TIM3: force ADC trigger; DAC: Z slide.
+        w.tim3en().set_bit().dacen().set_bit()
+    });
+    rcc.apb2enr().modify(|_, w| {
+        w.usart1en().set_bit().adc1en().set_bit().syscfgen().set_bit();
+        // ADC2: resolver sin/cos.
+        w.adc2en().set_bit()
+    });
     // Read back so the enables have taken effect before the first register access (errata 2.2.13).
+    let _ = rcc.ahb1enr().read();
+    let _ = rcc.apb1enr().read();
     let _ = rcc.apb2enr().read();
 }

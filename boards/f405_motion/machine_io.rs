@@ -1,9 +1,10 @@
 //! The safety inputs and process outputs the machine reads and drives every tick: e-stop and the
-//! 12 limit switches in; spindle enable and wire power out. Inputs are
+//! 12 limit switches in; spindle enable, wire power and the Z-slide DAC out. Inputs are
 //! read from the three ports' IDR (read-only, so sharing the ports with the step port is safe);
 //! outputs go through GPIOB's BSRR (atomic set/reset, no read-modify-write).
 
 use super::pins::{Port, ESTOP, LIMIT_MAX, LIMIT_MIN, SPINDLE_EN, WIRE_POWER};
+use super::z_dac::ZDac;
 use motion::machine::Outputs;
 use stm32f4::stm32f405 as pac;
 
@@ -17,7 +18,9 @@ pub struct RawInputs {
     pub limit_max: u8,
 }
 
-pub struct MachineIo;
+pub struct MachineIo {
+    z_dac: ZDac,
+}
 
 /// Bit `n` of a port's input data register.
 #[inline(always)]
@@ -48,8 +51,8 @@ fn gather(pins: &[(Port, u8); 6], a: u32, b: u32, c: u32) -> u8 {
 
 impl MachineIo {
     /// Pins are configured by `pins::init`.
-    pub fn new() -> Self {
-        MachineIo
+    pub fn new(z_dac: ZDac) -> Self {
+        MachineIo { z_dac }
     }
 
     /// Every input, active levels resolved: the e-stop loop and the limit switches are normally
@@ -64,12 +67,14 @@ impl MachineIo {
         }
     }
 
-    /// Spindle enable and wire power to `o`'s levels (the Z DAC code is the DAC driver's).
+    /// Spindle enable, wire power and the Z DAC to `o`'s levels. A DAC code out of range
+    /// writes mid-scale (the slide at rest); the machine only ever produces 12-bit codes.
     #[inline]
     pub fn write(&mut self, o: &Outputs) {
         let on = |level: bool, pin: u32| if level { 1 << pin } else { 1 << (pin + 16) };
         let bits = on(o.spindle_enable, SPINDLE_EN) | on(o.wire_power, WIRE_POWER);
         // SAFETY: BSRR accepts any bit pattern; only these two output bits are written.
         unsafe { (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(bits)) };
+        let _ = self.z_dac.write(o.z_dac);
     }
 }

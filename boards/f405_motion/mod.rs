@@ -6,8 +6,10 @@
 //! | --- | --- |
 //! | HSE 8 MHz -> PLL | SYSCLK 168 MHz, AHB 168, APB1 42 (timers 84), APB2 84 (timers 168) MHz |
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`) |
-//! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2) |
-//! | ADC1 | force sensors |
+//! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2), index capture on CH3 (`TIM4` interrupt) |
+//! | ADC1 + TIM3 + DMA2 stream 0 | force sensors: TIM3 TRGO scans, DMA double buffer (`DMA2_STREAM0`) |
+//! | ADC2 | resolver sin/cos, injected group, one pair per tick |
+//! | DAC channel 1 | Z-slide command (PA4), mid-scale when safe |
 //! | USART1 | host link (`link` feature), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
 //! | EXTI12 | e-stop (EXTI15_10 interrupt); the tick also reads its level |
 //! | GPIO | limit switches, wire stall (read every tick), spindle enable, wire power |
@@ -17,6 +19,7 @@
 
 mod clocks;
 mod cycles;
+mod force_adc;
 #[path = "../common/host_serial.rs"]
 mod host_serial;
 mod io;
@@ -24,18 +27,29 @@ mod log;
 #[cfg(feature = "link")]
 mod machine_io;
 mod pins;
+mod resolver_adc;
+mod spindle_timer;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
 #[cfg(feature = "link")]
 #[path = "../common/watchdog.rs"]
 mod watchdog;
+mod z_dac;
 
 pub use cycles::CycleCounter;
+// Wired by the link firmware's capability tasks (no app names these types yet).
+#[allow(unused_imports)]
+pub use force_adc::{ForceAdc, ForceFrame, FORCE_CHANNEL_COUNT, FRAMES_PER_HALF};
 pub use host_serial::HostSerial;
 pub use io::EStop;
 #[cfg(feature = "link")]
 pub use machine_io::MachineIo;
+// Wired by the link firmware's capability tasks (no app names these types yet).
+#[allow(unused_imports)]
+pub use resolver_adc::ResolverAdc;
+#[allow(unused_imports)]
+pub use spindle_timer::SpindleTimer;
 pub use step_port::StepPort;
 #[cfg(feature = "link")]
 pub use watchdog::Watchdog;
@@ -66,14 +80,41 @@ pub struct Board {
     /// The independent watchdog, not started (the link firmware starts it).
     #[cfg(feature = "link")]
     pub iwdg: pac::IWDG,
+    /// The capability drivers (`None` only if init ran twice).
+    // Wired by the link firmware's capability tasks; no app uses them yet.
+    #[allow(dead_code)]
+    pub capabilities: Option<Capabilities>,
+}
+
+/// The capability drivers (force ADC, spindle encoder, resolver ADC). The Z DAC is in
+/// [`MachineIo`]: the machine's outputs drive it every tick.
+// Wired by the link firmware's capability tasks; no app uses them yet.
+#[allow(dead_code)]
+pub struct Capabilities {
+    /// ADC1 scans of the force channels, TIM3-triggered, DMA2 stream 0 (not started).
+    pub force_adc: ForceAdc,
+    /// TIM4 encoder count and index capture (counting; encoder logic not configured).
+    pub spindle: SpindleTimer,
+    /// ADC2 resolver sin/cos (idle until the first `sample`).
+    pub resolver: ResolverAdc,
 }
 
 pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
     let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
     clocks::enable_peripherals(&dp.RCC);
     pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
-    io::init_spindle_encoder(&dp.TIM4);
-    io::init_force_adc(&dp.ADC1, &dp.ADC_COMMON);
+    force_adc::init_common(&dp.ADC_COMMON);
+    // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.
+    let force_buf = cortex_m::singleton!(: force_adc::ForceDmaBuffer =
+        [[0; FORCE_CHANNEL_COUNT]; 2 * FRAMES_PER_HALF]);
+    let capabilities = force_buf.map(|buf| Capabilities {
+        force_adc: ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM3, buf, clocks.apb1_timer_hz),
+        spindle: SpindleTimer::new(dp.TIM4),
+        resolver: ResolverAdc::new(dp.ADC2),
+    });
+    // Mid-scale (the Z slide at rest) from here on, whichever firmware runs.
+    #[cfg_attr(not(feature = "link"), allow(unused_variables))]
+    let z_dac = z_dac::ZDac::new(dp.DAC);
     Board {
         tick_timer: TickTimer::new(dp.TIM2, clocks.apb1_timer_hz, tick_hz),
         step_port: StepPort::new(dp.GPIOC, dp.GPIOB),
@@ -81,9 +122,10 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         estop: EStop::new(dp.EXTI, &dp.SYSCFG),
         host: HostSerial::new(dp.USART1, clocks.pclk2_hz, HOST_BAUD),
         #[cfg(feature = "link")]
-        io: MachineIo::new(),
+        io: MachineIo::new(z_dac),
         #[cfg(feature = "link")]
         iwdg: dp.IWDG,
+        capabilities,
     }
 }
 
@@ -92,6 +134,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
 /// controller must not restart a job by itself after a fault).
 pub fn exit(_ok: bool) -> ! {
     step_port::force_safe();
+    z_dac::force_safe();
     // SAFETY: reading DHCSR has no side effects.
     let debugger = unsafe { (*cortex_m::peripheral::DCB::PTR).dhcsr.read() } & 1 != 0;
     if debugger {

@@ -86,8 +86,8 @@ pub const PINS: [Pin; 41] = [
     pin("HOST_RX", Port::A, 10, Mode::Alternate { af: 7, pull_up: true }),  // USART1_RX
     // Spindle encoder index: TIM4_CH3 input capture latches the count at the index edge.
     pin("SPINDLE_INDEX", Port::B, 8, Mode::Alternate { af: 2, pull_up: true }),
-    pin("RESOLVER_SIN", Port::A, 5, Mode::Analog), // ADC1_IN5
-    pin("RESOLVER_COS", Port::A, 6, Mode::Analog), // ADC1_IN6
+    pin("RESOLVER_SIN", Port::A, 5, Mode::Analog), // ADC2_IN5 (ADC12_IN5)
+    pin("RESOLVER_COS", Port::A, 6, Mode::Analog), // ADC2_IN6 (ADC12_IN6)
     pin("Z_DAC", Port::A, 4, Mode::Analog),        // DAC1_OUT1: voice-coil Z slide command
     // Outputs that power the process start off: nothing cuts before the firmware says so.
     pin("SPINDLE_EN", Port::B, SPINDLE_EN as u8, LOW),

@@ -9,6 +9,8 @@
 pub mod biquad;
 pub mod chain;
 pub mod control;
+pub mod dma_frames;
 pub mod peak;
 pub mod plant;
+pub mod sample_timer;
 pub mod scenario;

@@ -10,7 +10,9 @@
 
 pub mod encoder;
 pub mod resolver;
+pub mod resolver_offset;
 pub mod sim;
+pub mod timer_encoder;
 
 use crate::protocol::errors::FaultCode;
 

@@ -6,6 +6,7 @@
 //! `motionctl::fourier::firmware_table`) and the closed-loop scenario ([`scenario`]).
 
 pub mod command;
+pub mod dac_code;
 pub mod douglass_table;
 pub mod output;
 pub mod plant;
