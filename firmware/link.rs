@@ -57,6 +57,9 @@ pub static WAKE_TICKS: AtomicU32 = AtomicU32::new(1);
 pub static LINK_OK: AtomicBool = AtomicBool::new(true);
 /// The e-stop interrupt saw the loop open: the tick latches EStop even if the level is gone.
 pub static ESTOP_EDGE: AtomicBool = AtomicBool::new(false);
+/// A config save is erasing flash: every fetch stalls, so the tick that follows finds its timer
+/// update pending. That late tick is the save's, not an overrun.
+pub static SAVING_CONFIG: AtomicBool = AtomicBool::new(false);
 /// Fed only when the tick and the status task both ran since the last feed.
 pub static WATCHDOG: WatchdogGate = WatchdogGate::new();
 
@@ -118,6 +121,8 @@ struct Feed {
     clock_base_ms: u64,
     /// Latched faults already announced with a `Fault` frame.
     announced: u32,
+    /// A config accepted since the last save, to persist once the machine is at rest.
+    save_pending: Option<BoardConfig>,
 }
 
 impl Link {
@@ -125,7 +130,14 @@ impl Link {
     pub fn new(firmware: &str, preparer: Preparer, tick_rate: board::TickRate) -> Self {
         Link {
             board: BoardLink::new(firmware, CAPABILITIES),
-            feed: Feed { queue: Deque::new(), preparer, tick_rate, clock_base_ms: 0, announced: 0 },
+            feed: Feed {
+                queue: Deque::new(),
+                preparer,
+                tick_rate,
+                clock_base_ms: 0,
+                announced: 0,
+                save_pending: None,
+            },
             last_frame_ms: 0,
             next_watchdog_ms: 0,
         }
@@ -196,6 +208,24 @@ impl Link {
         Some(self.feed.preparer.prepare(&seg).map_err(|e| (seg.id, e)))
     }
 
+    /// The config to persist, once the machine is at rest (no job, no homing, DDA idle): a save
+    /// stalls the flash, and with it the tick, for up to half a second.
+    pub fn take_save(&mut self, motion: &mut impl Mutex<T = Motion>) -> Option<BoardConfig> {
+        self.feed.save_pending?;
+        let at_rest = motion.lock(|m| {
+            matches!(
+                m.machine.state(),
+                MachineState::Idle | MachineState::Ready | MachineState::Fault
+            ) && m.dda.is_idle()
+                && !m.machine.is_jogging()
+        });
+        if at_rest {
+            self.feed.save_pending.take()
+        } else {
+            None
+        }
+    }
+
     /// Milliseconds of DDA time since boot (division: never call from the tick).
     fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
         let (now, tick_hz) =
@@ -256,6 +286,9 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
         };
         self.command(MachineCommand::SetConfig(cfg))?;
         self.drop_job();
+        if board::ConfigStorage::PERSISTS {
+            self.link.save_pending = Some(*cfg);
+        }
         let Some(mut fresh) = fresh else { return Ok(()) };
         let tick_rate = &mut self.link.tick_rate;
         // The swap and the retiming in one critical section: no tick sees a half-done change.
@@ -384,6 +417,13 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn home(&mut self) -> Result<(), ErrorCode> {
         self.command(MachineCommand::Home)?;
         self.drop_job();
+        Ok(())
+    }
+
+    fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::JogOff)?;
+        // The feeder plans the jog move (the machine's background).
+        self.wake_feeder = true;
         Ok(())
     }
 }

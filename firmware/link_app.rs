@@ -7,7 +7,8 @@
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
-//! sends the periodic Status and feeds the watchdog, woken by the tick every millisecond.
+//! sends the periodic Status, feeds the watchdog and persists an accepted config once the machine
+//! is at rest, woken by the tick every millisecond.
 
 use core::sync::atomic::AtomicBool;
 
@@ -18,9 +19,11 @@ static FEEDER_BLOCKED: AtomicBool = AtomicBool::new(false);
 mod app {
     use super::FEEDER_BLOCKED;
     use crate::board;
-    use crate::link::{self, Link, Motion, ESTOP_EDGE, LINK_OK, WAKE_TICKS, WATCHDOG};
+    use crate::link::{
+        self, Link, Motion, ESTOP_EDGE, LINK_OK, SAVING_CONFIG, WAKE_TICKS, WATCHDOG,
+    };
     use core::sync::atomic::Ordering::Relaxed;
-    use motion::machine::{BootConfig, Inputs, OverrunDetector};
+    use motion::machine::{BoardConfig, Inputs, OverrunDetector};
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
@@ -47,17 +50,25 @@ mod app {
         usart_wakes_feeder: Wake,
         status_waits: Waiter,
         watchdog: board::Watchdog,
+        config: board::ConfigStorage,
     }
 
     #[init]
     fn init(mut cx: init::Context) -> (Shared, Local) {
-        // No flash record yet (QEMU's flash is read-only; the real board's record is written by
-        // `motion::machine::persist` once a flash driver lands): the machine boots in Fault with
-        // ConfigMissing and safe defaults until the host sends a config.
-        let (motion, preparer) = defmt::unwrap!(Motion::boot(Err(BootConfig::Missing)));
+        // The timer starts at the safe default's rate and is retimed to the stored config's
+        // before it runs.
+        let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
+        let board::Board {
+            mut tick_timer, mut step_port, estop, host, io, iwdg, mut config, ..
+        } = board::init(cx.device, &mut cx.core, default_hz);
+        // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
+        // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
+        let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load()));
         let tick_hz = motion.machine.config().wire.machine.tick_hz;
-        let board::Board { mut tick_timer, mut step_port, estop, host, io, iwdg, .. } =
-            board::init(cx.device, &mut cx.core, tick_hz);
+        let mut tick_rate = tick_timer.rate_control();
+        if !tick_rate.set(tick_hz) {
+            defmt::panic!("stored tick rate {=u32} Hz not supported by this board", tick_hz);
+        }
         defmt::println!(
             "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud; \
              machine {=u8} (faults {=u32:#x})",
@@ -74,7 +85,7 @@ mod app {
             &mut name,
             format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
         );
-        let link = Link::new(&name, preparer, tick_timer.rate_control());
+        let link = Link::new(&name, preparer, tick_rate);
         let watchdog = board::Watchdog::start(iwdg, link::WATCHDOG_TIMEOUT_MS);
 
         let (feeder_wake, feeder_waits) = make_signal!(());
@@ -96,6 +107,7 @@ mod app {
                 usart_wakes_feeder: feeder_wake,
                 status_waits,
                 watchdog,
+                config,
             },
         )
     }
@@ -153,7 +165,9 @@ mod app {
             *l.wake -= 1;
         }
         WATCHDOG.tick_alive();
-        *l.overran = l.overrun.after_tick(l.tick_timer.update_pending());
+        // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
+        let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
+        *l.overran = l.overrun.after_tick(late);
     }
 
     /// E-stop edge: drivers off at once; the tick latches the fault (even if the loop closed
@@ -223,7 +237,8 @@ mod app {
 
     /// Every millisecond of machine time: judge the link, announce faults, send the periodic
     /// Status, and feed the watchdog when the tick and this task both ran.
-    #[task(priority = 1, shared = [motion, link, host_port], local = [status_waits, watchdog])]
+    #[task(priority = 1, shared = [motion, link, host_port],
+        local = [status_waits, watchdog, config])]
     async fn link_status(cx: link_status::Context) {
         let link_status::SharedResources { mut motion, mut link, mut host_port, .. } = cx.shared;
         let mut overruns_seen = 0;
@@ -239,6 +254,16 @@ mod app {
             let (responses, feed) = link.lock(|l| l.poll(&mut motion));
             if feed && WATCHDOG.poll() {
                 cx.local.watchdog.feed();
+            }
+            if let Some(cfg) = link.lock(|l| l.take_save(&mut motion)) {
+                let (watchdog, config) = (&mut *cx.local.watchdog, &mut *cx.local.config);
+                SAVING_CONFIG.store(true, Relaxed);
+                let saved = watchdog.stretch(|| config.save(&cfg));
+                SAVING_CONFIG.store(false, Relaxed);
+                match saved {
+                    Ok(()) => defmt::info!("config saved to flash"),
+                    Err(e) => defmt::error!("config not saved: {}", defmt::Debug2Format(&e)),
+                }
             }
             for response in responses.iter().flatten() {
                 // Encoded outside the locks: the USART task keeps running meanwhile.

@@ -840,6 +840,26 @@ impl Dda {
     }
 
     /// Room for prepared segments.
+    /// The running segment has no successor in the ready queue, and only just enough of it is
+    /// left (plus `margin_vticks`) to ramp from the current rate to a stop within it: a feed
+    /// hold issued now ends on the path instead of at the segment's end at its exit rate.
+    /// Multiplies and compares only (the machine's tick asks it while the host is late).
+    #[inline]
+    pub fn stop_due(&self, margin_vticks: u32) -> bool {
+        if self.remaining == 0 || !self.ready.is_empty() {
+            return false;
+        }
+        // During a cruise the budget is only brought up to date on leaving it.
+        let budget = if self.cruise_len != 0 {
+            self.budget.saturating_sub(self.cruise_vticks() as u64 * self.two_dr)
+        } else {
+            self.budget
+        };
+        let exit_sq = (self.seg_exit as u64 * self.seg_exit as u64) >> RATE_FRAC_BITS;
+        // budget = exit^2 + 2 dr * left; stopping from `rate` takes rate^2 / (2 dr) of `left`.
+        self.rate_sq + exit_sq + margin_vticks as u64 * self.two_dr >= budget
+    }
+
     pub fn ready_free(&self) -> usize {
         READY_DEPTH - self.ready.len()
     }

@@ -8,7 +8,7 @@ use core::fmt::Write;
 pub use crate::trace::TraceHash;
 
 /// Most named figures one report carries.
-pub const MAX_FIGURES: usize = 24;
+pub const MAX_FIGURES: usize = 32;
 /// Longest report line (`scenario ...` or one `scenario_fig ...`).
 pub const LINE_CAPACITY: usize = 160;
 pub type Line = heapless::String<LINE_CAPACITY>;

@@ -15,9 +15,14 @@ const COUNTS_PER_MS: u32 = LSI_HZ / 32 / 1_000;
 const KEY_UNLOCK: u16 = 0x5555;
 const KEY_FEED: u16 = 0xAAAA;
 const KEY_START: u16 = 0xCCCC;
+/// While stretched: prescaler /64 (PR = 4) and the largest reload, 4095 * 64 / 32 kHz = 8.2 s
+/// nominal (4.1 s at the fastest LSI), well beyond a 16 KiB sector erase (0.5 s at most).
+const STRETCH_PRESCALER_CODE: u16 = 4;
+const MAX_RELOAD: u16 = 0xfff;
 
 pub struct Watchdog {
     iwdg: pac::IWDG,
+    reload: u16,
 }
 
 impl Watchdog {
@@ -25,17 +30,41 @@ impl Watchdog {
     pub fn start(iwdg: pac::IWDG, timeout_ms: u32) -> Self {
         // SAFETY: DBGMCU only affects behaviour under a debugger halt; this bit is ours alone.
         unsafe { (*pac::DBGMCU::ptr()).apb1_fz().modify(|_, w| w.dbg_iwdg_stop().set_bit()) };
-        let reload = timeout_ms.saturating_mul(COUNTS_PER_MS).clamp(1, 0xfff) as u16;
-        // SAFETY (all below): the key values and 3-/12-bit fields are the ones RM0090 21.4
-        // defines; PR and RLR are written after the unlock key.
+        let reload = timeout_ms.saturating_mul(COUNTS_PER_MS).clamp(1, MAX_RELOAD as u32) as u16;
+        let mut w = Watchdog { iwdg, reload };
+        w.set(PRESCALER_CODE, reload);
+        // SAFETY: the start and reload keys.
         unsafe {
-            iwdg.kr().write(|w| w.bits(KEY_UNLOCK));
-            iwdg.pr().write(|w| w.bits(PRESCALER_CODE));
-            iwdg.rlr().write(|w| w.bits(reload));
-            iwdg.kr().write(|w| w.bits(KEY_START));
-            iwdg.kr().write(|w| w.bits(KEY_FEED));
+            w.iwdg.kr().write(|w| w.bits(KEY_START));
+            w.iwdg.kr().write(|w| w.bits(KEY_FEED));
         }
-        Watchdog { iwdg }
+        w
+    }
+
+    /// Writes PR and RLR once the previous update reached the LSI domain (PVU/RVU clear).
+    fn set(&mut self, prescaler_code: u16, reload: u16) {
+        while self.iwdg.sr().read().pvu().bit_is_set() || self.iwdg.sr().read().rvu().bit_is_set() {
+        }
+        // SAFETY: the unlock key, then 3- and 12-bit fields as RM0090 21.4 defines them.
+        unsafe {
+            self.iwdg.kr().write(|w| w.bits(KEY_UNLOCK));
+            self.iwdg.pr().write(|w| w.bits(prescaler_code));
+            self.iwdg.rlr().write(|w| w.bits(reload));
+        }
+    }
+
+    /// Runs `f` (a flash erase: every fetch stalls, the control task cannot feed) with the
+    /// timeout stretched to seconds, then restores it. Fed on both sides.
+    #[cfg_attr(not(feature = "board-f405-motion"), allow(dead_code))]
+    pub fn stretch<R>(&mut self, f: impl FnOnce() -> R) -> R {
+        self.feed();
+        self.set(STRETCH_PRESCALER_CODE, MAX_RELOAD);
+        self.feed();
+        let r = f();
+        self.feed();
+        self.set(PRESCALER_CODE, self.reload);
+        self.feed();
+        r
     }
 
     pub fn feed(&mut self) {

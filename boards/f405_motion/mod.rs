@@ -14,11 +14,16 @@
 //! | EXTI12 | e-stop (EXTI15_10 interrupt); the tick also reads its level |
 //! | GPIO | limit switches, wire stall (read every tick), spindle enable, wire power |
 //! | IWDG | watchdog (link firmware), ~100 ms, fed only while tick and control run |
+//! | FLASH sectors 2-3 | the persisted board config (two 16 KiB slots; code starts at sector 4) |
 //! | DWT.CYCCNT | cycle counter for benchmarks |
 //! | RTT | defmt log frames (probe-rs) |
 
 mod clocks;
+#[cfg(feature = "link")]
+mod config_storage;
 mod cycles;
+#[cfg(feature = "link")]
+mod flash;
 mod force_adc;
 #[path = "../common/host_serial.rs"]
 mod host_serial;
@@ -39,6 +44,8 @@ mod z_dac;
 
 pub use cycles::CycleCounter;
 // Wired by the link firmware's capability tasks (no app names these types yet).
+#[cfg(feature = "link")]
+pub use config_storage::ConfigStorage;
 #[allow(unused_imports)]
 pub use force_adc::{ForceAdc, ForceFrame, FORCE_CHANNEL_COUNT, FRAMES_PER_HALF};
 pub use host_serial::HostSerial;
@@ -80,6 +87,9 @@ pub struct Board {
     /// The independent watchdog, not started (the link firmware starts it).
     #[cfg(feature = "link")]
     pub iwdg: pac::IWDG,
+    /// The persisted config (flash sectors 2-3).
+    #[cfg(feature = "link")]
+    pub config: ConfigStorage,
     /// The capability drivers (`None` only if init ran twice).
     // Wired by the link firmware's capability tasks; no app uses them yet.
     #[allow(dead_code)]
@@ -125,6 +135,8 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         io: MachineIo::new(z_dac),
         #[cfg(feature = "link")]
         iwdg: dp.IWDG,
+        #[cfg(feature = "link")]
+        config: ConfigStorage::new(dp.FLASH),
         capabilities,
     }
 }

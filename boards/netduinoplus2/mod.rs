@@ -54,6 +54,9 @@ pub struct Board {
     /// QEMU ignores the IWDG; started anyway so the link firmware is the same code.
     #[cfg(feature = "link")]
     pub iwdg: pac::IWDG,
+    /// No persisted config under QEMU (its flash is read-only ROM).
+    #[cfg(feature = "link")]
+    pub config: ConfigStorage,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -68,6 +71,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         io: MachineIo,
         #[cfg(feature = "link")]
         iwdg: dp.IWDG,
+        #[cfg(feature = "link")]
+        config: ConfigStorage,
     }
 }
 
@@ -104,6 +109,27 @@ impl MachineIo {
 
     #[inline]
     pub fn write(&mut self, _o: &motion::machine::Outputs) {}
+}
+
+/// QEMU models no flash interface (its flash is ROM): the config is always "missing" at boot
+/// and never saved; the store itself is tested on the host over a NOR-flash mock.
+#[cfg(feature = "link")]
+pub struct ConfigStorage;
+
+#[cfg(feature = "link")]
+impl ConfigStorage {
+    pub const PERSISTS: bool = false;
+
+    pub fn load(&mut self) -> Result<motion::machine::BoardConfig, motion::machine::BootConfig> {
+        Err(motion::machine::BootConfig::Missing)
+    }
+
+    pub fn save(
+        &mut self,
+        _cfg: &motion::machine::BoardConfig,
+    ) -> Result<(), motion::machine::persist::SaveError> {
+        Ok(())
+    }
 }
 
 /// QEMU has no e-stop input: the interrupt is never raised.

@@ -388,3 +388,51 @@ fn no_drift_over_a_billion_steps() {
     assert_eq!(net, expect);
     assert_eq!(dda.positions(), expect);
 }
+
+/// A starved job's last segment (exit rate > 0, nothing behind it): `stop_due` says when a hold
+/// must start for the ramp to end inside the segment. Held from that moment it stops on the
+/// path; run on instead, the DDA reaches the end at speed and underruns (so the check can fail).
+/// With and without the cruise fast path, which keeps the budget stale until it leaves.
+#[test]
+fn stop_due_leaves_room_to_ramp_down_inside_the_last_segment() {
+    let c = cfg(2_500, 0, 0);
+    for cruise in [true, false] {
+        for (len, exit) in [(20_000, 0.6), (4_000, 0.3), (60_000, 0.9)] {
+            let seg = Segment {
+                steps: [len, len / 3, 0, 0, 0, 0],
+                duration_ticks: len as u32 * 2,
+                entry_rate: Rate::ZERO,
+                exit_rate: rate(exit),
+                accel_per_tick: Rate::from_bits(1 << 16),
+                id: 1,
+            };
+            let run = |hold: bool| {
+                let mut dda = motion::Dda::new(&c).unwrap();
+                if !cruise {
+                    dda.disable_cruise_path();
+                }
+                let mut prep = motion::dda::Preparer::new(&c).unwrap();
+                dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+                let mut held_at = None;
+                for t in 0..10 * seg.duration_ticks as u64 {
+                    if hold && held_at.is_none() && dda.stop_due(64) {
+                        dda.apply(Command::Hold);
+                        held_at = Some(t);
+                    }
+                    dda.tick();
+                    if dda.is_idle() || dda.state() == motion::dda::MotionState::Held {
+                        break;
+                    }
+                }
+                (dda.segments_done(), dda.underruns(), held_at, dda.state())
+            };
+            let (done, underruns, held_at, state) = run(true);
+            let why = format!("cruise {cruise}, {len} steps, exit {exit}");
+            assert!(held_at.is_some(), "{why}: stop_due never fired");
+            assert_eq!((done, underruns), (0, 0), "{why}: the hold ended inside the segment");
+            assert_eq!(state, motion::dda::MotionState::Held, "{why}");
+            let (done, underruns, _, _) = run(false);
+            assert_eq!((done, underruns), (1, 1), "{why}: unheld, it ends at speed and underruns");
+        }
+    }
+}

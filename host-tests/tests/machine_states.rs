@@ -113,6 +113,7 @@ fn command_of<'a>(k: CommandKind, cfg: &'a BoardConfig, seg: &'a Segment) -> Mac
         CommandKind::Resume => MachineCommand::Resume,
         CommandKind::Abort => MachineCommand::Abort,
         CommandKind::ClearFault => MachineCommand::ClearFault,
+        CommandKind::JogOff => MachineCommand::JogOff,
     }
 }
 
@@ -128,6 +129,9 @@ fn every_state_command_pair_is_answered_as_the_table_says() {
             let got = r.cmd(command_of(k, &cfg, &seg));
             let want = match cell(s, k) {
                 Cell::Refused => Err(Refusal::OutOfState(s)),
+                // The rig's fault is an e-stop: nothing to jog off, refused, nothing changes
+                // (the jog itself: the `fault_limit_jog_off` scenario).
+                Cell::Stay if k == CommandKind::JogOff => Err(Refusal::NotOnLimit),
                 Cell::Stay => Ok(s),
                 Cell::To(t) => Ok(t),
                 // After an e-stop the homing is not trusted: Idle.

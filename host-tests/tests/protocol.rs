@@ -126,6 +126,7 @@ fn all_requests() -> Vec<Request> {
         RequestBody::ClearFault,
         RequestBody::Home,
         RequestBody::SetHoming(HomingConfig::NONE),
+        RequestBody::JogOffLimit,
     ]
     .into_iter()
     .enumerate()
@@ -214,7 +215,7 @@ fn every_message_round_trips_through_frames() {
     }
     // The kinds are all covered.
     let kinds: HashSet<u8> = reqs.iter().map(|r| r.body.kind()).collect();
-    assert_eq!(kinds.len(), 14);
+    assert_eq!(kinds.len(), 15);
 }
 
 #[test]
@@ -717,7 +718,8 @@ fn random_request(rng: &mut Rng, next_seq: u32) -> Request {
         }
         10 => RequestBody::SetOverride { rate_bits: rng.next() as u32 >> rng.below(4) },
         11 => RequestBody::SetStatusPeriod { ms: rng.next() as u16 >> rng.below(16) },
-        12 => RequestBody::Home,
+        12 if rng.chance(0.5) => RequestBody::Home,
+        12 => RequestBody::JogOffLimit,
         13 => {
             let mut h = HomingConfig::NONE;
             h.count = rng.below(3) as u8;

@@ -91,6 +91,11 @@ pub enum Cmd {
         #[command(flatten)]
         link: LinkArgs,
     },
+    /// After a limit fault: move the tripped axes slowly off their switches (then clear-fault).
+    JogOffLimit {
+        #[command(flatten)]
+        link: LinkArgs,
+    },
     /// Set the feed override factor (0..=2).
     Override {
         #[arg(value_parser = parse_override)]
@@ -399,6 +404,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),
         Cmd::Abort { link } => one_request(&link, RequestBody::Abort, "abort"),
         Cmd::ClearFault { link } => one_request(&link, RequestBody::ClearFault, "clear-fault"),
+        Cmd::JogOffLimit { link } => one_request(&link, RequestBody::JogOffLimit, "jog-off-limit"),
         Cmd::Home { link } => home_board(&link),
         Cmd::Override { factor, link } => {
             let rate_bits = ((factor * (1u64 << 30) as f64).round() as u32).min(MAX_OVERRIDE_BITS);

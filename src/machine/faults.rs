@@ -34,7 +34,8 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         FaultCode::LimitSwitch
         | FaultCode::SoftLimit
         | FaultCode::ConfigMissing
-        | FaultCode::FollowingError => Reaction::Stop,
+        | FaultCode::FollowingError
+        | FaultCode::HomingFailed => Reaction::Stop,
         FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::LinkLost
@@ -57,10 +58,11 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         FaultCode::LimitSwitch => "every limit switch released",
         FaultCode::LinkLost => "link back",
         FaultCode::ConfigMissing => "a valid SetConfig accepted",
-        FaultCode::SoftLimit | FaultCode::QueueUnderrun | FaultCode::TickOverrun => {
-            "at once (an event, not a level)"
-        }
-        FaultCode::SensorFault => "sensor input clear (switch-not-found in homing: at once)",
+        FaultCode::SoftLimit
+        | FaultCode::QueueUnderrun
+        | FaultCode::TickOverrun
+        | FaultCode::HomingFailed => "at once (an event, not a level)",
+        FaultCode::SensorFault => "sensor input clear",
         _ => "the sensor's fault bit clear",
     }
 }

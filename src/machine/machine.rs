@@ -12,6 +12,7 @@
 use super::config::BoardConfig;
 use super::faults::{reaction, FaultLatch, Reaction};
 use super::homing::{HomeEvent, Homing};
+use super::jog_off::{JogEvent, JogOff};
 use super::limits::SoftLimits;
 use super::outputs::Outputs;
 use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
@@ -20,6 +21,10 @@ use crate::dda::{Command, Dda, Preparer, StepOutput, READY_DEPTH};
 use crate::planner::Planner;
 use crate::protocol::{ErrorCode, FaultCode, WireState};
 use crate::segment::{Segment, SegmentError};
+
+/// Slack, in virtual ticks, between the point where a starved job is held and the last point
+/// from which the hold still stops within the running segment (the hold acts from the next tick).
+pub const STARVE_MARGIN_VTICKS: u32 = 64;
 
 /// What the board reads every tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,6 +85,7 @@ pub enum MachineCommand<'a> {
     Resume,
     Abort,
     ClearFault,
+    JogOff,
 }
 
 impl MachineCommand<'_> {
@@ -93,6 +99,7 @@ impl MachineCommand<'_> {
             MachineCommand::Resume => CommandKind::Resume,
             MachineCommand::Abort => CommandKind::Abort,
             MachineCommand::ClearFault => CommandKind::ClearFault,
+            MachineCommand::JogOff => CommandKind::JogOff,
         }
     }
 }
@@ -110,13 +117,18 @@ pub enum Refusal {
     SoftLimit {
         axis: u8,
     },
+    /// `JogOff` without a limit fault to jog off: no LimitSwitch latched, another cause present,
+    /// no switch (or both switches of an axis) closed, or motion not yet at rest.
+    NotOnLimit,
 }
 
 impl Refusal {
     /// The NAK code the link sends for this refusal.
     pub const fn error_code(&self) -> ErrorCode {
         match self {
-            Refusal::OutOfState(_) | Refusal::CauseActive(_) => ErrorCode::OutOfState,
+            Refusal::OutOfState(_) | Refusal::CauseActive(_) | Refusal::NotOnLimit => {
+                ErrorCode::OutOfState
+            }
             Refusal::InvalidConfig(_) => ErrorCode::InvalidConfig,
             Refusal::Segment(_) | Refusal::SoftLimit { .. } => ErrorCode::InvalidSegment,
         }
@@ -157,6 +169,10 @@ pub struct Machine {
     abort_pending: bool,
     hold_pending: bool,
     homing: Homing,
+    /// Moving off a tripped limit switch (in `Fault`).
+    jog: Option<JogOff>,
+    /// The limit switches (min, max) as the last tick read them.
+    switches: (u8, u8),
     last_dir: u8,
     ticks: u64,
 }
@@ -191,6 +207,8 @@ impl Machine {
             abort_pending: false,
             hold_pending: false,
             homing: Homing::idle(),
+            jog: None,
+            switches: (0, 0),
             last_dir: 0,
             ticks: 0,
         }
@@ -278,6 +296,11 @@ impl Machine {
         &self.homing
     }
 
+    /// A `JogOff` move is under way.
+    pub fn is_jogging(&self) -> bool {
+        self.jog.is_some()
+    }
+
     pub fn outputs(&self) -> Outputs {
         self.outputs
     }
@@ -334,6 +357,7 @@ impl Machine {
                 self.install(*new);
                 self.homed = false;
                 self.homing.cancel();
+                self.jog = None;
                 self.freeze();
             }
             MachineCommand::Queue(seg) => {
@@ -355,13 +379,23 @@ impl Machine {
             MachineCommand::Resume => dda.apply(Command::Resume),
             MachineCommand::Abort => {
                 self.homing.cancel();
+                self.jog = None;
                 self.freeze();
             }
             MachineCommand::ClearFault => {
                 self.latch.clear();
                 self.homing.cancel();
+                self.jog = None;
                 self.hold_pending = false;
                 self.freeze();
+            }
+            MachineCommand::JogOff => {
+                let only_limit = self.active & !FaultCode::LimitSwitch.bit() == 0;
+                let at_rest = !self.frozen && !self.abort_pending && dda.is_idle();
+                let jog = JogOff::start(self.switches.0, self.switches.1, &self.cfg)
+                    .filter(|_| self.latch.has(FaultCode::LimitSwitch) && only_limit && at_rest)
+                    .filter(|_| self.jog.is_none());
+                self.jog = Some(jog.ok_or(Refusal::NotOnLimit)?);
             }
         }
         self.state = to;
@@ -393,6 +427,7 @@ impl Machine {
         match self.state {
             MachineState::Homing => self.watch_homing(dda, inp),
             MachineState::Running => self.watch_job(dda),
+            MachineState::Fault if self.jog.is_some() => self.watch_jog(dda, inp),
             _ => {}
         }
         self.apply_hold(dda);
@@ -406,6 +441,7 @@ impl Machine {
         if inp.estop {
             active |= FaultCode::EStop.bit();
         }
+        self.switches = (inp.limit_min, inp.limit_max);
         let limits = inp.limit_min | inp.limit_max;
         if limits != 0 {
             active |= FaultCode::LimitSwitch.bit();
@@ -496,9 +532,7 @@ impl Machine {
                 self.freeze();
             }
             HomeEvent::NotFound { .. } | HomeEvent::Stuck { .. } => {
-                // No dedicated code: a switch that never closes (or never opens) is a sensor
-                // reading out of range.
-                self.raise(FaultCode::SensorFault);
+                self.raise(FaultCode::HomingFailed);
                 return;
             }
         }
@@ -508,6 +542,21 @@ impl Machine {
             self.enter(MachineState::Ready);
             // The background resets the job bookkeeping to the homed position.
             self.freeze();
+        }
+    }
+
+    /// The jog off a limit switch: stop once every tripped switch opened, at once if another
+    /// closes, and forget the jog when its move ended (the operator may jog again).
+    fn watch_jog(&mut self, dda: &Dda, inp: &Inputs) {
+        let Some(jog) = self.jog else { return };
+        match jog.watch(inp.limit_min, inp.limit_max, dda.is_idle()) {
+            JogEvent::None => {}
+            JogEvent::OtherSwitch | JogEvent::Released | JogEvent::Ended => {
+                self.jog = None;
+                // Also after a move that ended by itself: the background resets the job
+                // bookkeeping to where the axes are.
+                self.freeze();
+            }
         }
     }
 
@@ -524,9 +573,13 @@ impl Machine {
             return;
         }
         // The DDA runs the last admitted segment, which expects a successor (exit speed > 0),
-        // and nothing is queued behind it: the host is late. Hold now, so the stop is a ramp on
-        // the path instead of the DDA's abrupt stop at the segment end.
-        let starving = in_flight == 1 && self.last_exit_nonzero && dda.ready_free() == READY_DEPTH;
+        // nothing is queued behind it, and the segment is about to end: the host is late. Hold
+        // now, so the stop is a ramp on the path instead of the DDA's abrupt stop at the
+        // segment end. (Until then the host may still deliver the successor in time.)
+        let starving = in_flight == 1
+            && self.last_exit_nonzero
+            && dda.ready_free() == READY_DEPTH
+            && dda.stop_due(STARVE_MARGIN_VTICKS);
         if starving || dda.underruns() != self.underruns_base {
             self.raise(FaultCode::QueueUnderrun);
         }
@@ -573,12 +626,14 @@ impl Machine {
 
     /// Planning-rate work is due: an abort after an immediate stop, or a homing move to plan.
     pub fn wants_background(&self) -> bool {
-        self.abort_pending || (self.state == MachineState::Homing && self.homing.needs_move())
+        self.abort_pending
+            || (self.state == MachineState::Homing && self.homing.needs_move())
+            || self.jog.is_some_and(|j| j.needs_move())
     }
 
     /// The planning-rate work (control task; divides): aborts a frozen DDA, then plans and
     /// queues the next homing move. A homing move the planner or DDA refuses raises
-    /// `SensorFault` (the config was validated, so it does not happen with a valid one).
+    /// `HomingFailed` (the config was validated, so it does not happen with a valid one).
     pub fn background(&mut self, dda: &mut Dda, prep: &mut Preparer) {
         if self.abort_pending {
             dda.abort();
@@ -592,10 +647,12 @@ impl Machine {
             self.underruns_base = dda.underruns();
             self.last_exit_nonzero = false;
         }
-        if self.state != MachineState::Homing {
-            return;
-        }
-        let Some(mv) = self.homing.take_move() else { return };
+        let mv = match (self.state, &mut self.jog) {
+            (MachineState::Homing, _) => self.homing.take_move(),
+            (MachineState::Fault, Some(jog)) => jog.take_move(&self.cfg),
+            _ => None,
+        };
+        let Some(mv) = mv else { return };
         let mut planner = Planner::new(&self.cfg.wire.machine);
         let mut ok = planner.push(&mv).is_ok();
         planner.finish();
@@ -606,8 +663,12 @@ impl Machine {
                 Err(_) => false,
             };
         }
-        if !ok {
-            self.raise(FaultCode::SensorFault);
+        if !ok && self.state == MachineState::Homing {
+            self.raise(FaultCode::HomingFailed);
+        } else if !ok {
+            // A jog move the planner refuses: nothing moves; the operator sees the jog end.
+            self.jog = None;
+            self.freeze();
         }
     }
 }

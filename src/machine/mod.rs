@@ -12,6 +12,7 @@
 pub mod config;
 pub mod faults;
 pub mod homing;
+pub mod jog_off;
 pub mod limits;
 #[allow(clippy::module_inception)]
 pub mod machine;

@@ -87,10 +87,11 @@ pub enum CommandKind {
     Resume = 5,
     Abort = 6,
     ClearFault = 7,
+    JogOff = 8,
 }
 
 impl CommandKind {
-    pub const COUNT: usize = 8;
+    pub const COUNT: usize = 9;
     /// Every command, in table order.
     pub const ALL: [CommandKind; Self::COUNT] = [
         CommandKind::SetConfig,
@@ -101,6 +102,7 @@ impl CommandKind {
         CommandKind::Resume,
         CommandKind::Abort,
         CommandKind::ClearFault,
+        CommandKind::JogOff,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -113,6 +115,7 @@ impl CommandKind {
             CommandKind::Resume => "Resume",
             CommandKind::Abort => "Abort",
             CommandKind::ClearFault => "ClearFault",
+            CommandKind::JogOff => "JogOff",
         }
     }
 
@@ -131,6 +134,9 @@ impl CommandKind {
             CommandKind::Abort => "Stop at once (no deceleration) and drop every queued segment.",
             CommandKind::ClearFault => {
                 "Unlatch the faults once no cause is active; the rest of the job is dropped."
+            }
+            CommandKind::JogOff => {
+                "After a limit fault, move the tripped axes slowly off their switches (stops when they open, or at once if another closes); then ClearFault."
             }
         }
     }
@@ -164,15 +170,15 @@ const fn to(s: MachineState) -> Cell {
 }
 
 /// Row = state ([`MachineState::index`]), column = command ([`CommandKind::index`]):
-/// SetConfig, Home, Start, Queue, Hold, Resume, Abort, ClearFault.
+/// SetConfig, Home, Start, Queue, Hold, Resume, Abort, ClearFault, JogOff.
 pub const TABLE: [[Cell; CommandKind::COUNT]; MachineState::COUNT] = [
-    /* Boot    */ [R, R, R, R, R, R, R, R],
-    /* Idle    */ [K, to(S::Homing), R, R, R, R, K, R],
-    /* Homing  */ [R, R, R, R, R, R, to(S::Idle), R],
-    /* Ready   */ [to(S::Idle), to(S::Homing), to(S::Running), K, R, R, K, R],
-    /* Running */ [R, R, R, K, to(S::Holding), R, to(S::Ready), R],
-    /* Holding */ [R, R, R, K, R, to(S::Running), to(S::Ready), R],
-    /* Fault   */ [K, R, R, R, R, R, K, Cell::Recover],
+    /* Boot    */ [R, R, R, R, R, R, R, R, R],
+    /* Idle    */ [K, to(S::Homing), R, R, R, R, K, R, R],
+    /* Homing  */ [R, R, R, R, R, R, to(S::Idle), R, R],
+    /* Ready   */ [to(S::Idle), to(S::Homing), to(S::Running), K, R, R, K, R, R],
+    /* Running */ [R, R, R, K, to(S::Holding), R, to(S::Ready), R, R],
+    /* Holding */ [R, R, R, K, R, to(S::Running), to(S::Ready), R, R],
+    /* Fault   */ [K, R, R, R, R, R, K, Cell::Recover, K],
 ];
 
 /// The table's answer for `state` and `cmd`.

@@ -149,6 +149,7 @@ coded_enum! {
         ZSlideLimit = 15 => ("ZSlideLimit", "The Z-slide command needs more speed or acceleration than the slide has."),
         WireStall = 16 => ("WireStall", "The wire stayed stalled through the whole retrace distance."),
         FollowingError = 17 => ("FollowingError", "Measured position too far from the commanded one."),
+        HomingFailed = 18 => ("HomingFailed", "A homing switch was not found within the axis's travel, or did not release on back-off."),
     }
 }
 

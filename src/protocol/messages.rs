@@ -77,6 +77,8 @@ pub enum RequestBody {
     Home,
     /// Replace the homing parameters (a `SetConfig` that keeps the machine config; loses homing).
     SetHoming(HomingConfig),
+    /// After a limit fault: move the tripped axes slowly off their switches (`Fault` only).
+    JogOffLimit,
 }
 
 /// How the machine homes: `order[..count]` are the axes homed in turn (0 = home where it
@@ -112,6 +114,7 @@ impl RequestBody {
             RequestBody::ClearFault => 11,
             RequestBody::Home => 12,
             RequestBody::SetHoming(_) => 13,
+            RequestBody::JogOffLimit => 14,
         }
     }
 

@@ -32,6 +32,7 @@
 //! | QueueSegments | credits for the whole batch, every segment valid and inside the soft limits |
 //! | Hold | motion to hold (the target refuses an idle DDA with nothing to feed) |
 //! | ClearFault | no fault cause still active (the target refuses with `OutOfState`) |
+//! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
@@ -74,6 +75,9 @@ pub trait LinkTarget {
     /// Called with homing parameters validated against the current config, only with an empty
     /// queue.
     fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode>;
+    /// Moves the axes off the limit switches they tripped (refused with `OutOfState` when there
+    /// is nothing to jog off).
+    fn jog_off_limit(&mut self) -> Result<(), ErrorCode>;
 }
 
 /// The machine command a request is, if it is one (queries and link settings are not).
@@ -87,6 +91,7 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
         RequestBody::ClearFault => CommandKind::ClearFault,
+        RequestBody::JogOffLimit => CommandKind::JogOff,
         RequestBody::Hello { .. }
         | RequestBody::GetConfig
         | RequestBody::GetStatus
@@ -419,6 +424,13 @@ impl BoardLink {
             }
             RequestBody::Home => {
                 t.home().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::JogOffLimit => {
+                t.jog_off_limit().map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
                 Ok(Reply::None)
             }
             RequestBody::SetOverride { rate_bits } => {

@@ -210,6 +210,11 @@ impl LinkTarget for SimTarget {
         Ok(())
     }
 
+    /// The fake machine has no switches: there is never anything to jog off.
+    fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
+        Err(ErrorCode::OutOfState)
+    }
+
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
         if self.queue.len() >= self.capacity as usize {
             return Err(ErrorCode::QueueFull);

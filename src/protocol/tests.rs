@@ -104,6 +104,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         RequestBody::SetStatusPeriod { ms: u16::MAX },
         RequestBody::ClearFault,
         RequestBody::Home,
+        RequestBody::JogOffLimit,
         RequestBody::SetHoming(HomingConfig {
             order: [u8::MAX; MAX_AXES],
             count: u8::MAX,

@@ -41,6 +41,9 @@ pub enum Case {
     EStop,
     LimitMin(u8),
     LimitMax(u8),
+    /// A limit trips, ClearFault is refused while the axis sits on the switch, JogOff moves it
+    /// off, then ClearFault returns to Ready with the position kept.
+    LimitJogOff,
     HomingOk,
     HomingNotFound,
     SoftLimitQueue,
@@ -53,12 +56,13 @@ pub enum Case {
 }
 
 /// Every case, in the order the scenario list runs them.
-pub const CASES: [Case; 19] = [
+pub const CASES: [Case; 20] = [
     Case::EStop,
     Case::LimitMin(0),
     Case::LimitMax(0),
     Case::LimitMin(1),
     Case::LimitMax(1),
+    Case::LimitJogOff,
     Case::HomingOk,
     Case::HomingNotFound,
     Case::SoftLimitQueue,
@@ -83,6 +87,7 @@ impl Case {
             Case::LimitMax(0) => "fault_limit_x_max",
             Case::LimitMin(_) => "fault_limit_y_min",
             Case::LimitMax(_) => "fault_limit_y_max",
+            Case::LimitJogOff => "fault_limit_jog_off",
             Case::HomingOk => "fault_homing_ok",
             Case::HomingNotFound => "fault_homing_not_found",
             Case::SoftLimitQueue => "fault_soft_limit_queue",
@@ -106,8 +111,10 @@ impl Case {
         let (state, code) = match self {
             Case::EStop => (Fault, FaultCode::EStop),
             Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
+            // Jogged off and cleared: the fault it recovered from.
+            Case::LimitJogOff => (Ready, FaultCode::LimitSwitch),
             Case::HomingOk => return (Ready, None),
-            Case::HomingNotFound => (Fault, FaultCode::SensorFault),
+            Case::HomingNotFound => (Fault, FaultCode::HomingFailed),
             // Refused at the queue: nothing changes, the refusal names the soft limit.
             Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
             Case::SoftLimitRun => (Fault, FaultCode::SoftLimit),
@@ -219,6 +226,9 @@ pub struct FaultScenario {
     beyond_tried: bool,
     refusal: Option<Refusal>,
     clear_refused: Option<Refusal>,
+    jog_sent: bool,
+    /// The fault a successful ClearFault unlatched.
+    cleared: Option<FaultCode>,
     home_refused: bool,
     overrun: OverrunDetector,
     overrun_flag: bool,
@@ -249,7 +259,7 @@ impl FaultScenario {
         let cfg = machine.config().wire.machine;
         let moves: &'static [Move] = match case {
             Case::EStop | Case::LinkLoss | Case::TickOverrun | Case::Sensor(_) => &LONG_X,
-            Case::LimitMin(0) => &TO_X_MIN,
+            Case::LimitMin(0) | Case::LimitJogOff => &TO_X_MIN,
             Case::LimitMax(0) => &TO_X_MAX,
             Case::LimitMin(_) => &TO_Y_MIN,
             Case::LimitMax(_) => &TO_Y_MAX,
@@ -278,6 +288,8 @@ impl FaultScenario {
             beyond_tried: false,
             refusal: None,
             clear_refused: None,
+            jog_sent: false,
+            cleared: None,
             home_refused: false,
             overrun: OverrunDetector::new(),
             overrun_flag: false,
@@ -345,7 +357,36 @@ impl FaultScenario {
                     && (self.has_more_to_feed()
                         || (self.case == Case::SoftLimitRun && !self.rogue_pushed))
             }
+            MachineState::Fault if self.case == Case::LimitJogOff => {
+                let at_rest = self.dda.is_idle() && !self.machine.wants_background();
+                at_rest
+                    && !self.machine.is_jogging()
+                    && (!self.jog_sent || self.machine.active_causes() == 0)
+            }
             _ => false,
+        }
+    }
+
+    /// The operator after a limit trip: ClearFault first (refused: the switch is closed), then
+    /// JogOff, then ClearFault once the switch has opened.
+    fn recover_from_limit(&mut self) {
+        if !self.jog_sent {
+            self.clear_refused =
+                self.machine.command(MachineCommand::ClearFault, &mut self.dda).err();
+            self.jog_sent = true;
+            if let Err(r) = self.machine.command(MachineCommand::JogOff, &mut self.dda) {
+                self.refusal = Some(r);
+                self.done = true;
+            }
+            return;
+        }
+        let first = self.machine.faults().first();
+        match self.machine.command(MachineCommand::ClearFault, &mut self.dda) {
+            Ok(_) => self.cleared = first,
+            Err(r) => {
+                self.refusal = Some(r);
+                self.done = true;
+            }
         }
     }
 
@@ -373,6 +414,7 @@ impl FaultScenario {
     /// The control task's work: homing command, admitting and feeding segments, starting.
     fn feed(&mut self) {
         match self.machine.state() {
+            MachineState::Fault if self.case == Case::LimitJogOff => self.recover_from_limit(),
             MachineState::Idle => {
                 self.home_sent = true;
                 let _ = self.machine.command(MachineCommand::Home, &mut self.dda);
@@ -441,6 +483,7 @@ impl FaultScenario {
             || state == MachineState::Fault && self.dda.rate().to_bits() == 0;
         let final_state = match self.case {
             Case::HomingOk => state == MachineState::Ready && self.machine.is_homed(),
+            Case::LimitJogOff => state == MachineState::Ready && self.cleared.is_some(),
             Case::SoftLimitQueue => self.beyond_tried,
             _ => state == MachineState::Fault,
         };
@@ -521,7 +564,7 @@ impl Scenario for FaultScenario {
     }
 
     fn report(&self) -> ScenarioReport {
-        let fault = match (self.machine.faults().first(), self.refusal) {
+        let fault = match (self.machine.faults().first().or(self.cleared), self.refusal) {
             (Some(f), _) => f.code(),
             (None, Some(Refusal::SoftLimit { .. })) => FaultCode::SoftLimit.code(),
             _ => 0,
@@ -553,6 +596,8 @@ impl Scenario for FaultScenario {
         r.push("refusal_nak", self.refusal.map_or(0, |x| x.error_code().code() as i64));
         r.push("clear_refused_nak", self.clear_refused.map_or(0, |x| x.error_code().code() as i64));
         r.push("home_refused", self.home_refused as i64);
+        r.push("jog_sent", self.jog_sent as i64);
+        r.push("cleared", self.cleared.map_or(0, |f| f.code() as i64));
         r.push("homed", self.machine.is_homed() as i64);
         r
     }
@@ -621,6 +666,34 @@ mod tests {
             assert_eq!(r.figure(["pos0_steps", "pos1_steps"][axis]), Some(at), "{}", r.name);
             assert_eq!(r.figure("clear_refused_nak"), Some(10), "{}", r.name);
         }
+    }
+
+    #[test]
+    fn jog_off_a_limit_then_clear_keeps_the_position() {
+        let r = run(Case::LimitJogOff);
+        // ClearFault was refused while the switch was closed ...
+        assert_eq!(r.figure("clear_refused_nak"), Some(10));
+        assert_eq!(r.figure("jog_sent"), Some(1));
+        assert_eq!(r.figure("refusal_nak"), Some(0), "JogOff and the second ClearFault accepted");
+        // ... the jog stopped on the first step off the switch (min switch closed at <= -3000),
+        assert_eq!(r.figure("phys0_steps"), Some(SWITCH_MIN + 1));
+        assert_eq!(r.figure("pos0_steps"), r.figure("phys0_steps"), "position kept exactly");
+        // ... and the machine is back in Ready with nothing latched, homing still trusted.
+        assert_eq!(r.figure("fault_mask"), Some(0));
+        assert_eq!(r.figure("cleared"), Some(FaultCode::LimitSwitch.code() as i64));
+        assert_eq!(r.figure("homed"), Some(1));
+    }
+
+    #[test]
+    fn jog_off_is_refused_without_a_limit_fault() {
+        // An e-stop fault: not a limit, nothing to jog off; the refusal changes nothing.
+        let mut s = FaultScenario::new(Case::EStop).unwrap();
+        let _ = run_to_end(&mut s, MAX_TICKS + 1);
+        let before = (s.machine.state(), s.machine.faults().mask(), s.machine.positions());
+        let r = s.machine.command(MachineCommand::JogOff, &mut s.dda);
+        assert_eq!(r, Err(Refusal::NotOnLimit));
+        assert_eq!((s.machine.state(), s.machine.faults().mask(), s.machine.positions()), before);
+        assert!(!s.machine.is_jogging());
     }
 
     #[test]
