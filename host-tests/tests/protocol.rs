@@ -150,6 +150,9 @@ fn all_responses() -> Vec<Response> {
         machine: MachineState::Holding,
         causes: FaultCode::EStop.bit(),
         homed: true,
+        event_credits: 7,
+        events_fired: 19_036,
+        event_blocks: 1,
     };
     let hello = HelloInfo {
         version: PROTOCOL_VERSION,
