@@ -299,10 +299,8 @@ pub fn run(
         }
         while let Some(ev) = s.events.pop_front() {
             match ev {
-                HostEvent::Status(st) => {
-                    if seq_at_or_after(st.next_seq, latest.next_seq) {
-                        latest = st;
-                    }
+                HostEvent::Status(st) if seq_at_or_after(st.next_seq, latest.next_seq) => {
+                    latest = st;
                 }
                 HostEvent::Fault { code, tick } => bail!(
                     "board fault {} ({}) at tick {tick}, after {} events",
