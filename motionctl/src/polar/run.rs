@@ -302,6 +302,8 @@ pub fn run(
                 HostEvent::Status(st) if seq_at_or_after(st.next_seq, latest.next_seq) => {
                     latest = st;
                 }
+                // Announced before this job (e.g. ConfigMissing at boot, cleared above).
+                HostEvent::Fault { tick, .. } if tick < base.tick => {}
                 HostEvent::Fault { code, tick } => bail!(
                     "board fault {} ({}) at tick {tick}, after {} events",
                     code.name(),
