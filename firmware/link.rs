@@ -11,6 +11,14 @@
 //!   [`Machine::command`], which consults the one command table; the link only adds its queue.
 //! * [`HostPort`]: the serial driver and the transmit byte queue.
 //!
+//! Event jobs (recorded step events, `motion::polar`): `QueueEvents` blocks are verified by
+//! `BoardLink` and wait whole in the link's [`EventFeed`]; `StartPlayback` makes a fresh
+//! [`Playback`] (inside [`Motion`], so the tick owns it) pre-filled from the blocks, and starts
+//! the job in the same critical section; the feeder decodes the rest a few events at a time
+//! ([`Link::feed_events`]) and finishes the playback after the host's last block. The tick runs
+//! it through [`Machine::tick_with`]: the same fault inputs, freeze, counters, soft limits and
+//! job end as segments. Event credits are blocks.
+//!
 //! Job life cycle, as the machine's table has it: SetConfig (Idle), Home (-> Homing -> Ready),
 //! QueueSegments (Ready/Running/Holding), Start (Ready -> Running); the job ends (Running ->
 //! Ready) when every admitted segment has finished and the DDA is at rest. `Abort` stops at
@@ -25,10 +33,13 @@ use motion::dda::{Command, MotionState, Prepared, Preparer};
 use motion::machine::{
     BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal, WatchdogGate,
 };
+use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
+use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
+use motion::polar::StepEvent;
 use motion::protocol::{
     encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
-    Status, WireConfig, WireState, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SOFT_LIMITS,
-    CAP_STATUS_STREAM, MAX_FRAME_WIRE, SENSOR_CHANNELS,
+    Status, WireConfig, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_OVERRIDE,
+    CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME_WIRE, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::Dda;
@@ -62,15 +73,27 @@ pub static ESTOP_EDGE: AtomicBool = AtomicBool::new(false);
 pub static SAVING_CONFIG: AtomicBool = AtomicBool::new(false);
 /// Fed only when the tick and the status task both ran since the last feed.
 pub static WATCHDOG: WatchdogGate = WatchdogGate::new();
+/// The event feed holds events not yet in the playback: the tick wakes the feeder when the
+/// playback has room for [`EVENT_REFILL`] of them.
+pub static EVENTS_WAITING: AtomicBool = AtomicBool::new(false);
+/// The feeder refills the playback once this many slots are free: the other half of the
+/// queue covers the feeder's latency (at least 32 ticks: at most 4 events fire per tick).
+pub const EVENT_REFILL: usize = QUEUE_DEPTH / 2;
+/// Events decoded per critical section: the decoding runs outside the `Motion` lock, the copy
+/// into the playback inside it (a few hundred cycles, well inside a tick).
+const EVENT_BATCH: usize = 16;
 
 /// What the board announces in `HelloInfo::capabilities`.
 pub const CAPABILITIES: u32 =
-    CAP_DDA | CAP_STATUS_STREAM | CAP_OVERRIDE | CAP_HOLD_RESUME | CAP_SOFT_LIMITS;
+    CAP_DDA | CAP_STATUS_STREAM | CAP_OVERRIDE | CAP_HOLD_RESUME | CAP_SOFT_LIMITS | CAP_EVENTS;
 
-/// The DDA and the machine around it: one resource, so the tick takes one lock.
+/// The DDA, the event playback and the machine around them: one resource, so the tick takes
+/// one lock.
 pub struct Motion {
     pub dda: Dda,
     pub machine: Machine,
+    /// The event job's playback (the last job's, for its counts, until the next start).
+    pub playback: Playback,
 }
 
 impl Motion {
@@ -83,7 +106,7 @@ impl Motion {
         let dda = Dda::new(&cfg).ok()?;
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
-        Some((Motion { dda, machine }, preparer))
+        Some((Motion { dda, machine, playback: Playback::new(SizeScale::ONE) }, preparer))
     }
 
     /// The state as the link reports it: started with segments still to feed counts as
@@ -91,6 +114,9 @@ impl Motion {
     fn wire_state(&self) -> WireState {
         match (self.machine.state(), self.dda.state()) {
             (MachineState::Running, MotionState::Idle) => WireState::Moving,
+            (MachineState::Holding, MotionState::Idle) if self.machine.event_job() => {
+                WireState::Held
+            }
             _ => self.machine.wire_state(&self.dda),
         }
     }
@@ -114,6 +140,8 @@ pub struct Link {
 /// needs.
 struct Feed {
     queue: Deque<Segment, SEGMENT_QUEUE>,
+    /// Verified event blocks waiting for the playback.
+    events: EventFeed<EVENT_QUEUE_BLOCKS>,
     preparer: Preparer,
     tick_rate: board::TickRate,
     /// Milliseconds of DDA time before the current DDA was created (SetConfig restarts its
@@ -132,6 +160,7 @@ impl Link {
             board: BoardLink::new(firmware, CAPABILITIES),
             feed: Feed {
                 queue: Deque::new(),
+                events: EventFeed::new(),
                 preparer,
                 tick_rate,
                 clock_base_ms: 0,
@@ -226,6 +255,43 @@ impl Link {
         }
     }
 
+    /// The feeder's event work: moves decoded events into the running event job's playback in
+    /// small batches (decoded outside the `Motion` lock) until it is full or the blocks run out;
+    /// finishes it after the last block. Clears [`EVENTS_WAITING`] once nothing is left to move.
+    pub fn feed_events(&mut self, motion: &mut impl Mutex<T = Motion>) {
+        let events = &mut self.feed.events;
+        loop {
+            let room = motion.lock(|m| {
+                if m.machine.event_job() && !events.is_finished() {
+                    m.playback.free()
+                } else {
+                    0
+                }
+            });
+            if room == 0 {
+                return;
+            }
+            let mut buf = [StepEvent::default(); EVENT_BATCH];
+            let want = room.min(EVENT_BATCH);
+            let (n, finished) = events.take(&mut buf[..want]);
+            let (head, _) = buf.split_at(n);
+            motion.lock(|m| {
+                for &ev in head {
+                    // Cannot fail: only this task pushes, and `room` slots were free.
+                    let _ = m.playback.push(ev);
+                }
+                if finished {
+                    m.playback.finish();
+                }
+            });
+            if finished || n < want {
+                // The stream ended, or every queued block went in: QueueEvents wakes us again.
+                EVENTS_WAITING.store(false, Relaxed);
+                return;
+            }
+        }
+    }
+
     /// Milliseconds of DDA time since boot (division: never call from the tick).
     fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
         let (now, tick_hz) =
@@ -267,6 +333,8 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
         self.link.queue.clear();
+        self.link.events.clear();
+        EVENTS_WAITING.store(false, Relaxed);
         self.wake_feeder = true;
     }
 
@@ -348,6 +416,8 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 machine: mc.state(),
                 causes: mc.active_causes(),
                 homed: mc.is_homed(),
+                events_fired: m.playback.fired(),
+                event_blocks: self.link.events.blocks() as u16,
                 ..Status::default()
             }
         })
@@ -383,7 +453,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn hold(&mut self) -> Result<(), ErrorCode> {
         // A hold must not outlive the job it was meant for: nothing moving and nothing to feed
         // means there is nothing to hold.
-        let idle = self.with(|m| m.dda.is_idle());
+        let idle = self.with(|m| m.dda.is_idle() && !m.machine.event_job());
         if idle && self.link.queue.is_empty() {
             return Err(ErrorCode::OutOfState);
         }
@@ -423,6 +493,68 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
         self.command(MachineCommand::JogOff)?;
         // The feeder plans the jog move (the machine's background).
+        self.wake_feeder = true;
+        Ok(())
+    }
+
+    fn event_credits(&self) -> u16 {
+        if self.with(|m| m.machine.events_queued()) {
+            self.link.events.credits()
+        } else {
+            // A new stream starts with an empty feed (see `queue_events`).
+            self.link.events.capacity()
+        }
+    }
+
+    fn next_event_block(&self) -> Option<u16> {
+        if self.with(|m| m.machine.events_queued()) {
+            self.link.events.expected()
+        } else {
+            Some(0)
+        }
+    }
+
+    fn events_pending(&self) -> bool {
+        self.with(|m| m.machine.events_queued() || m.machine.event_job())
+    }
+
+    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
+        let fresh = !self.with(|m| m.machine.events_queued());
+        let state = self.command(MachineCommand::QueueEvents)?;
+        if fresh {
+            // The machine had no events: whatever the feed holds is a finished job's.
+            self.link.events.clear();
+        }
+        // Checked by BoardLink against `next_event_block` and `event_credits`: a refusal here
+        // is a link bug. (The machine's flag stays set: the job has nothing new to play.)
+        self.link.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
+        EVENTS_WAITING.store(true, Relaxed);
+        self.wake_feeder |= state != MachineState::Ready;
+        Ok(())
+    }
+
+    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
+        // Decode the first events outside the lock, from a copy (a refused start changes
+        // nothing), then start the job and fill its playback in one critical section: the
+        // first tick of the job already has events.
+        let mut feed = self.link.events.clone();
+        let mut first = [StepEvent::default(); QUEUE_DEPTH];
+        let (n, finished) = feed.take(&mut first);
+        let (head, _) = first.split_at(n);
+        let r = self.motion.get_mut().lock(|m| {
+            m.machine.command(MachineCommand::StartEvents, &mut m.dda)?;
+            m.playback = Playback::new(scale);
+            for &ev in head {
+                // Cannot fail: a fresh playback holds QUEUE_DEPTH events.
+                let _ = m.playback.push(ev);
+            }
+            if finished {
+                m.playback.finish();
+            }
+            Ok(())
+        });
+        r.map_err(|e: Refusal| e.error_code())?;
+        self.link.events = feed;
         self.wake_feeder = true;
         Ok(())
     }

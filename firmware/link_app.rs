@@ -3,7 +3,8 @@
 //! the one state machine and fault model (`src/machine/MACHINE.md`).
 //!
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
-//! homing, job end) and drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
+//! homing, job end) -- `Machine::tick_with` the event playback during an event job -- and
+//! drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
@@ -20,7 +21,8 @@ mod app {
     use super::FEEDER_BLOCKED;
     use crate::board;
     use crate::link::{
-        self, Link, Motion, ESTOP_EDGE, LINK_OK, SAVING_CONFIG, WAKE_TICKS, WATCHDOG,
+        self, Link, Motion, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK, SAVING_CONFIG,
+        WAKE_TICKS, WATCHDOG,
     };
     use core::sync::atomic::Ordering::Relaxed;
     use motion::machine::{BoardConfig, Inputs, OverrunDetector};
@@ -139,7 +141,11 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
-            let out = m.machine.tick(&mut m.dda, &inputs);
+            let out = if m.machine.event_job() {
+                m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
+            } else {
+                m.machine.tick(&mut m.dda, &inputs)
+            };
             port.apply(m.dda.now(), &out.step);
             l.io.write(&out.outputs);
             // The drivers stay off from an e-stop until its fault is cleared.
@@ -153,7 +159,10 @@ mod app {
                 }
             }
             let room = FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0;
-            if room || m.machine.wants_background() {
+            let events = EVENTS_WAITING.load(Relaxed)
+                && m.machine.event_job()
+                && m.playback.free() >= EVENT_REFILL;
+            if room || events || m.machine.wants_background() {
                 FEEDER_BLOCKED.store(false, Relaxed);
                 l.tick_wakes_feeder.write(());
             }
@@ -187,6 +196,7 @@ mod app {
         let feeder::SharedResources { mut motion, mut link, .. } = cx.shared;
         loop {
             cx.local.feeder_waits.wait().await;
+            link.lock(|l| l.feed_events(&mut motion));
             loop {
                 let full = motion.lock(|m| {
                     let full = m.dda.ready_free() == 0;

@@ -127,6 +127,11 @@ fn all_requests() -> Vec<Request> {
         RequestBody::Home,
         RequestBody::SetHoming(HomingConfig::NONE),
         RequestBody::JogOffLimit,
+        RequestBody::QueueEvents(EventBlock {
+            bytes: BlockBytes::from_slice(&[0xB5, 1, 2, 3]).unwrap(),
+            last: false,
+        }),
+        RequestBody::StartPlayback { m: 3, k: 2 },
     ]
     .into_iter()
     .enumerate()
@@ -151,6 +156,9 @@ fn all_responses() -> Vec<Response> {
         machine: MachineState::Holding,
         causes: FaultCode::EStop.bit(),
         homed: true,
+        event_credits: 7,
+        events_fired: 19_036,
+        event_blocks: 1,
     };
     let hello = HelloInfo {
         version: PROTOCOL_VERSION,
@@ -215,7 +223,7 @@ fn every_message_round_trips_through_frames() {
     }
     // The kinds are all covered.
     let kinds: HashSet<u8> = reqs.iter().map(|r| r.body.kind()).collect();
-    assert_eq!(kinds.len(), 15);
+    assert_eq!(kinds.len(), 17);
 }
 
 #[test]

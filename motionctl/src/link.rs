@@ -49,6 +49,9 @@ pub fn describe_rejection(r: &Rejection) -> String {
             format!(" [field {field}{axis}]")
         }
         NakDetail::State(s) => format!(" [board state {s:?}]"),
+        NakDetail::Block { reason, expected } => {
+            format!(" [event block check {reason} failed; board expects block {expected:?}]")
+        }
     };
     format!("{} ({}){detail}", r.code.name(), r.code.description())
 }

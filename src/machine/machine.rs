@@ -74,6 +74,41 @@ pub struct TickOut {
     pub outputs: Outputs,
 }
 
+/// Where a tick's steps come from: the DDA ([`DdaSource`], segment jobs) or a recorded
+/// step-event playback (`motion::polar::playback::Playback`, event jobs). The machine runs
+/// either through the same tick ([`Machine::tick_with`]): fault inputs, e-stop freeze, step
+/// counters, soft limits and job end are the same code for both.
+pub trait StepSource {
+    /// One tick's pins. The source ticks `dda` itself (an event source ticks the idle DDA too,
+    /// for its clock and feed commands). `hold`: a feed hold or a hold reaction is in force (the
+    /// DDA decelerates on its own; an event source stops its clock). Interrupt rate: integer
+    /// work only, bounded, no division.
+    fn tick(&mut self, dda: &mut Dda, hold: bool) -> StepOutput;
+    /// Nothing left to step: the job is done once the machine sees this while `Running`.
+    fn idle(&self, dda: &Dda) -> bool;
+    /// Ran dry before its end (a late host): raises `QueueUnderrun`. The DDA reports its own
+    /// underruns through `Dda::underruns`, hence the default.
+    fn starved(&self) -> bool {
+        false
+    }
+}
+
+/// The DDA as a [`StepSource`]: what [`Machine::tick`] runs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DdaSource;
+
+impl StepSource for DdaSource {
+    #[inline(always)]
+    fn tick(&mut self, dda: &mut Dda, _hold: bool) -> StepOutput {
+        dda.tick()
+    }
+
+    #[inline(always)]
+    fn idle(&self, dda: &Dda) -> bool {
+        dda.is_idle()
+    }
+}
+
 /// A command with its payload.
 #[derive(Clone, Copy, Debug)]
 pub enum MachineCommand<'a> {
@@ -86,6 +121,12 @@ pub enum MachineCommand<'a> {
     Abort,
     ClearFault,
     JogOff,
+    /// Admit step events for an event job (the table's Queue column). The caller checked the
+    /// events (stream CRC and decoding) and holds them; segments and events never share a job.
+    QueueEvents,
+    /// Start the event job (the table's Start column): the caller's step source plays the
+    /// admitted events through [`Machine::tick_with`].
+    StartEvents,
 }
 
 impl MachineCommand<'_> {
@@ -100,6 +141,8 @@ impl MachineCommand<'_> {
             MachineCommand::Abort => CommandKind::Abort,
             MachineCommand::ClearFault => CommandKind::ClearFault,
             MachineCommand::JogOff => CommandKind::JogOff,
+            MachineCommand::QueueEvents => CommandKind::Queue,
+            MachineCommand::StartEvents => CommandKind::Start,
         }
     }
 }
@@ -175,6 +218,13 @@ pub struct Machine {
     switches: (u8, u8),
     last_dir: u8,
     ticks: u64,
+    /// Events were admitted for an event job that has not ended.
+    events_queued: bool,
+    /// An event job runs (or holds): the tick's source is the playback, and the job ends when
+    /// the source is idle.
+    event_job: bool,
+    /// A hold is in force (feed hold, or a hold reaction): event sources stop their clock.
+    paused: bool,
 }
 
 impl Default for Machine {
@@ -211,6 +261,9 @@ impl Machine {
             switches: (0, 0),
             last_dir: 0,
             ticks: 0,
+            events_queued: false,
+            event_job: false,
+            paused: false,
         }
     }
 
@@ -320,6 +373,16 @@ impl Machine {
         matches!(self.state, MachineState::Running | MachineState::Holding) && !self.frozen
     }
 
+    /// An event job was started and has not ended: tick with the playback source.
+    pub fn event_job(&self) -> bool {
+        self.event_job
+    }
+
+    /// Events were admitted (queued or playing) and the job has not ended.
+    pub fn events_queued(&self) -> bool {
+        self.events_queued
+    }
+
     /// Ticks seen.
     pub fn ticks(&self) -> u64 {
         self.ticks
@@ -350,6 +413,17 @@ impl Machine {
                 }
             }
         };
+        // Segments and events never share a job: the machine has one job end to watch.
+        let events = self.events_queued || self.event_job;
+        let mixed = match cmd {
+            MachineCommand::Queue(_) | MachineCommand::Start => events,
+            MachineCommand::QueueEvents => self.in_flight(dda) != 0,
+            MachineCommand::StartEvents => !self.events_queued || self.event_job,
+            _ => false,
+        };
+        if mixed {
+            return Err(Refusal::OutOfState(self.state));
+        }
         // Checks first (a refusal changes nothing), then effects.
         match cmd {
             MachineCommand::SetConfig(new) => {
@@ -370,13 +444,25 @@ impl Machine {
                 self.admitted = self.admitted.wrapping_add(1);
                 self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
             }
+            MachineCommand::QueueEvents => self.events_queued = true,
+            MachineCommand::StartEvents => {
+                self.event_job = true;
+                self.paused = false;
+            }
             MachineCommand::Home => {
+                self.events_queued = false;
                 self.homed = false;
                 self.homing = Homing::start(&self.cfg);
             }
             MachineCommand::Start => {}
-            MachineCommand::Hold => dda.apply(Command::Hold),
-            MachineCommand::Resume => dda.apply(Command::Resume),
+            MachineCommand::Hold => {
+                self.paused = true;
+                dda.apply(Command::Hold);
+            }
+            MachineCommand::Resume => {
+                self.paused = false;
+                dda.apply(Command::Resume);
+            }
             MachineCommand::Abort => {
                 self.homing.cancel();
                 self.jog = None;
@@ -408,6 +494,19 @@ impl Machine {
     /// 17 fault codes, the latter only while a sensor fault bit is set).
     #[inline]
     pub fn tick(&mut self, dda: &mut Dda, inp: &Inputs) -> TickOut {
+        self.tick_with(dda, inp, &mut DdaSource)
+    }
+
+    /// [`Machine::tick`] with the steps from `source` (an event job's playback): the same
+    /// inputs, freeze, counters, soft limits and job bookkeeping; an event job ends when the
+    /// source is idle and raises `QueueUnderrun` when it starves.
+    #[inline]
+    pub fn tick_with(
+        &mut self,
+        dda: &mut Dda,
+        inp: &Inputs,
+        source: &mut impl StepSource,
+    ) -> TickOut {
         self.ticks += 1;
         self.watch_inputs(dda, inp);
         self.apply_hold(dda);
@@ -419,13 +518,14 @@ impl Machine {
                 outputs: self.outputs,
             };
         }
-        let step = dda.tick();
+        let step = source.tick(dda, self.paused);
         self.last_dir = step.dir();
         if step.rise() != 0 {
             self.count(step);
         }
         match self.state {
             MachineState::Homing => self.watch_homing(dda, inp),
+            MachineState::Running if self.event_job => self.watch_events(dda, source),
             MachineState::Running => self.watch_job(dda),
             MachineState::Fault if self.jog.is_some() => self.watch_jog(dda, inp),
             _ => {}
@@ -585,6 +685,19 @@ impl Machine {
         }
     }
 
+    /// An event job: done when the source has stepped everything; a source that ran dry before
+    /// the host's last block is an underrun (hold, like a late segment).
+    #[inline]
+    fn watch_events(&mut self, dda: &Dda, source: &impl StepSource) {
+        if source.idle(dda) {
+            self.event_job = false;
+            self.events_queued = false;
+            self.enter(MachineState::Ready);
+        } else if source.starved() {
+            self.raise(FaultCode::QueueUnderrun);
+        }
+    }
+
     /// Latches `code`; a new fault gets its class's reaction and the machine goes to `Fault`.
     fn raise(&mut self, code: FaultCode) {
         if !self.latch.raise(code) {
@@ -607,6 +720,7 @@ impl Machine {
     fn apply_hold(&mut self, dda: &mut Dda) {
         if self.hold_pending {
             self.hold_pending = false;
+            self.paused = true;
             dda.apply(Command::Hold);
         }
     }
@@ -646,6 +760,10 @@ impl Machine {
             self.done_base = dda.segments_done();
             self.underruns_base = dda.underruns();
             self.last_exit_nonzero = false;
+            // The caller dropped the events it held (Abort, ClearFault, SetConfig, Home).
+            self.events_queued = false;
+            self.event_job = false;
+            self.paused = false;
         }
         let mv = match (self.state, &mut self.jog) {
             (MachineState::Homing, _) => self.homing.take_move(),

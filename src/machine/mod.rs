@@ -24,7 +24,9 @@ pub mod watchdog;
 
 pub use config::{BoardConfig, HomeAxis};
 pub use faults::{reaction, FaultLatch, Reaction};
-pub use machine::{BootConfig, Inputs, Machine, MachineCommand, Refusal, TickOut};
+pub use machine::{
+    BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, StepSource, TickOut,
+};
 pub use outputs::{Outputs, Z_DAC_MID_SCALE};
 pub use state::{cell, Cell, CommandKind, MachineState};
 pub use watchdog::{OverrunDetector, WatchdogGate};

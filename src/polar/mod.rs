@@ -6,6 +6,8 @@
 //! built-in [`limacon_stream`] as a closed-loop scenario.
 
 pub mod copy;
+pub mod feed;
+pub mod job;
 pub mod limacon_stream;
 pub mod playback;
 pub mod scenario;

@@ -8,7 +8,8 @@
 //! one tick before a reversed rise (setup) and never in the tick of a rise (hold).
 
 use super::{StepEvent, AXIS_R};
-use crate::dda::StepOutput;
+use crate::dda::{Dda, StepOutput};
+use crate::machine::StepSource;
 use crate::segment::Rate;
 use heapless::Deque;
 
@@ -179,6 +180,26 @@ impl Playback {
         self.source_done && self.queue.is_empty() && self.pins.idle()
     }
 
+    /// Decoded events waiting to fire.
+    pub fn queued(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// The feeder has not finished and no event is waiting: time cannot run on (an underrun).
+    pub fn starved(&self) -> bool {
+        self.queue.is_empty() && !self.source_done
+    }
+
+    /// The size scale this playback was made with.
+    pub fn scale(&self) -> SizeScale {
+        self.pins.scale
+    }
+
+    /// The speed scale in force, `Rate` bits.
+    pub fn rate_bits(&self) -> u32 {
+        self.rate_bits
+    }
+
     /// Events fired so far.
     pub fn fired(&self) -> u32 {
         self.fired
@@ -197,7 +218,14 @@ impl Playback {
     /// return the pins. Integer adds, compares and shifts only; bounded loops.
     #[inline]
     pub fn tick(&mut self) -> StepOutput {
-        self.phase_q30 += self.rate_bits as u64;
+        self.tick_at(self.rate_bits)
+    }
+
+    /// [`Playback::tick`] at speed `rate_bits` (Q2.30) for this tick only; 0 stops the clock
+    /// (a hold: due events wait, steps already fired still reach the pins).
+    #[inline]
+    pub fn tick_at(&mut self, rate_bits: u32) -> StepOutput {
+        self.phase_q30 += rate_bits as u64;
         let mut n = 0;
         while n < MAX_FIRE_PER_TICK {
             let Some(ev) = self.queue.front().copied() else { break };
@@ -216,6 +244,27 @@ impl Playback {
             self.phase_q30 = self.phase_q30.min(1 << 31);
         }
         self.pins.output()
+    }
+}
+
+/// An event job through the machine's tick: the idle DDA is ticked for its clock (status time,
+/// link timeout, scheduled commands), the speed scale follows its feed override clamped to
+/// 0.25..=2 (two compares), and a hold stops the playback's clock.
+impl StepSource for Playback {
+    #[inline]
+    fn tick(&mut self, dda: &mut Dda, hold: bool) -> StepOutput {
+        // Idle DDA: its idle fast path (a decrement) or one idle full tick.
+        let _ = dda.tick();
+        let rate = if hold { 0 } else { dda.feed_override().clamp(RATE_MIN, RATE_MAX).to_bits() };
+        self.tick_at(rate)
+    }
+
+    fn idle(&self, _dda: &Dda) -> bool {
+        self.done()
+    }
+
+    fn starved(&self) -> bool {
+        Playback::starved(self)
     }
 }
 

@@ -50,6 +50,22 @@ pub enum StreamError {
     DtRange,
 }
 
+impl StreamError {
+    /// A stable small number per error, for the link's NAK detail.
+    pub const fn code(self) -> u8 {
+        match self {
+            StreamError::Truncated => 1,
+            StreamError::BadMagic => 2,
+            StreamError::Version(_) => 3,
+            StreamError::Crc => 4,
+            StreamError::Varint => 5,
+            StreamError::BadRun => 6,
+            StreamError::Count => 7,
+            StreamError::DtRange => 8,
+        }
+    }
+}
+
 /// Writes one LEB128 varint into `buf` at `*n`; false when it does not fit.
 fn put_varint(buf: &mut [u8], n: &mut usize, mut v: u32) -> bool {
     loop {
@@ -244,14 +260,12 @@ impl<'a> Block<'a> {
     /// The block's events in order; the iterator yields an error (then stops) on a bad item or
     /// when the count differs from the header.
     pub fn iter(&self) -> BlockEvents<'a> {
-        BlockEvents {
-            payload: self.payload,
-            pos: 0,
-            expect: self.events,
-            seen: 0,
-            run: None,
-            done: false,
-        }
+        BlockEvents { payload: self.payload, cursor: Cursor::new(self) }
+    }
+
+    /// The payload bytes, for [`Cursor::next`].
+    pub fn payload(&self) -> &'a [u8] {
+        self.payload
     }
 }
 
@@ -316,6 +330,22 @@ impl Iterator for BlockItems<'_> {
 #[derive(Clone, Debug)]
 pub struct BlockEvents<'a> {
     payload: &'a [u8],
+    cursor: Cursor,
+}
+
+impl Iterator for BlockEvents<'_> {
+    type Item = Result<StepEvent, StreamError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.cursor.next(self.payload)
+    }
+}
+
+/// Where a block's decoding stands, without borrowing the block: a decoder that keeps the
+/// block's bytes in a queue (the link firmware's feeder) resumes it event by event with
+/// [`Cursor::next`] on the same payload.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cursor {
     pos: usize,
     expect: u16,
     seen: u32,
@@ -324,15 +354,29 @@ pub struct BlockEvents<'a> {
     done: bool,
 }
 
-impl Iterator for BlockEvents<'_> {
-    type Item = Result<StepEvent, StreamError>;
+impl Cursor {
+    /// At the start of `block`.
+    pub fn new(block: &Block<'_>) -> Self {
+        Cursor { pos: 0, expect: block.events, seen: 0, run: None, done: false }
+    }
 
-    fn next(&mut self) -> Option<Self::Item> {
+    /// True once every event was returned or an error was.
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+
+    /// Events returned so far.
+    pub fn seen(&self) -> u32 {
+        self.seen
+    }
+
+    /// The next event of the block whose payload is `payload` (the one this cursor was made
+    /// for; [`Block::payload`]); `None` at the end, an error (then `None`) on a bad item.
+    pub fn next(&mut self, payload: &[u8]) -> Option<Result<StepEvent, StreamError>> {
         if self.done {
             return None;
         }
-        let r = self.step();
-        match r {
+        match self.step(payload) {
             Ok(Some(ev)) => Some(Ok(ev)),
             Ok(None) => {
                 self.done = true;
@@ -344,10 +388,8 @@ impl Iterator for BlockEvents<'_> {
             }
         }
     }
-}
 
-impl BlockEvents<'_> {
-    fn step(&mut self) -> Result<Option<StepEvent>, StreamError> {
+    fn step(&mut self, payload: &[u8]) -> Result<Option<StepEvent>, StreamError> {
         if let Some((code, dt, add, left)) = self.run {
             if !(0..=MAX_DT_TICKS as i64).contains(&dt) {
                 return Err(StreamError::BadRun);
@@ -355,21 +397,21 @@ impl BlockEvents<'_> {
             self.run = if left > 1 { Some((code, dt + add, add, left - 1)) } else { None };
             return self.count(StepEvent::from_code(dt as u32, code));
         }
-        if self.pos >= self.payload.len() {
+        if self.pos >= payload.len() {
             return if self.seen == self.expect as u32 {
                 Ok(None)
             } else {
                 Err(StreamError::Count)
             };
         }
-        let v = get_varint(self.payload, &mut self.pos)?;
+        let v = get_varint(payload, &mut self.pos)?;
         let code = (v & 3) as u8;
         let dt = v >> 3;
         if v & 4 == 0 {
             return self.count(StepEvent::from_code(dt, code));
         }
-        let count = get_varint(self.payload, &mut self.pos)?;
-        let add = unzigzag(get_varint(self.payload, &mut self.pos)?) as i64;
+        let count = get_varint(payload, &mut self.pos)?;
+        let add = unzigzag(get_varint(payload, &mut self.pos)?) as i64;
         if count < 2 {
             return Err(StreamError::BadRun);
         }

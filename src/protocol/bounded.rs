@@ -129,3 +129,56 @@ impl<'de> Deserialize<'de> for SegmentBatch {
         d.deserialize_seq(V(PhantomData))
     }
 }
+
+/// Most bytes of one step-event block on the wire ([`crate::polar::stream::MAX_BLOCK`]).
+pub const MAX_EVENT_BLOCK: usize = crate::polar::stream::MAX_BLOCK;
+
+/// The bytes of one step-event stream block (v1, `src/polar/stream.rs`): postcard bytes
+/// (length-prefixed), refused above [`MAX_EVENT_BLOCK`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct BlockBytes(heapless::Vec<u8, MAX_EVENT_BLOCK>);
+
+impl BlockBytes {
+    /// `None` if `bytes` is longer than [`MAX_EVENT_BLOCK`].
+    pub fn from_slice(bytes: &[u8]) -> Option<Self> {
+        heapless::Vec::from_slice(bytes).ok().map(BlockBytes)
+    }
+}
+
+impl Deref for BlockBytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        &self.0
+    }
+}
+
+impl Serialize for BlockBytes {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_bytes(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for BlockBytes {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = BlockBytes;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "at most {MAX_EVENT_BLOCK} bytes")
+            }
+            fn visit_bytes<E: de::Error>(self, v: &[u8]) -> Result<Self::Value, E> {
+                BlockBytes::from_slice(v).ok_or_else(|| E::invalid_length(v.len(), &self))
+            }
+        }
+        d.deserialize_bytes(V)
+    }
+}
+
+/// One step-event block for `QueueEvents`; `last` marks the stream's final block (the board's
+/// playback finishes after it instead of waiting for more: an empty queue before it is an
+/// underrun).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EventBlock {
+    pub bytes: BlockBytes,
+    pub last: bool,
+}

@@ -27,6 +27,10 @@
 //!   it, so the board's queue cannot overflow. With nothing in flight, credits only grow on the
 //!   board but the host learns of it only from a response: keep a status stream on
 //!   (`SetStatusPeriod`) or send `GetStatus` when starved.
+//! * Event credits (`QueueEvents` blocks) are counted the same way in a second counter,
+//!   `event_credits()`, from `Status::event_credits` (unsolicited: after `next_seq - 1`; a
+//!   `GetStatus` answer: after its seq) and `Reply::EventCredits` (after the QueueEvents' seq).
+//!   Before the first report it is 0: send a `GetStatus` first.
 
 use heapless::Deque;
 
@@ -126,6 +130,9 @@ pub struct HostLink {
     /// Latest credit report and the seq it holds after.
     credits: u16,
     credits_after: u32,
+    /// Latest event-credit report and the seq it holds after.
+    event_credits: u16,
+    event_credits_after: u32,
     /// Expected seq of the last rewind; repeats of it are ignored until progress past it.
     rewound_to: Option<u32>,
     /// Frames handed out by `poll_transmit`, and of those, retransmissions.
@@ -149,6 +156,8 @@ impl HostLink {
             board: None,
             credits: 0,
             credits_after: 0,
+            event_credits: 0,
+            event_credits_after: 0,
             rewound_to: None,
             sent_frames: 0,
             retransmissions: 0,
@@ -165,6 +174,8 @@ impl HostLink {
         self.next_seq = nonce;
         self.credits = 0;
         self.credits_after = nonce;
+        self.event_credits = 0;
+        self.event_credits_after = nonce;
         self.rewound_to = None;
         let body = RequestBody::Hello { version: PROTOCOL_VERSION, nonce };
         // Cannot fail: the window was just emptied.
@@ -202,6 +213,17 @@ impl HostLink {
         (self.credits as u32).saturating_sub(committed) as u16
     }
 
+    /// Event blocks `send` would accept now.
+    pub fn event_credits(&self) -> u16 {
+        let committed: u32 = self
+            .entries
+            .iter()
+            .filter(|e| after(e.seq, self.event_credits_after))
+            .map(|e| e.body.block_count() as u32)
+            .sum();
+        (self.event_credits as u32).saturating_sub(committed) as u16
+    }
+
     /// Queues a request; returns its seq. It goes out through `poll_transmit`.
     pub fn send(&mut self, body: RequestBody) -> Result<u32, SendError> {
         if matches!(body, RequestBody::Hello { .. }) {
@@ -215,6 +237,10 @@ impl HostLink {
         }
         let available = self.segment_credits();
         if body.segment_count() > available {
+            return Err(SendError::NoCredits { available });
+        }
+        let available = self.event_credits();
+        if body.block_count() > available {
             return Err(SendError::NoCredits { available });
         }
         let seq = self.next_seq;
@@ -281,12 +307,20 @@ impl HostLink {
         }
     }
 
+    fn note_event_credits(&mut self, credits: u16, after_seq: u32) {
+        if self.in_session(after_seq) && !after(self.event_credits_after, after_seq) {
+            self.event_credits = credits;
+            self.event_credits_after = after_seq;
+        }
+    }
+
     /// Feeds a decoded response; returns what it meant, if anything.
     pub fn receive(&mut self, resp: Response) -> Option<HostEvent> {
         let ev = match resp {
             Response::Status(s) => {
                 if self.is_connected() {
                     self.note_credits(s.credits, s.next_seq.wrapping_sub(1));
+                    self.note_event_credits(s.event_credits, s.next_seq.wrapping_sub(1));
                 }
                 Some(HostEvent::Status(s))
             }
@@ -324,6 +358,7 @@ impl HostLink {
         self.entries.clear();
         self.board = None;
         self.credits = 0;
+        self.event_credits = 0;
         Some(HostEvent::SessionLost(code))
     }
 
@@ -358,6 +393,11 @@ impl HostLink {
             return None;
         }
         self.note_credits(credits, seq);
+        match &result {
+            Ok(Reply::EventCredits(c)) => self.note_event_credits(*c, seq),
+            Ok(Reply::Status(s)) => self.note_event_credits(s.event_credits, seq),
+            _ => {}
+        }
         if self.rewound_to.is_some_and(|r| !after(r, seq)) {
             self.rewound_to = None;
         }

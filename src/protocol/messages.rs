@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::bounded::{FixedStr, SegmentBatch};
+use super::bounded::{EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
 use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTiming, MAX_AXES};
 use crate::dda::MotionState;
@@ -35,6 +35,8 @@ pub const CAP_HOLD_RESUME: u32 = 1 << 3;
 pub const CAP_SOFT_LIMITS: u32 = 1 << 4;
 /// `Status::sensors` carries real readings.
 pub const CAP_SENSORS: u32 = 1 << 5;
+/// `QueueEvents` / `StartPlayback` (recorded step-event jobs) are honoured.
+pub const CAP_EVENTS: u32 = 1 << 6;
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -77,6 +79,17 @@ pub enum RequestBody {
     Home,
     /// Replace the homing parameters (a `SetConfig` that keeps the machine config; loses homing).
     SetHoming(HomingConfig),
+    /// Queue one block of a recorded step-event stream (v1, with its CRC) for an event job.
+    /// Checked whole (CRC, every event, block sequence from 0) before anything is queued; costs
+    /// one *event* credit (`Status::event_credits`, `Reply::EventCredits`). Refused while
+    /// segments are queued (a job is either segments or events).
+    QueueEvents(EventBlock),
+    /// Start the event job: play the queued events with radial size scale `m`:`k` (each 1..=4,
+    /// else `OutOfRange`); speed scale = the feed override (0.25..=2). Needs queued events.
+    StartPlayback {
+        m: u8,
+        k: u8,
+    },
     /// After a limit fault: move the tripped axes slowly off their switches (`Fault` only).
     JogOffLimit,
 }
@@ -114,7 +127,17 @@ impl RequestBody {
             RequestBody::ClearFault => 11,
             RequestBody::Home => 12,
             RequestBody::SetHoming(_) => 13,
-            RequestBody::JogOffLimit => 14,
+            RequestBody::QueueEvents(_) => 14,
+            RequestBody::StartPlayback { .. } => 15,
+            RequestBody::JogOffLimit => 16,
+        }
+    }
+
+    /// Event blocks this request queues if it succeeds (one event credit each).
+    pub fn block_count(&self) -> u16 {
+        match self {
+            RequestBody::QueueEvents(_) => 1,
+            _ => 0,
         }
     }
 
@@ -151,6 +174,8 @@ pub enum Reply {
     Hello(HelloInfo),
     Config(WireConfig),
     Status(Status),
+    /// The answer to `QueueEvents`: free event-block slots right after it (`T = seq`).
+    EventCredits(u16),
 }
 
 /// More about a NAK.
@@ -176,6 +201,14 @@ pub enum NakDetail {
     /// `OutOfState`: the machine state the board is in (see the command table in
     /// `src/machine/MACHINE.md`).
     State(MachineState),
+    /// `InvalidSegment` for a `QueueEvents` block: `reason` = `polar::feed::BlockError::code`
+    /// (1..=8 stream checks, 1 truncated ... 4 CRC ..., 9 trailing bytes, 10 sequence, 11 after
+    /// the last block); `expected` = the block seq the board expects next (`None` after the
+    /// last block).
+    Block {
+        reason: u8,
+        expected: Option<u16>,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -248,6 +281,12 @@ pub struct Status {
     pub causes: u32,
     /// The homing is trusted (positions are machine coordinates).
     pub homed: bool,
+    /// Free event-block slots (`QueueEvents` credits, counted like `credits`).
+    pub event_credits: u16,
+    /// Events the current (or last) event job has fired.
+    pub events_fired: u32,
+    /// Event blocks queued and not yet decoded into the playback.
+    pub event_blocks: u16,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

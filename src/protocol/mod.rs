@@ -24,7 +24,9 @@ pub mod messages;
 pub mod session;
 pub mod sim;
 
-pub use bounded::{FixedStr, SegmentBatch, MAX_SEGMENTS_PER_FRAME};
+pub use bounded::{
+    BlockBytes, EventBlock, FixedStr, SegmentBatch, MAX_EVENT_BLOCK, MAX_SEGMENTS_PER_FRAME,
+};
 pub use errors::{markdown_table, ErrorCode, FaultCode, SegmentReason};
 pub use frame::{
     encode_frame, encode_payload_frame, EncodeError, FrameDecoder, FrameError, CRC32, MAX_FRAME,

@@ -33,6 +33,8 @@
 //! | Hold | motion to hold (the target refuses an idle DDA with nothing to feed) |
 //! | ClearFault | no fault cause still active (the target refuses with `OutOfState`) |
 //! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
+//! | QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
+//! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
@@ -40,6 +42,8 @@ use super::frame::FrameError;
 use super::messages::*;
 use crate::config::{ConfigError, MAX_AXES};
 use crate::machine::{cell, Cell, CommandKind, MachineState};
+use crate::polar::feed::check_block;
+use crate::polar::playback::SizeScale;
 use crate::segment::{Rate, Segment};
 
 /// Outcomes remembered for retransmissions; the host's window must not exceed it.
@@ -78,6 +82,29 @@ pub trait LinkTarget {
     /// Moves the axes off the limit switches they tripped (refused with `OutOfState` when there
     /// is nothing to jog off).
     fn jog_off_limit(&mut self) -> Result<(), ErrorCode>;
+    /// Free event-block slots (event credits). Targets without event jobs have none.
+    fn event_credits(&self) -> u16 {
+        0
+    }
+    /// The stream block seq the target takes next (0 for a new job); `None` once the host
+    /// marked a block as the last.
+    fn next_event_block(&self) -> Option<u16> {
+        None
+    }
+    /// Events are queued or an event job runs: segments are refused (`OutOfState`) until it
+    /// ends or is aborted.
+    fn events_pending(&self) -> bool {
+        false
+    }
+    /// Called with a block that passed every stream check and is `next_event_block()`, only
+    /// with an event credit free.
+    fn queue_events(&mut self, _block: &[u8], _last: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// Starts the event job with radial size scale `scale` (checked).
+    fn start_playback(&mut self, _scale: SizeScale) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
 }
 
 /// The machine command a request is, if it is one (queries and link settings are not).
@@ -85,8 +112,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
     Some(match body {
         RequestBody::SetConfig(_) | RequestBody::SetHoming(_) => CommandKind::SetConfig,
         RequestBody::Home => CommandKind::Home,
-        RequestBody::QueueSegments(_) => CommandKind::Queue,
-        RequestBody::Start => CommandKind::Start,
+        RequestBody::QueueSegments(_) | RequestBody::QueueEvents(_) => CommandKind::Queue,
+        RequestBody::Start | RequestBody::StartPlayback { .. } => CommandKind::Start,
         RequestBody::Hold => CommandKind::Hold,
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
@@ -107,12 +134,15 @@ const MALFORMED_KIND: u8 = 0xFF;
 const KIND_HELLO: u8 = RequestBody::Hello { version: 0, nonce: 0 }.kind();
 const KIND_GET_CONFIG: u8 = RequestBody::GetConfig.kind();
 const KIND_GET_STATUS: u8 = RequestBody::GetStatus.kind();
+pub(crate) const KIND_QUEUE_EVENTS: u8 = 14;
 
 #[derive(Clone, Debug)]
 struct Memo {
     seq: u32,
     kind: u8,
     credits: u16,
+    /// Event credits right after the request (replayed in a `QueueEvents` Ack).
+    event_credits: u16,
     outcome: Outcome,
 }
 
@@ -214,6 +244,7 @@ impl BoardLink {
     pub fn status(&self, t: &impl LinkTarget) -> Status {
         let mut s = t.status();
         s.credits = t.credits();
+        s.event_credits = t.event_credits();
         s.next_seq = self.next_seq().unwrap_or(0);
         s
     }
@@ -259,7 +290,7 @@ impl BoardLink {
         self.status_period_ms = 0;
         self.status_due_ms = None;
         let credits = t.credits();
-        self.remember(req.seq, req.body.kind(), credits, Ok(()));
+        self.remember(req.seq, req.body.kind(), (credits, t.event_credits()), Ok(()));
         Response::Ack { seq: req.seq, credits, reply: Reply::Hello(self.hello_info(t)) }
     }
 
@@ -291,24 +322,30 @@ impl BoardLink {
             };
         }
         let result = exec(self, t);
-        let credits = t.credits();
+        let credits = (t.credits(), t.event_credits());
         if let Some(s) = self.session.as_mut() {
             s.next_seq = seq.wrapping_add(1);
         }
         match result {
             Ok(reply) => {
                 self.remember(seq, kind, credits, Ok(()));
-                Response::Ack { seq, credits, reply }
+                let reply = match kind {
+                    KIND_QUEUE_EVENTS => Reply::EventCredits(credits.1),
+                    _ => reply,
+                };
+                Response::Ack { seq, credits: credits.0, reply }
             }
             Err((code, detail)) => {
                 self.remember(seq, kind, credits, Err((code, detail.clone())));
-                Response::Nak { seq, credits, code, detail }
+                Response::Nak { seq, credits: credits.0, code, detail }
             }
         }
     }
 
-    fn remember(&mut self, seq: u32, kind: u8, credits: u16, outcome: Outcome) {
-        self.memo[seq as usize % RESULT_MEMORY] = Some(Memo { seq, kind, credits, outcome });
+    fn remember(&mut self, seq: u32, kind: u8, credits: (u16, u16), outcome: Outcome) {
+        let (credits, event_credits) = credits;
+        self.memo[seq as usize % RESULT_MEMORY] =
+            Some(Memo { seq, kind, credits, event_credits, outcome });
     }
 
     /// Answers a retransmission from memory, executing nothing.
@@ -321,6 +358,7 @@ impl BoardLink {
                         KIND_HELLO => Reply::Hello(self.hello_info(t)),
                         KIND_GET_CONFIG => Reply::Config(t.config()),
                         KIND_GET_STATUS => Reply::Status(self.status(t)),
+                        KIND_QUEUE_EVENTS => Reply::EventCredits(m.event_credits),
                         _ => Reply::None,
                     };
                     Response::Ack { seq, credits: m.credits, reply }
@@ -376,6 +414,9 @@ impl BoardLink {
                 Ok(Reply::None)
             }
             RequestBody::QueueSegments(batch) => {
+                if t.events_pending() {
+                    return out_of_state;
+                }
                 if batch.len() > t.credits() as usize {
                     return Err(plain(ErrorCode::QueueFull));
                 }
@@ -408,6 +449,29 @@ impl BoardLink {
             RequestBody::Start => {
                 t.config().validate().map_err(config_nak)?;
                 t.start().map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::QueueEvents(block) => {
+                if t.event_credits() == 0 {
+                    return Err(plain(ErrorCode::QueueFull));
+                }
+                let expected = t.next_event_block();
+                check_block(&block.bytes, expected).map_err(|e| {
+                    (ErrorCode::InvalidSegment, NakDetail::Block { reason: e.code(), expected })
+                })?;
+                t.queue_events(&block.bytes, block.last).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
+                Ok(Reply::None)
+            }
+            RequestBody::StartPlayback { m, k } => {
+                let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
+                t.config().validate().map_err(config_nak)?;
+                t.start_playback(scale).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
                 Ok(Reply::None)
             }
             RequestBody::Hold => {

@@ -4,6 +4,10 @@
 //! Its machine state follows the machine's command table ([`crate::machine::cell`]) with two
 //! simplifications: homing completes at once, and a job ends when the queue runs dry after a
 //! segment that ends at rest.
+//!
+//! Event jobs (`QueueEvents`, `StartPlayback`) run the firmware's own code: the blocks go through
+//! an [`EventFeed`] into a [`Playback`] ticked by [`SimTarget::run_events`] at the feed override,
+//! so the positions and event counts are exactly the board's.
 
 use heapless::Deque;
 
@@ -12,10 +16,14 @@ use super::messages::{HomingConfig, Status, WireConfig, WireState};
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
+use crate::polar::feed::EventFeed;
+use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::segment::{Rate, Segment};
 
 /// Largest queue a `SimTarget` can have.
 pub const SIM_QUEUE_MAX: usize = 64;
+/// Event blocks a `SimTarget` holds (as the link firmware).
+pub const SIM_EVENT_BLOCKS: usize = crate::polar::feed::EVENT_QUEUE_BLOCKS;
 
 /// Fake machine: queued segments complete when the test calls [`SimTarget::complete_one`].
 #[derive(Clone, Debug)]
@@ -42,6 +50,14 @@ pub struct SimTarget {
     /// Calls that changed something (every successful mutating call), for "nothing changed"
     /// assertions.
     pub mutations: u64,
+    /// Event blocks waiting for the playback.
+    pub events: EventFeed<SIM_EVENT_BLOCKS>,
+    /// The event job's playback (ticked by [`SimTarget::run_events`]).
+    pub playback: Playback,
+    /// An event job was started and has not ended.
+    pub event_job: bool,
+    /// Machine positions when the event job started (the playback counts from there).
+    event_base: [i64; MAX_AXES],
 }
 
 impl PartialEq for SimTarget {
@@ -55,6 +71,9 @@ impl PartialEq for SimTarget {
             && (self.segments_done, self.last_done_id) == (o.segments_done, o.last_done_id)
             && (self.queued_total, self.max_depth, self.mutations)
                 == (o.queued_total, o.max_depth, o.mutations)
+            && (self.events.events_admitted, self.events.blocks(), self.event_job)
+                == (o.events.events_admitted, o.events.blocks(), o.event_job)
+            && self.playback.fired() == o.playback.fired()
     }
 }
 
@@ -82,6 +101,45 @@ impl SimTarget {
             queued_total: 0,
             max_depth: 0,
             mutations: 0,
+            events: EventFeed::new(),
+            playback: Playback::new(SizeScale::ONE),
+            event_job: false,
+            event_base: [0; MAX_AXES],
+        }
+    }
+
+    /// Runs an event job for `ticks` ticks as the firmware would: refill the playback from the
+    /// blocks, tick it at the feed override (stopped while held), count its steps. The job ends
+    /// when the playback is done; a playback that starves before the last block is an underrun
+    /// (`QueueUnderrun`, the job stops).
+    pub fn run_events(&mut self, ticks: u64) {
+        for _ in 0..ticks {
+            if !self.event_job || self.faults != 0 {
+                return;
+            }
+            self.events.fill(&mut self.playback);
+            if self.playback.starved() {
+                self.raise_fault(FaultCode::QueueUnderrun);
+                return;
+            }
+            let rate = if self.held {
+                0
+            } else {
+                Rate::from_bits(self.override_bits).clamp(RATE_MIN, RATE_MAX).to_bits()
+            };
+            self.playback.tick_at(rate);
+            self.tick += 1;
+            let p = self.playback.position();
+            self.positions[0] = self.event_base[0] + p[0];
+            self.positions[1] = self.event_base[1] + p[1];
+            if self.playback.done() {
+                self.event_job = false;
+                self.running = false;
+                self.events.clear();
+                self.planned = self.positions;
+                self.machine = MachineState::Ready;
+                return;
+            }
         }
     }
 
@@ -114,10 +172,16 @@ impl SimTarget {
     pub fn raise_fault(&mut self, code: FaultCode) {
         self.faults |= code.bit();
         self.queue.clear();
+        self.drop_events();
         self.planned = self.positions;
         self.running = false;
         self.held = false;
         self.machine = MachineState::Fault;
+    }
+
+    fn drop_events(&mut self) {
+        self.events.clear();
+        self.event_job = false;
     }
 
     /// The table's transition for an accepted command (`BoardLink` checked it was allowed).
@@ -146,7 +210,7 @@ impl LinkTarget for SimTarget {
             WireState::Faulted
         } else if self.held {
             WireState::Held
-        } else if self.running && !self.queue.is_empty() {
+        } else if self.running && (!self.queue.is_empty() || self.event_job) {
             WireState::Moving
         } else {
             WireState::Idle
@@ -190,6 +254,9 @@ impl LinkTarget for SimTarget {
             machine: self.machine,
             causes: 0,
             homed: self.homed,
+            event_credits: self.events.credits(),
+            events_fired: self.playback.fired(),
+            event_blocks: self.events.blocks() as u16,
         }
     }
 
@@ -216,6 +283,9 @@ impl LinkTarget for SimTarget {
     }
 
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
+        if self.event_job || !self.events.is_unused() {
+            return Err(ErrorCode::OutOfState);
+        }
         if self.queue.len() >= self.capacity as usize {
             return Err(ErrorCode::QueueFull);
         }
@@ -230,6 +300,9 @@ impl LinkTarget for SimTarget {
     }
 
     fn start(&mut self) -> Result<(), ErrorCode> {
+        if self.event_job || !self.events.is_unused() {
+            return Err(ErrorCode::OutOfState);
+        }
         self.running = true;
         self.take(CommandKind::Start);
         Ok(())
@@ -249,6 +322,7 @@ impl LinkTarget for SimTarget {
 
     fn abort(&mut self) -> Result<(), ErrorCode> {
         self.queue.clear();
+        self.drop_events();
         self.planned = self.positions;
         self.running = false;
         self.held = false;
@@ -265,8 +339,43 @@ impl LinkTarget for SimTarget {
     fn clear_fault(&mut self) -> Result<(), ErrorCode> {
         self.faults = 0;
         self.queue.clear();
+        self.drop_events();
         self.planned = self.positions;
         self.take(CommandKind::ClearFault);
+        Ok(())
+    }
+
+    fn event_credits(&self) -> u16 {
+        self.events.credits()
+    }
+
+    fn next_event_block(&self) -> Option<u16> {
+        self.events.expected()
+    }
+
+    fn events_pending(&self) -> bool {
+        self.event_job || !self.events.is_unused()
+    }
+
+    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
+        if !self.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
+        self.take(CommandKind::Queue);
+        Ok(())
+    }
+
+    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
+        if self.event_job || self.events.is_unused() || !self.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.playback = Playback::new(scale);
+        self.events.fill(&mut self.playback);
+        self.event_base = self.positions;
+        self.event_job = true;
+        self.running = true;
+        self.take(CommandKind::Start);
         Ok(())
     }
 }

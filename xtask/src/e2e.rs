@@ -187,7 +187,7 @@ pub fn read_csv(path: &Path, total: u64) -> Result<CsvFacts> {
 }
 
 /// Builds motionctl (test-fast profile, shared with the host tests) and returns its path.
-fn build_motionctl(root: &Path) -> Result<PathBuf> {
+pub(crate) fn build_motionctl(root: &Path) -> Result<PathBuf> {
     crate::run_status(
         "motionctl build",
         crate::cargo(root).args(["build", "-p", "motionctl", "--profile", "test-fast"]),
@@ -196,7 +196,11 @@ fn build_motionctl(root: &Path) -> Result<PathBuf> {
 }
 
 /// Runs motionctl with a timeout; stdout is captured (and echoed), stderr passes through.
-fn run_motionctl(root: &Path, bin: &Path, args: &[String]) -> Result<(bool, String, Duration)> {
+pub(crate) fn run_motionctl(
+    root: &Path,
+    bin: &Path,
+    args: &[String],
+) -> Result<(bool, String, Duration)> {
     println!("  $ motionctl {}", args.join(" "));
     let start = Instant::now();
     let mut child = Command::new(bin)

@@ -5,6 +5,7 @@
 //! | `build [--board B] [--bench] [--link]` | release firmware for a board (`netduinoplus2` default, `f405-motion`); `--link` serves the host link instead of the demo job |
 //! | `demo` | runs the demo firmware in QEMU, decodes its log, summarises the report, compares with the host model |
 //! | `test` | everything CI checks, in order, failing fast |
+//! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
@@ -16,6 +17,7 @@ mod divcheck;
 mod e2e;
 mod firmware;
 mod golden;
+mod polar_e2e;
 mod scenarios;
 mod setup;
 
@@ -33,6 +35,7 @@ commands:
   demo                                                  run the demo job in QEMU and compare with the host model
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
+  polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
@@ -85,6 +88,11 @@ fn run() -> Result<()> {
             }
             setup::ensure(&root)?;
             test(&root, &skip)
+        }
+        "polar-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            polar_e2e::test(&root)
         }
         "scenarios" => {
             no_args(cmd, rest)?;
@@ -267,6 +275,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl streams 2000 segments to QEMU through 1 % noise",
             Box::new(|| e2e::test(root)),
+        ),
+        (
+            "end to end: motionctl plays the limacon event stream on QEMU (speed 2, size 3:2)",
+            Box::new(|| polar_e2e::test(root)),
         ),
     ];
     let total = steps.len();

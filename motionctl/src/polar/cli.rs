@@ -7,6 +7,7 @@ use super::digitize::{digitize, Setup};
 use super::pole::{self, Constraints, HookeJeeves, Pole, MM2_PER_IN2};
 use super::{Resolution, DR_IN, DTHETA_RAD};
 use anyhow::{bail, Context};
+use motion::polar::playback::SizeScale;
 use motion::polar::stream::BlockEncoder;
 
 /// Default event tick (the playback's DDA tick).
@@ -137,6 +138,93 @@ pub enum PolarCmd {
         #[arg(long, value_name = "HALF")]
         box_only: Option<f64>,
     },
+    /// Play a stream file on the board as an event job (through the host link), then check
+    /// the events fired and the final (theta, r) steps against the host model.
+    Run {
+        file: std::path::PathBuf,
+        #[command(flatten)]
+        link: crate::cli::LinkArgs,
+        /// Speed scale (the feed override), 0.25..=2.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        /// Radial size scale M:K (M radial steps per K recorded ones), each 1..=4.
+        #[arg(long, default_value = "1:1", value_parser = parse_size)]
+        size: SizeScale,
+    },
+}
+
+/// `M:K` with M, K in 1..=4.
+pub fn parse_size(s: &str) -> Result<SizeScale, String> {
+    let (m, k) = s.split_once(':').ok_or_else(|| format!("expected M:K, found {s:?}"))?;
+    let num = |t: &str| t.trim().parse::<u8>().map_err(|_| format!("bad number in {s:?}"));
+    SizeScale::new(num(m)?, num(k)?).ok_or_else(|| format!("M and K must be 1..=4, got {s}"))
+}
+
+/// `polar run`: opens the link (QEMU, serial, TCP or the simulated board), plays the stream.
+fn run_stream(
+    file: &std::path::Path,
+    link: &crate::cli::LinkArgs,
+    speed: f64,
+    size: SizeScale,
+) -> anyhow::Result<()> {
+    use crate::transport::Transport;
+    let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
+    let target = link.target()?;
+    let host = link.host_config(&target);
+    let (mut t, qemu_guard): (Box<dyn Transport>, _) = if link.sim {
+        let sim = super::sim::EventSim::new(super::sim::SIM_SPEED);
+        if link.noise > 0.0 {
+            eprintln!(
+                "motionctl: noise proxy: {:.2} % of bytes corrupted or dropped, seed {}",
+                link.noise * 100.0,
+                link.seed
+            );
+            (Box::new(crate::noise::Noisy::new(sim, link.noise, link.seed)), None)
+        } else {
+            (Box::new(sim), None)
+        }
+    } else {
+        link.open()?
+    };
+    let opts = super::run::PolarRunOptions {
+        speed,
+        scale: size,
+        host,
+        home: link.home || link.qemu || link.sim,
+        progress: true,
+    };
+    let result = super::run::run(&mut t, &bytes, &opts);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    println!(
+        "events     {} fired, {} in {} ({} blocks)",
+        r.events_fired,
+        r.events,
+        file.display(),
+        r.blocks
+    );
+    println!(
+        "positions  theta {} r {} steps; host model theta {} r {}",
+        r.positions[0], r.positions[1], r.expected_positions[0], r.expected_positions[1]
+    );
+    println!(
+        "time       {:.2} s wall; model {} ticks, board ~{} ticks (status-resolution)",
+        r.seconds, r.model_ticks, r.board_ticks
+    );
+    println!(
+        "link       {} frames out, {} retransmitted, {} link NAKs, {} garbled frames in",
+        r.frames_out, r.retransmissions, r.link_naks, r.bad_frames_in
+    );
+    println!("{}", r.machine_line());
+    if !r.ok() {
+        bail!("verification failed: {}", r.problems.join("; "));
+    }
+    println!("result     OK: every event fired once; positions match the host model");
+    Ok(())
 }
 
 /// Runs one `polar` subcommand, printing to stdout.
@@ -207,6 +295,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             print!("{text}");
             r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
         }
+        PolarCmd::Run { file, link, speed, size } => run_stream(&file, &link, speed, size),
         PolarCmd::Pole { contour, res, box_only } => {
             let c = parse_contour(&contour)?;
             let res = res.res()?;

@@ -10,7 +10,9 @@ pub mod drive;
 pub mod dump;
 pub mod listing;
 pub mod pole;
+pub mod run;
 pub mod segments;
+pub mod sim;
 
 /// Radial resolution dR, inches (0.001 in = 2.54e-3 cm).
 pub const DR_IN: f64 = 0.001;

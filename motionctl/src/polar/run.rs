@@ -1,0 +1,420 @@
+//! `motionctl polar run STREAM.bin`: plays a recorded step-event stream on the board as an
+//! event job and checks what it did.
+//!
+//! Hello -> the board idle (only `ConfigMissing` may be latched: it is cleared after the config)
+//! -> the polar machine's config (`motion::polar::job::wire_config`, at the stream's tick rate)
+//! -> Home if needed (and allowed) -> `SetOverride` (the speed scale) -> the stream's blocks in
+//! `QueueEvents` requests as event credits allow (the last one marked) -> `StartPlayback` once
+//! the board's block queue is full or the whole stream is queued -> wait until the job is done
+//! -> verify: events fired == events in the file, and the final (theta, r) steps == the host
+//! model (the firmware's own `Playback`, run here with the same size scale and speed).
+
+use crate::link::{describe_rejection, LinkFailure, Session};
+use crate::runner;
+use crate::transport::Transport;
+use motion::machine::MachineState;
+use motion::polar::playback::{Playback, SizeScale};
+use motion::polar::stream::{decode_all, parse_block};
+use motion::protocol::{
+    BlockBytes, EventBlock, FaultCode, HostConfig, HostEvent, Reply, RequestBody, Status,
+};
+use motion::segment::Rate;
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+/// Status period during the job.
+pub const STATUS_PERIOD_MS: u16 = 40;
+/// Longest a run may take beyond the model's duration at the chosen speed.
+pub const SLACK: Duration = Duration::from_secs(30);
+
+/// What `run` needs besides the stream.
+#[derive(Clone, Debug)]
+pub struct PolarRunOptions {
+    /// Speed scale 0.25..=2 (the feed override).
+    pub speed: f64,
+    pub scale: SizeScale,
+    pub host: HostConfig,
+    /// Home the board first if it is not homed.
+    pub home: bool,
+    /// Print progress lines on stderr.
+    pub progress: bool,
+}
+
+impl Default for PolarRunOptions {
+    fn default() -> Self {
+        PolarRunOptions {
+            speed: 1.0,
+            scale: SizeScale::ONE,
+            host: HostConfig { rto_ms: 50, window: 8 },
+            home: true,
+            progress: false,
+        }
+    }
+}
+
+/// The host model of a stream: events, final (theta, r) steps and ticks at `speed` and `scale`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Model {
+    pub events: u32,
+    pub positions: [i64; 2],
+    pub ticks: u64,
+}
+
+/// Splits a stream file into its blocks (each checked whole, in sequence).
+pub fn blocks(bytes: &[u8]) -> anyhow::Result<Vec<&[u8]>> {
+    decode_all(bytes, |_| {}).map_err(|e| anyhow::anyhow!("not a valid event stream: {e:?}"))?;
+    let mut out = Vec::new();
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        let (_, r) = parse_block(rest).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        out.push(&rest[..rest.len() - r.len()]);
+        rest = r;
+    }
+    Ok(out)
+}
+
+/// Runs the firmware's playback over the whole stream (no link, no feeder latency).
+pub fn model(bytes: &[u8], speed: Rate, scale: SizeScale) -> anyhow::Result<Model> {
+    let mut events = Vec::new();
+    decode_all(bytes, |e| events.push(e)).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut p = Playback::new(scale);
+    p.set_rate(speed);
+    let mut it = events.into_iter();
+    let mut ticks = 0u64;
+    while !p.done() {
+        while p.free() > 0 {
+            match it.next() {
+                Some(e) => {
+                    let _ = p.push(e);
+                }
+                None => {
+                    p.finish();
+                    break;
+                }
+            }
+        }
+        p.tick();
+        ticks += 1;
+    }
+    Ok(Model { events: p.fired(), positions: p.position(), ticks })
+}
+
+/// What a run did; `problems` is empty when every check passed.
+#[derive(Clone, Debug, Default)]
+pub struct PolarReport {
+    pub blocks: usize,
+    pub events: u32,
+    pub events_fired: u32,
+    pub positions: [i64; 2],
+    pub expected_positions: [i64; 2],
+    pub model_ticks: u64,
+    /// Board ticks from the status before the start to the first status showing the job done
+    /// (an upper bound of the job's ticks, by at most one status period and the start latency).
+    pub board_ticks: u64,
+    pub seconds: f64,
+    pub frames_out: u64,
+    pub retransmissions: u64,
+    pub link_naks: u64,
+    pub bad_frames_in: u64,
+    pub min_event_credits: u16,
+    pub problems: Vec<String>,
+}
+
+impl PolarReport {
+    pub fn ok(&self) -> bool {
+        self.problems.is_empty()
+    }
+
+    /// One `key=value` line for scripts (the xtask end-to-end step parses it).
+    pub fn machine_line(&self) -> String {
+        format!(
+            "polar-summary ok={} blocks={} events={} events_fired={} theta={} r={} \
+             theta_model={} r_model={} model_ticks={} board_ticks={} seconds={:.3} \
+             frames_out={} retransmissions={} link_naks={} bad_frames_in={}",
+            self.ok() as u8,
+            self.blocks,
+            self.events,
+            self.events_fired,
+            self.positions[0],
+            self.positions[1],
+            self.expected_positions[0],
+            self.expected_positions[1],
+            self.model_ticks,
+            self.board_ticks,
+            self.seconds,
+            self.frames_out,
+            self.retransmissions,
+            self.link_naks,
+            self.bad_frames_in,
+        )
+    }
+}
+
+fn fault_names(bits: u32) -> String {
+    let v: Vec<&str> =
+        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
+}
+
+fn seq_at_or_after(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) >= 0
+}
+
+enum Pending {
+    Block,
+    Start,
+    Poll,
+}
+
+/// Connects, configures and plays `bytes` (a v1 stream) as an event job; see the module doc.
+pub fn run(
+    transport: &mut dyn Transport,
+    bytes: &[u8],
+    opts: &PolarRunOptions,
+) -> anyhow::Result<PolarReport> {
+    use anyhow::{anyhow, bail};
+    let t0 = Instant::now();
+    let say = |m: &str| {
+        if opts.progress {
+            eprintln!("motionctl: {m}");
+        }
+    };
+    if !(0.25..=2.0).contains(&opts.speed) {
+        bail!("--speed must be within 0.25..=2, got {}", opts.speed);
+    }
+    let speed = Rate::from_num(opts.speed);
+    let blocks = blocks(bytes)?;
+    let model = model(bytes, speed, opts.scale)?;
+    let cfg = motion::polar::job::wire_config();
+    say(&format!(
+        "{} blocks, {} events; host model at speed {} and size {}:{}: {} ticks ({:.2} s), \
+         final (theta, r) = {:?} steps",
+        blocks.len(),
+        model.events,
+        opts.speed,
+        opts.scale.m,
+        opts.scale.k,
+        model.ticks,
+        model.ticks as f64 / cfg.machine.tick_hz as f64,
+        model.positions
+    ));
+
+    let mut s = Session::new(transport, opts.host);
+    let link = |e: LinkFailure| anyhow!("{e}");
+    let info = s.connect().map_err(link)?;
+    if info.capabilities & motion::protocol::CAP_EVENTS == 0 {
+        bail!("the board ({:?}) does not play event jobs (no CAP_EVENTS)", info.firmware.as_str());
+    }
+    say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
+    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
+        match s.request(body).map_err(link)? {
+            Ok(r) => Ok(r),
+            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
+        }
+    };
+    let status = |s: &mut Session| -> anyhow::Result<Status> {
+        match query(s, RequestBody::GetStatus, "GetStatus")? {
+            Reply::Status(st) => Ok(st),
+            _ => bail!("the board answered GetStatus without a status"),
+        }
+    };
+    let st = status(&mut s)?;
+    let config_missing = FaultCode::ConfigMissing.bit();
+    if st.faults & !config_missing != 0 {
+        bail!(
+            "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
+            fault_names(st.faults)
+        );
+    }
+    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault) {
+        bail!("the board is busy (state {:?}): run `motionctl abort` first", st.machine);
+    }
+    if query(&mut s, RequestBody::GetConfig, "GetConfig")? != Reply::Config(cfg) || st.faults != 0 {
+        query(&mut s, RequestBody::SetConfig(cfg), "SetConfig (the polar machine)")?;
+        say("sent the polar machine's config (2 axes, theta and r, at the stream's tick rate)");
+    }
+    if st.faults == config_missing {
+        query(&mut s, RequestBody::ClearFault, "ClearFault")?;
+    }
+    if status(&mut s)?.machine != MachineState::Ready {
+        if !opts.home {
+            bail!("the board is not homed: home it (`motionctl home`) or pass --home");
+        }
+        runner::home(&mut s, &|m| say(m)).map_err(|e| anyhow!("{e}"))?;
+    }
+    query(&mut s, RequestBody::SetOverride { rate_bits: speed.to_bits() }, "SetOverride")?;
+    query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
+    s.streaming = true;
+    let base = status(&mut s)?;
+
+    let mut report = PolarReport {
+        blocks: blocks.len(),
+        events: model.events,
+        model_ticks: model.ticks,
+        min_event_credits: u16::MAX,
+        ..PolarReport::default()
+    };
+    let mut pending: HashMap<u32, Pending> = HashMap::new();
+    let mut next = 0usize;
+    let mut acked = 0usize;
+    let mut start_seq: Option<u32> = None;
+    let mut started = false;
+    let mut latest = base.clone();
+    let mut start_tick: Option<u64> = None;
+    let mut poll_in_flight = false;
+    let mut last_poll = Instant::now();
+    let mut last_tx = (s.host.sent_frames, Instant::now());
+    let mut last_say = Instant::now();
+    let deadline = Duration::from_secs_f64(model.ticks as f64 / cfg.machine.tick_hz as f64) + SLACK;
+    let stream_t0 = Instant::now();
+
+    loop {
+        s.pump(Duration::from_millis(5)).map_err(link)?;
+        for n in s.notices.drain(..) {
+            say(&n);
+        }
+        for (seq, result) in s.take_answers() {
+            let Some(p) = pending.remove(&seq) else { continue };
+            match (p, result) {
+                (Pending::Block, Ok(_)) => acked += 1,
+                (Pending::Block, Err(r)) => {
+                    bail!("the board refused block {acked}: {}", describe_rejection(&r))
+                }
+                (Pending::Start, Ok(_)) => started = true,
+                (Pending::Start, Err(r)) => {
+                    bail!("the board refused StartPlayback: {}", describe_rejection(&r))
+                }
+                (Pending::Poll, Ok(Reply::Status(st))) => {
+                    poll_in_flight = false;
+                    if seq_at_or_after(st.next_seq, latest.next_seq) {
+                        latest = st;
+                    }
+                }
+                (Pending::Poll, _) => poll_in_flight = false,
+            }
+        }
+        while let Some(ev) = s.events.pop_front() {
+            match ev {
+                HostEvent::Status(st) if seq_at_or_after(st.next_seq, latest.next_seq) => {
+                    latest = st;
+                }
+                // Announced before this job (e.g. ConfigMissing at boot, cleared above).
+                HostEvent::Fault { tick, .. } if tick < base.tick => {}
+                HostEvent::Fault { code, tick } => bail!(
+                    "board fault {} ({}) at tick {tick}, after {} events",
+                    code.name(),
+                    code.description(),
+                    latest.events_fired
+                ),
+                HostEvent::SessionLost(code) => {
+                    bail!("{}: the job cannot resume safely", LinkFailure::SessionLost(code))
+                }
+                _ => {}
+            }
+        }
+        if latest.faults != 0 {
+            bail!(
+                "the board faulted ({}) after {} of {} events",
+                fault_names(latest.faults),
+                latest.events_fired,
+                model.events
+            );
+        }
+        report.min_event_credits = report.min_event_credits.min(latest.event_credits);
+
+        // Blocks, as event credits and the window allow.
+        while next < blocks.len() && s.host.window_free() > 0 && s.host.event_credits() > 0 {
+            let bytes = BlockBytes::from_slice(blocks[next])
+                .ok_or_else(|| anyhow!("block {next} is longer than a link block"))?;
+            let last = next + 1 == blocks.len();
+            let seq = s.send(RequestBody::QueueEvents(EventBlock { bytes, last })).map_err(link)?;
+            pending.insert(seq, Pending::Block);
+            next += 1;
+        }
+
+        // Start once the board's block queue is full or the whole stream is queued.
+        let queued_all = acked == next && (next == blocks.len() || s.host.event_credits() == 0);
+        if start_seq.is_none() && acked > 0 && queued_all {
+            start_tick = Some(latest.tick);
+            let body = RequestBody::StartPlayback { m: opts.scale.m, k: opts.scale.k };
+            let seq = s.send(body).map_err(link)?;
+            pending.insert(seq, Pending::Start);
+            start_seq = Some(seq);
+            say(&format!("{acked} blocks queued: StartPlayback {}:{}", opts.scale.m, opts.scale.k));
+        }
+
+        // Starved of credits, or quiet for a while: ask for a status.
+        let starved = next < blocks.len() && s.host.event_credits() == 0;
+        let quiet =
+            s.host.sent_frames == last_tx.0 && last_tx.1.elapsed() >= runner::HEARTBEAT_EVERY;
+        if s.host.sent_frames != last_tx.0 {
+            last_tx = (s.host.sent_frames, Instant::now());
+        }
+        if (starved && last_poll.elapsed() >= Duration::from_millis(10) || quiet)
+            && !poll_in_flight
+            && s.host.window_free() > 0
+        {
+            let seq = s.send(RequestBody::GetStatus).map_err(link)?;
+            pending.insert(seq, Pending::Poll);
+            poll_in_flight = true;
+            last_poll = Instant::now();
+        }
+
+        if opts.progress && last_say.elapsed() >= Duration::from_secs(1) {
+            last_say = Instant::now();
+            say(&format!(
+                "{} / {} events fired, {acked} / {} blocks acknowledged, state {:?}",
+                latest.events_fired,
+                model.events,
+                blocks.len(),
+                latest.machine
+            ));
+        }
+
+        // Done: the start was answered, and a later status shows the job over.
+        let after_start = start_seq.is_some_and(|ss| seq_at_or_after(latest.next_seq, ss + 1));
+        if started && after_start && latest.machine == MachineState::Ready && next == blocks.len() {
+            break;
+        }
+        if stream_t0.elapsed() > deadline {
+            let _ = s.request(RequestBody::Abort);
+            bail!(
+                "the job took longer than {:.0} s: aborted after {} of {} events",
+                deadline.as_secs_f64(),
+                latest.events_fired,
+                model.events
+            );
+        }
+    }
+
+    let fin = status(&mut s)?;
+    let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });
+    report.events_fired = fin.events_fired;
+    report.positions = [fin.positions[0] - base.positions[0], fin.positions[1] - base.positions[1]];
+    report.expected_positions = model.positions;
+    report.board_ticks = latest.tick.saturating_sub(start_tick.unwrap_or(latest.tick));
+    report.seconds = t0.elapsed().as_secs_f64();
+    report.frames_out = s.host.sent_frames;
+    report.retransmissions = s.host.retransmissions;
+    report.link_naks = s.stats.link_naks;
+    report.bad_frames_in = s.stats.bad_frames_in;
+    if report.events_fired != model.events {
+        report
+            .problems
+            .push(format!("{} events fired, {} in the stream", report.events_fired, model.events));
+    }
+    if report.positions != model.positions {
+        report.problems.push(format!(
+            "final (theta, r) {:?} != host model {:?} steps",
+            report.positions, model.positions
+        ));
+    }
+    if fin.faults != 0 {
+        report.problems.push(format!("faults latched: {}", fault_names(fin.faults)));
+    }
+    Ok(report)
+}

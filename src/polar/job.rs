@@ -1,0 +1,257 @@
+//! The polar machine as the link sees it: a 2-axis (theta, r) config at the stream's tick rate,
+//! for `motionctl polar run` (and tests of event jobs through [`crate::machine::Machine`]).
+
+use super::scenario::TICK_HZ;
+use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
+use crate::protocol::{AxisScale, WireConfig};
+
+/// Steps per revolution of the arm (dTheta = 2 pi / 16000, the thesis's resolution).
+pub const THETA_STEPS_PER_REV: u32 = 16_000;
+/// Carriage steps per inch (dR = 0.001 in).
+pub const R_STEPS_PER_IN: u32 = 1_000;
+/// Soft limits, steps either side of the homed position: the work area's full span (theta
+/// 0..2.8 rad = 7130 steps, r 3..13 in = 10000 steps), so a contour that starts inside the work
+/// area can never trip them while one that runs away does.
+pub const THETA_SPAN_STEPS: i64 = 7_130;
+pub const R_SPAN_STEPS: i64 = 10_000;
+
+/// The polar machine's link config: `TICK_HZ` (the stream's time quantum), one-tick DIR setup
+/// and hold (what `StepPins` guarantees: DIR a tick before a reversed rise, never in the tick of
+/// a rise), at most one rise per axis every other tick (50 kHz).
+pub fn wire_config() -> WireConfig {
+    let axis =
+        AxisLimits { max_rate_hz: TICK_HZ / 2, accel_steps_per_s2: 1_000_000, junction_jerk_hz: 0 };
+    let mut axes = [AxisLimits::UNUSED; MAX_AXES];
+    axes[0] = axis;
+    axes[1] = axis;
+    let mut scale = [AxisScale::UNUSED; MAX_AXES];
+    // Steps per degree and per mm, times 1000.
+    scale[0] = AxisScale {
+        steps_per_unit_milli: THETA_STEPS_PER_REV * 1000 / 360,
+        soft_min: -THETA_SPAN_STEPS,
+        soft_max: THETA_SPAN_STEPS,
+    };
+    scale[1] = AxisScale {
+        steps_per_unit_milli: R_STEPS_PER_IN * 10_000 / 254,
+        soft_min: -R_SPAN_STEPS,
+        soft_max: R_SPAN_STEPS,
+    };
+    WireConfig {
+        machine: MachineConfig {
+            tick_hz: TICK_HZ,
+            timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },
+            axis_count: 2,
+            axes,
+        },
+        scale,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::feed::EventFeed;
+    use super::super::limacon_stream::BYTES;
+    use super::super::playback::{Playback, SizeScale};
+    use super::super::stream::{decode_all, parse_block};
+    use super::*;
+    use crate::dda::Dda;
+    use crate::machine::{
+        BoardConfig, Inputs, Machine, MachineCommand, MachineState, Refusal, StepSource,
+    };
+    use crate::protocol::{FaultCode, HomingConfig};
+    use crate::segment::Rate;
+
+    fn blocks() -> std::vec::Vec<&'static [u8]> {
+        let mut out = std::vec::Vec::new();
+        let mut rest = BYTES;
+        while !rest.is_empty() {
+            let (_, r) = parse_block(rest).unwrap();
+            out.push(&rest[..rest.len() - r.len()]);
+            rest = r;
+        }
+        out
+    }
+
+    /// A homed polar machine in `Ready` and its DDA.
+    fn ready() -> (Machine, Dda) {
+        let cfg = BoardConfig::with_homing(wire_config(), &HomingConfig::NONE);
+        cfg.validate().unwrap();
+        let mut m = Machine::new();
+        m.boot(Ok(cfg));
+        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
+        m.command(MachineCommand::Home, &mut dda).unwrap();
+        let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
+        for _ in 0..10 {
+            m.tick(&mut dda, &Inputs::QUIET);
+            if m.wants_background() {
+                m.background(&mut dda, &mut prep);
+            }
+        }
+        assert_eq!(m.state(), MachineState::Ready);
+        (m, dda)
+    }
+
+    /// The host model: the same playback, fed everything, ticked to the end.
+    fn model(scale: SizeScale, rate: Rate) -> (u32, [i64; 2], u64) {
+        let mut p = Playback::new(scale);
+        p.set_rate(rate);
+        let mut evs = std::vec::Vec::new();
+        decode_all(BYTES, |e| evs.push(e)).unwrap();
+        let mut it = evs.into_iter();
+        let mut ticks = 0;
+        while !p.done() {
+            while p.free() > 0 {
+                match it.next() {
+                    Some(e) => p.push(e).unwrap(),
+                    None => {
+                        p.finish();
+                        break;
+                    }
+                }
+            }
+            p.tick();
+            ticks += 1;
+        }
+        (p.fired(), p.position(), ticks)
+    }
+
+    struct Run {
+        m: Machine,
+        dda: Dda,
+        play: Playback,
+        feed: EventFeed<8>,
+        next: usize,
+        blocks: std::vec::Vec<&'static [u8]>,
+        ticks: u64,
+    }
+
+    impl Run {
+        fn new(scale: SizeScale, rate: Rate) -> Self {
+            let (m, mut dda) = ready();
+            dda.apply(crate::dda::Command::SetOverride(rate));
+            Run {
+                m,
+                dda,
+                play: Playback::new(scale),
+                feed: EventFeed::new(),
+                next: 0,
+                blocks: blocks(),
+                ticks: 0,
+            }
+        }
+
+        /// Queues blocks while credits last (all of them when `upto` allows).
+        fn queue(&mut self, upto: usize) {
+            while self.next < upto.min(self.blocks.len()) && self.feed.credits() > 0 {
+                let last = self.next + 1 == self.blocks.len();
+                self.m.command(MachineCommand::QueueEvents, &mut self.dda).unwrap();
+                self.feed.push(self.blocks[self.next], last).unwrap();
+                self.next += 1;
+            }
+        }
+
+        /// One tick as the link firmware does it: feeder refill, then the machine's tick.
+        fn tick(&mut self, inp: &Inputs) -> crate::machine::TickOut {
+            self.feed.fill(&mut self.play);
+            self.ticks += 1;
+            self.m.tick_with(&mut self.dda, inp, &mut self.play)
+        }
+    }
+
+    #[test]
+    fn event_job_runs_through_the_machine_and_matches_the_host_model() {
+        let (scale, rate) = (SizeScale::new(3, 2).unwrap(), Rate::lit("2"));
+        let (events, pos, model_ticks) = model(scale, rate);
+        let mut r = Run::new(scale, rate);
+        r.queue(usize::MAX);
+        // Segments and events never share a job.
+        let seg = crate::segment::Segment {
+            steps: [10, 0, 0, 0, 0, 0],
+            duration_ticks: 1_000,
+            entry_rate: Rate::ZERO,
+            exit_rate: Rate::ZERO,
+            accel_per_tick: Rate::from_bits(1 << 20),
+            id: 1,
+        };
+        assert!(matches!(
+            r.m.command(MachineCommand::Queue(&seg), &mut r.dda),
+            Err(Refusal::OutOfState(MachineState::Ready))
+        ));
+        r.feed.fill(&mut r.play);
+        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        assert!(r.m.event_job());
+        let mut rises = [0u64; 2];
+        while r.m.state() == MachineState::Running && r.ticks < 100_000_000 {
+            r.queue(usize::MAX);
+            let out = r.tick(&Inputs::QUIET);
+            for (a, n) in rises.iter_mut().enumerate() {
+                *n += (out.step.rise() >> a & 1) as u64;
+            }
+        }
+        assert_eq!(r.m.state(), MachineState::Ready, "faults {:#x}", r.m.faults().mask());
+        assert!(!r.m.event_job() && !r.m.events_queued());
+        // Same events, same steps, same ticks as the model; positions from the machine's own
+        // counters (rising edges and DIR), not from the playback.
+        assert_eq!(r.play.fired(), events);
+        assert_eq!([r.m.positions()[0], r.m.positions()[1]], pos);
+        assert_eq!(rises, [r.play.pins().rises[0], r.play.pins().rises[1]]);
+        assert_eq!(r.ticks, model_ticks);
+        // 3:2 on r only: the closed limacon still closes on both axes.
+        assert_eq!(pos, [0, 0]);
+        assert!(events > 19_000, "{events}");
+    }
+
+    #[test]
+    fn estop_freezes_an_event_job_the_same_tick() {
+        let mut r = Run::new(SizeScale::ONE, Rate::ONE);
+        r.queue(usize::MAX);
+        r.feed.fill(&mut r.play);
+        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        while r.play.fired() < 500 {
+            r.queue(usize::MAX);
+            r.tick(&Inputs::QUIET);
+        }
+        let estop = Inputs { estop: true, ..Inputs::QUIET };
+        let out = r.tick(&estop);
+        assert_eq!(out.step.rise(), 0);
+        let (fired, pos) = (r.play.fired(), r.m.positions());
+        for _ in 0..100_000 {
+            let out = r.tick(&Inputs::QUIET);
+            assert_eq!(out.step.rise(), 0, "frozen: nothing reaches the pins");
+        }
+        assert_eq!((r.play.fired(), r.m.positions()), (fired, pos));
+        assert_eq!(r.m.state(), MachineState::Fault);
+        assert!(r.m.faults().has(FaultCode::EStop));
+    }
+
+    #[test]
+    fn a_late_host_is_an_underrun_and_the_playback_holds() {
+        let mut r = Run::new(SizeScale::ONE, Rate::ONE);
+        // Two blocks, none marked last: the host is late with the third.
+        r.queue(2);
+        r.feed.fill(&mut r.play);
+        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        let admitted = r.feed.events_admitted;
+        while r.m.state() == MachineState::Running && r.ticks < 10_000_000 {
+            r.tick(&Inputs::QUIET);
+        }
+        assert_eq!(r.m.state(), MachineState::Fault);
+        assert!(r.m.faults().has(FaultCode::QueueUnderrun));
+        assert_eq!(r.play.fired(), admitted, "every admitted event fired before the underrun");
+        // The machine table refuses more blocks in Fault.
+        assert!(matches!(
+            r.m.command(MachineCommand::QueueEvents, &mut r.dda),
+            Err(Refusal::OutOfState(MachineState::Fault))
+        ));
+        // The hold reaction stops the playback's clock: events that reach it now do not fire.
+        r.feed.push(r.blocks[2], false).unwrap();
+        r.feed.fill(&mut r.play);
+        assert!(r.play.queued() > 0);
+        let fired = r.play.fired();
+        for _ in 0..100_000 {
+            r.tick(&Inputs::QUIET);
+        }
+        assert_eq!(r.play.fired(), fired);
+        assert!(!StepSource::idle(&r.play, &r.dda));
+    }
+}
