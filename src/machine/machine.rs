@@ -127,6 +127,10 @@ pub enum MachineCommand<'a> {
     /// Start the event job (the table's Start column): the caller's step source plays the
     /// admitted events through [`Machine::tick_with`].
     StartEvents,
+    /// Start a Z-slide job (the table's Start column): the caller's step source
+    /// (`motion::zslide::link_job::ZJob`) steps X and Z through [`Machine::tick_with`]; the job
+    /// ends when the source is idle. Refused while segments or events are queued.
+    StartZ,
 }
 
 impl MachineCommand<'_> {
@@ -143,6 +147,7 @@ impl MachineCommand<'_> {
             MachineCommand::JogOff => CommandKind::JogOff,
             MachineCommand::QueueEvents => CommandKind::Queue,
             MachineCommand::StartEvents => CommandKind::Start,
+            MachineCommand::StartZ => CommandKind::Start,
         }
     }
 }
@@ -225,6 +230,9 @@ pub struct Machine {
     event_job: bool,
     /// A hold is in force (feed hold, or a hold reaction): event sources stop their clock.
     paused: bool,
+    /// A Z-slide job runs (or holds): like an event job, the tick's source is the caller's and
+    /// the job ends when the source is idle.
+    z_job: bool,
 }
 
 impl Default for Machine {
@@ -264,6 +272,7 @@ impl Machine {
             events_queued: false,
             event_job: false,
             paused: false,
+            z_job: false,
         }
     }
 
@@ -414,11 +423,12 @@ impl Machine {
             }
         };
         // Segments and events never share a job: the machine has one job end to watch.
-        let events = self.events_queued || self.event_job;
+        let events = self.events_queued || self.event_job || self.z_job;
         let mixed = match cmd {
             MachineCommand::Queue(_) | MachineCommand::Start => events,
             MachineCommand::QueueEvents => self.in_flight(dda) != 0,
             MachineCommand::StartEvents => !self.events_queued || self.event_job,
+            MachineCommand::StartZ => events || self.in_flight(dda) != 0,
             _ => false,
         };
         if mixed {
@@ -447,6 +457,10 @@ impl Machine {
             MachineCommand::QueueEvents => self.events_queued = true,
             MachineCommand::StartEvents => {
                 self.event_job = true;
+                self.paused = false;
+            }
+            MachineCommand::StartZ => {
+                self.z_job = true;
                 self.paused = false;
             }
             MachineCommand::Home => {
@@ -526,6 +540,7 @@ impl Machine {
         match self.state {
             MachineState::Homing => self.watch_homing(dda, inp),
             MachineState::Running if self.event_job => self.watch_events(dda, source),
+            MachineState::Running if self.z_job => self.watch_z_job(dda, source),
             MachineState::Running => self.watch_job(dda),
             MachineState::Fault if self.jog.is_some() => self.watch_jog(dda, inp),
             _ => {}
@@ -698,6 +713,20 @@ impl Machine {
         }
     }
 
+    /// A Z-slide job: done when its source (X feed finished, Z back at rest) is idle.
+    #[inline]
+    fn watch_z_job(&mut self, dda: &Dda, source: &impl StepSource) {
+        if source.idle(dda) {
+            self.z_job = false;
+            self.enter(MachineState::Ready);
+        }
+    }
+
+    /// A Z-slide job runs or holds ([`MachineCommand::StartZ`]): the tick's source is the Z job.
+    pub fn z_job(&self) -> bool {
+        self.z_job
+    }
+
     /// Latches `code`; a new fault gets its class's reaction and the machine goes to `Fault`.
     fn raise(&mut self, code: FaultCode) {
         if !self.latch.raise(code) {
@@ -764,6 +793,7 @@ impl Machine {
             self.events_queued = false;
             self.event_job = false;
             self.paused = false;
+            self.z_job = false;
         }
         let mv = match (self.state, &mut self.jog) {
             (MachineState::Homing, _) => self.homing.take_move(),

@@ -94,10 +94,12 @@ impl ZUpdate {
     }
 }
 
-/// The generator over one table.
+/// The generator's state without its table: every method that reads the table takes it as an
+/// argument, so an owner may keep the table beside the state (the link firmware's Z job, whose
+/// table is replaced by uploads between jobs). [`ZCommand`] pairs it with a borrowed table.
+/// The table passed must be the one given to [`ZGen::new`] (its derivative scan is cached).
 #[derive(Clone, Debug)]
-pub struct ZCommand<'t, const ROWS: usize, const WIDTH: usize> {
-    table: &'t CoefficientTable<ROWS, WIDTH>,
+pub struct ZGen<const WIDTH: usize> {
     cfg: ZCommandConfig,
     v_max_in_q48_per_tick: i64,
     a_max_in_q48_per_tick2: i64,
@@ -144,11 +146,11 @@ fn smoothstep_rates_q32(m_q16: u32, dm_q32: i64) -> (i64, i64) {
     ((slope_q16 * dm) >> 16, (curve_q16 * dm2_q32) >> 16)
 }
 
-impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
+impl<const WIDTH: usize> ZGen<WIDTH> {
     /// Checks the config and scans the table once for its largest angle derivatives (config
     /// time: divides, loops over rows x [`CHECK_ANGLES`]).
-    pub fn new(
-        table: &'t CoefficientTable<ROWS, WIDTH>,
+    pub fn new<const ROWS: usize>(
+        table: &CoefficientTable<ROWS, WIDTH>,
         cfg: ZCommandConfig,
         z_rest_in_q32: i32,
     ) -> Result<Self, ZConfigError> {
@@ -184,7 +186,6 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
             }
         }
         Ok(Self {
-            table,
             cfg,
             v_max_in_q48_per_tick: v_max as i64,
             a_max_in_q48_per_tick2: (a_max as i64).max(1),
@@ -222,8 +223,9 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
     /// becomes the rest Z the disengage returns to). Errs with `ZSlideLimit` if the table at
     /// this spindle speed (or the engage ramp) needs more than the slide has, `SpindleStopped`
     /// if the spindle is stopped.
-    pub fn start(
+    pub fn start<const ROWS: usize>(
         &mut self,
+        table: &CoefficientTable<ROWS, WIDTH>,
         x_in_q24: i32,
         speed_turn_q32_per_tick: i32,
         z_now_in_q32: i32,
@@ -237,11 +239,11 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
         let (v, a) = self.required_at(speed_turn_q32_per_tick);
         // Engage ramp: smoothstep's peak slope is 1.5 / engage_ticks times the distance from
         // the current Z to the table's Z at the engage X.
-        let c = self.table.coefficients(x_in_q24, self.cfg.interp);
+        let c = table.coefficients(x_in_q24, self.cfg.interp);
         let mut far = 0i64;
         for j in 0..CHECK_ANGLES {
             let phi = j.wrapping_mul(u32::MAX / CHECK_ANGLES + 1);
-            let z = super::table::eval_row(self.table.form(), &c, phi).z_in_q32;
+            let z = super::table::eval_row(table.form(), &c, phi).z_in_q32;
             far = far.max((z as i64 - z_now_in_q32 as i64).abs());
         }
         let ramp_v = (far << 16) * 3 / 2 / self.cfg.engage_ticks as i64;
@@ -262,8 +264,9 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
     /// One update (call once per tick, >= 20 kHz): spindle angle and speed from the source,
     /// its fault if any, the X position. Returns the command (frozen once faulted).
     #[inline(never)]
-    pub fn update(
+    pub fn update<const ROWS: usize>(
         &mut self,
+        table: &CoefficientTable<ROWS, WIDTH>,
         x_in_q24: i32,
         angle_turn_q32: u32,
         speed_turn_q32_per_tick: i32,
@@ -292,8 +295,8 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
         let advance =
             ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64) >> 16) as u32;
         let phi = angle_turn_q32.wrapping_add(advance);
-        let c = self.table.coefficients(x_in_q24, self.cfg.interp);
-        let p: ZPoint = eval_row(self.table.form(), &c, phi);
+        let c = table.coefficients(x_in_q24, self.cfg.interp);
+        let p: ZPoint = eval_row(table.form(), &c, phi);
         // X-feed term: the series at this angle over the coefficients' change since the last
         // update is dZ/dX * dX per tick (a backward difference: half a tick late, negligible).
         // Without it the servo lags by 2.7 uin at X 6.75 in the scenario's 3 in/s feed.
@@ -303,7 +306,7 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
             *d = now.wrapping_sub(*before);
         }
         self.last_coeffs_in_q32 = c;
-        let v_x = (eval_row(self.table.form(), &dc, phi).z_in_q32 as i64) << 16;
+        let v_x = (eval_row(table.form(), &dc, phi).z_in_q32 as i64) << 16;
         let w = rad_per_tick_q32(speed_turn_q32_per_tick);
         let v_phi = ((p.dz_dphi_in_q32 * w) >> 16) + v_x;
         let a_phi = acc_q48(p.d2z_dphi2_in_q32, w);
@@ -379,8 +382,70 @@ impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
     pub fn updates(&self) -> u64 {
         self.updates
     }
+}
+
+/// The generator over one borrowed table: [`ZGen`] plus the table it was built for.
+#[derive(Clone, Debug)]
+pub struct ZCommand<'t, const ROWS: usize, const WIDTH: usize> {
+    table: &'t CoefficientTable<ROWS, WIDTH>,
+    gen: ZGen<WIDTH>,
+}
+
+impl<'t, const ROWS: usize, const WIDTH: usize> ZCommand<'t, ROWS, WIDTH> {
+    /// [`ZGen::new`] over `table` (config time).
+    pub fn new(
+        table: &'t CoefficientTable<ROWS, WIDTH>,
+        cfg: ZCommandConfig,
+        z_rest_in_q32: i32,
+    ) -> Result<Self, ZConfigError> {
+        Ok(Self { table, gen: ZGen::new(table, cfg, z_rest_in_q32)? })
+    }
+    /// See [`ZGen::required_at`].
+    pub fn required_at(&self, speed_turn_q32_per_tick: i32) -> (i64, i64) {
+        self.gen.required_at(speed_turn_q32_per_tick)
+    }
+    /// See [`ZGen::limits`].
+    pub fn limits(&self) -> (i64, i64) {
+        self.gen.limits()
+    }
+    /// See [`ZGen::start`].
+    pub fn start(
+        &mut self,
+        x_in_q24: i32,
+        speed_turn_q32_per_tick: i32,
+        z_now_in_q32: i32,
+    ) -> Result<(), FaultCode> {
+        self.gen.start(self.table, x_in_q24, speed_turn_q32_per_tick, z_now_in_q32)
+    }
+    /// See [`ZGen::update`] (interrupt rate).
+    #[inline(always)]
+    pub fn update(
+        &mut self,
+        x_in_q24: i32,
+        angle_turn_q32: u32,
+        speed_turn_q32_per_tick: i32,
+        sensor_fault: Option<FaultCode>,
+    ) -> ZUpdate {
+        self.gen.update(self.table, x_in_q24, angle_turn_q32, speed_turn_q32_per_tick, sensor_fault)
+    }
+    pub fn state(&self) -> ZState {
+        self.gen.state()
+    }
+    pub fn fault_code(&self) -> Option<FaultCode> {
+        self.gen.fault_code()
+    }
+    pub fn last(&self) -> ZUpdate {
+        self.gen.last()
+    }
+    pub fn updates(&self) -> u64 {
+        self.gen.updates()
+    }
     pub fn table(&self) -> &'t CoefficientTable<ROWS, WIDTH> {
         self.table
+    }
+    /// The generator state.
+    pub fn gen(&self) -> &ZGen<WIDTH> {
+        &self.gen
     }
 }
 

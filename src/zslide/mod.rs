@@ -8,12 +8,13 @@
 pub mod command;
 pub mod dac_code;
 pub mod douglass_table;
+pub mod link_job;
 pub mod output;
 pub mod plant;
 pub mod scenario;
 pub mod table;
 
-pub use command::{ZCommand, ZCommandConfig, ZConfigError, ZState, ZUpdate};
+pub use command::{ZCommand, ZCommandConfig, ZConfigError, ZGen, ZState, ZUpdate};
 pub use output::{CommandLead, DacScale, StepFollower, StepScale};
 pub use plant::{VoiceCoilMotor, VoiceCoilServo, VoiceCoilSlide};
 pub use table::{CoefficientTable, Interp, TableError, TableForm, ZPoint};

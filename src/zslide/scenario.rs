@@ -35,13 +35,13 @@ use crate::spindle::{
 
 /// Tick rate of the scenario (and Z update rate), Hz.
 pub const TICK_HZ: u32 = 50_000;
-const CPR: u32 = 40_000;
-const RUN_TICKS: u32 = 3 * TICK_HZ;
-const ENGAGE_TICK: u32 = TICK_HZ / 5;
+pub const CPR: u32 = 40_000;
+pub const RUN_TICKS: u32 = 3 * TICK_HZ;
+pub const ENGAGE_TICK: u32 = TICK_HZ / 5;
 const STEP_TICK: u32 = TICK_HZ * 3 / 2;
 const RAMP_TICKS: u32 = TICK_HZ / 100;
-const FEED_TICKS: u32 = TICK_HZ * 5 / 2;
-const X_END_IN_Q24: i32 = 15 << 23; // 7.5 in
+pub const FEED_TICKS: u32 = TICK_HZ * 5 / 2;
+pub const X_END_IN_Q24: i32 = 15 << 23; // 7.5 in
 const X_BLEND_IN_Q24: i32 = (72 << 24) / 10; // 7.2 in
 /// The stepper reaches its target at the end of the tick: the command's advance.
 pub const STEPPER_LATENCY_TICKS_Q16: u32 = 1 << 16;
@@ -212,8 +212,21 @@ impl ZSlideScenario {
     }
 
     fn spindle_speed(&self) -> u32 {
+        spindle_speed_at(self.tick)
+    }
+
+    /// The Z command of the last tick (inches Q32): the trace the hash covers.
+    pub fn command_z_in_q32(&self) -> i32 {
+        self.command.last().z_in_q32
+    }
+}
+
+/// The scenario's spindle speed profile at `tick`: 360 rpm, a 10 ms ramp to 432 rpm at
+/// `STEP_TICK` (turn Q32 per tick; also drives the link-job test's sim spindle).
+pub fn spindle_speed_at(tick: u32) -> u32 {
+    {
         let (v0, v1) = (speed(360) as i64, speed(432) as i64);
-        let t = self.tick;
+        let t = tick;
         let v = if t < STEP_TICK {
             v0
         } else if t < STEP_TICK + RAMP_TICKS {
@@ -225,7 +238,9 @@ impl ZSlideScenario {
         };
         v as u32
     }
+}
 
+impl ZSlideScenario {
     fn phase(&self) -> Phase {
         let t = self.tick;
         if self.x_in_q24 >= X_BLEND_IN_Q24 {
