@@ -198,6 +198,11 @@ impl Link {
         });
         let job = matches!(state, MachineState::Running | MachineState::Holding);
         LINK_OK.store(!job || now_ms.saturating_sub(self.last_frame_ms) < LINK_TIMEOUT_MS, Relaxed);
+        // Without a session nobody hears a Fault frame; the host reads the latch from its first
+        // Status. Announcing it later would report a fault the host may since have cleared.
+        if self.board.next_seq().is_none() {
+            self.feed.announced = latched;
+        }
         let fresh = latched & !self.feed.announced;
         self.feed.announced = latched;
         let fault = match first {

@@ -557,6 +557,14 @@ pub fn run(
                     }
                     latest = st;
                 }
+                // A fault announced before this job's first status (e.g. the ConfigMissing a
+                // fresh board latched at boot, cleared above) is history, not this job's.
+                HostEvent::Fault { code, tick } if tick < base.tick => {
+                    say(
+                        &progress,
+                        &format!("note: earlier board fault {} at tick {tick}", code.name()),
+                    );
+                }
                 HostEvent::Fault { code, tick } => {
                     return Err(err(format!(
                         "board fault {} ({}) at tick {tick}, after {} of {total} segments",

@@ -8,7 +8,7 @@
 //! series and its two angle derivatives), a few multiplies for the limits and the blend. No
 //! division, no loops beyond the table width, no panics.
 
-use super::table::{eval_row, rad_per_tick_q32, CoefficientTable, Interp, ZPoint};
+use super::table::{eval_row_with_delta, rad_per_tick_q32, CoefficientTable, Interp, ZPoint};
 use crate::protocol::errors::FaultCode;
 
 /// Fastest spindle the generator accepts: 2^22 turn Q32 per tick (1/1024 turn per tick, 2930
@@ -296,17 +296,18 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
             ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64) >> 16) as u32;
         let phi = angle_turn_q32.wrapping_add(advance);
         let c = table.coefficients(x_in_q24, self.cfg.interp);
-        let p: ZPoint = eval_row(table.form(), &c, phi);
         // X-feed term: the series at this angle over the coefficients' change since the last
         // update is dZ/dX * dX per tick (a backward difference: half a tick late, negligible).
-        // Without it the servo lags by 2.7 uin at X 6.75 in the scenario's 3 in/s feed.
+        // Without it the servo lags by 2.7 uin at X 6.75 in the scenario's 3 in/s feed. It
+        // shares the angle's sines and cosines with the command's own evaluation.
         let mut dc = [0i32; WIDTH];
         for ((d, now), before) in dc.iter_mut().zip(c.iter()).zip(self.last_coeffs_in_q32.iter()) {
             // Coefficients are within +-2^28 (table check): the difference cannot overflow.
             *d = now.wrapping_sub(*before);
         }
         self.last_coeffs_in_q32 = c;
-        let v_x = (eval_row(table.form(), &dc, phi).z_in_q32 as i64) << 16;
+        let (p, dz_x): (ZPoint, i32) = eval_row_with_delta(table.form(), &c, &dc, phi);
+        let v_x = (dz_x as i64) << 16;
         let w = rad_per_tick_q32(speed_turn_q32_per_tick);
         let v_phi = ((p.dz_dphi_in_q32 * w) >> 16) + v_x;
         let a_phi = acc_q48(p.d2z_dphi2_in_q32, w);
