@@ -127,6 +127,13 @@ pub enum MachineCommand<'a> {
     /// Start the event job (the table's Start column): the caller's step source plays the
     /// admitted events through [`Machine::tick_with`].
     StartEvents,
+    /// Admit one segment for a wire job (the table's Queue column): checked like `Queue`
+    /// (segment and soft limits) but held by the caller's wire job (`motion::wire::link_job`),
+    /// not fed by the link's feeder. A wire job is a source job like an event job: it runs
+    /// through [`Machine::tick_with`] and never shares a job with plain segments or events.
+    QueueWire(&'a Segment),
+    /// Start the wire job (the table's Start column): like `StartEvents`.
+    StartWire,
 }
 
 impl MachineCommand<'_> {
@@ -143,6 +150,8 @@ impl MachineCommand<'_> {
             MachineCommand::JogOff => CommandKind::JogOff,
             MachineCommand::QueueEvents => CommandKind::Queue,
             MachineCommand::StartEvents => CommandKind::Start,
+            MachineCommand::QueueWire(_) => CommandKind::Queue,
+            MachineCommand::StartWire => CommandKind::Start,
         }
     }
 }
@@ -419,6 +428,10 @@ impl Machine {
             MachineCommand::Queue(_) | MachineCommand::Start => events,
             MachineCommand::QueueEvents => self.in_flight(dda) != 0,
             MachineCommand::StartEvents => !self.events_queued || self.event_job,
+            // During a source job the DDA also runs the source's own segments: only a plain
+            // job's segments count against it.
+            MachineCommand::QueueWire(_) => !events && self.in_flight(dda) != 0,
+            MachineCommand::StartWire => !self.events_queued || self.event_job,
             _ => false,
         };
         if mixed {
@@ -445,6 +458,19 @@ impl Machine {
                 self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
             }
             MachineCommand::QueueEvents => self.events_queued = true,
+            MachineCommand::QueueWire(seg) => {
+                seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
+                let end = self
+                    .limits
+                    .check_move(&self.planned_end, &seg.steps)
+                    .map_err(|axis| Refusal::SoftLimit { axis })?;
+                self.planned_end = end;
+                self.events_queued = true;
+            }
+            MachineCommand::StartWire => {
+                self.event_job = true;
+                self.paused = false;
+            }
             MachineCommand::StartEvents => {
                 self.event_job = true;
                 self.paused = false;
