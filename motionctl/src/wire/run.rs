@@ -25,6 +25,8 @@ use std::time::{Duration, Instant};
 
 /// Status period during the job.
 pub const STATUS_PERIOD_MS: u16 = 40;
+/// Status poll interval (wall clock), also the link heartbeat.
+pub const POLL_EVERY: Duration = Duration::from_millis(5);
 /// Longest a run may take beyond the job's nominal duration (wall clock; QEMU runs slower).
 pub const SLACK: Duration = Duration::from_secs(60);
 
@@ -263,9 +265,10 @@ pub fn run(
                 ));
             }
         }
-        let starved = next < segments.len() && s.host.segment_credits() == 0;
-        if (starved || last_poll.elapsed() >= runner::HEARTBEAT_EVERY)
-            && last_poll.elapsed() >= Duration::from_millis(10)
+        // Poll all the time: under QEMU (`-icount sleep=off`) the idle guest's clock runs many
+        // times faster than the wall clock, so a 250 ms heartbeat would be seconds of board
+        // time and the board would take the silence for a lost link (1 s).
+        if last_poll.elapsed() >= POLL_EVERY
             && !poll_in_flight
             && s.host.window_free() > 0
         {
