@@ -397,6 +397,21 @@ fn run_wire_job(
         "stall      {} stalls, {} retrace and {} return segments, largest retrace {} steps",
         r.stalls, r.retraces, r.returns, r.max_retrace_steps
     );
+    // One machine-readable line for scripts (xtask wire-e2e).
+    println!(
+        "wire-summary x={} y={} beta={} alpha={} stalls={} retraces={} returns={} \
+         max_retrace_steps={} board_ticks={} segments={}",
+        r.positions[0],
+        r.positions[1],
+        r.positions[2],
+        r.positions[3],
+        r.stalls,
+        r.retraces,
+        r.returns,
+        r.max_retrace_steps,
+        r.board_ticks,
+        r.segments
+    );
     if !r.ok() {
         for p in &r.problems {
             eprintln!("motionctl: {p}");

@@ -268,10 +268,7 @@ pub fn run(
         // Poll all the time: under QEMU (`-icount sleep=off`) the idle guest's clock runs many
         // times faster than the wall clock, so a 250 ms heartbeat would be seconds of board
         // time and the board would take the silence for a lost link (1 s).
-        if last_poll.elapsed() >= POLL_EVERY
-            && !poll_in_flight
-            && s.host.window_free() > 0
-        {
+        if last_poll.elapsed() >= POLL_EVERY && !poll_in_flight && s.host.window_free() > 0 {
             let seq = s.send(RequestBody::GetStatus).map_err(link)?;
             pending.insert(seq, Pending::Poll);
             poll_in_flight = true;
