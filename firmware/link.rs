@@ -38,14 +38,20 @@ use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
     encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
-    Status, WireConfig, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_OVERRIDE,
-    CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME_WIRE, SENSOR_CHANNELS,
+    Status, WireConfig, WireJobParams, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
+    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB, MAX_FRAME_WIRE,
+    SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
+use motion::wire::link_job::WireJob;
 use motion::Dda;
 use rtic::Mutex;
 
 use crate::board;
+
+/// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
+#[path = "link_wire.rs"]
+pub mod link_wire;
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
 pub const SEGMENT_QUEUE: usize = 64;
@@ -55,7 +61,7 @@ pub const TX_BUFFER: usize = 1024;
 /// is met to the millisecond.
 const POLLS_PER_SECOND: u32 = 1_000;
 /// A job (Running or Holding) with no valid frame from the host for this long is a lost link:
-/// the machine holds and latches `LinkLost`. motionctl sends at least every 250 ms during a job.
+/// the machine holds and latches `LinkLost`. motionctl sends at least every 100 ms during a job.
 pub const LINK_TIMEOUT_MS: u64 = 1_000;
 /// Watchdog timeout (nominal LSI) and how often the status task offers to feed it.
 pub const WATCHDOG_TIMEOUT_MS: u32 = 100;
@@ -84,8 +90,14 @@ pub const EVENT_REFILL: usize = QUEUE_DEPTH / 2;
 const EVENT_BATCH: usize = 16;
 
 /// What the board announces in `HelloInfo::capabilities`.
-pub const CAPABILITIES: u32 =
-    CAP_DDA | CAP_STATUS_STREAM | CAP_OVERRIDE | CAP_HOLD_RESUME | CAP_SOFT_LIMITS | CAP_EVENTS;
+pub const CAPABILITIES: u32 = CAP_DDA
+    | CAP_STATUS_STREAM
+    | CAP_OVERRIDE
+    | CAP_HOLD_RESUME
+    | CAP_SOFT_LIMITS
+    | CAP_EVENTS
+    | CAP_WIRE_JOB
+    | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes
 /// one lock.
@@ -94,6 +106,8 @@ pub struct Motion {
     pub machine: Machine,
     /// The event job's playback (the last job's, for its counts, until the next start).
     pub playback: Playback,
+    /// The wire job (the last one, for its counts, until the next `ArmWire`).
+    pub wire: Option<WireJob>,
 }
 
 impl Motion {
@@ -106,7 +120,10 @@ impl Motion {
         let dda = Dda::new(&cfg).ok()?;
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
-        Some((Motion { dda, machine, playback: Playback::new(SizeScale::ONE) }, preparer))
+        Some((
+            Motion { dda, machine, playback: Playback::new(SizeScale::ONE), wire: None },
+            preparer,
+        ))
     }
 
     /// The state as the link reports it: started with segments still to feed counts as
@@ -297,6 +314,17 @@ impl Link {
         }
     }
 
+    /// The feeder's wire-job work (segments into the DDA, stops, retrace and return moves),
+    /// when the tick asked for it. Inside the `Motion` lock: the controller pushes straight
+    /// into the DDA.
+    pub fn feed_wire(&mut self, motion: &mut impl Mutex<T = Motion>) {
+        motion.lock(|m| {
+            if link_wire::wants_feed(m) {
+                link_wire::feed(m);
+            }
+        });
+    }
+
     /// Milliseconds of DDA time since boot (division: never call from the tick).
     fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
         let (now, tick_hz) =
@@ -337,6 +365,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
+        self.motion.get_mut().lock(link_wire::drop_job);
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -388,7 +417,8 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn credits(&self) -> u16 {
-        (SEGMENT_QUEUE - self.link.queue.len()) as u16
+        self.with(|m| link_wire::credits(m))
+            .unwrap_or((SEGMENT_QUEUE - self.link.queue.len()) as u16)
     }
 
     fn queue_capacity(&self) -> u16 {
@@ -407,7 +437,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         // One lock: positions, tick, state and counters are one consistent snapshot.
         self.with(|m| {
             let (d, mc) = (&m.dda, &m.machine);
-            Status {
+            let mut s = Status {
                 tick: d.now(),
                 positions: mc.positions(),
                 state: m.wire_state(),
@@ -424,7 +454,9 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 events_fired: m.playback.fired(),
                 event_blocks: self.link.events.blocks() as u16,
                 ..Status::default()
-            }
+            };
+            link_wire::status(m, &mut s);
+            s
         })
     }
 
@@ -439,6 +471,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
+        if self.with(|m| link_wire::live(m)) {
+            let state = self.motion.get_mut().lock(|m| link_wire::queue(m, seg))?;
+            self.wake_feeder |= state != MachineState::Ready;
+            return Ok(());
+        }
         if self.link.queue.is_full() {
             return Err(ErrorCode::QueueFull);
         }
@@ -450,6 +487,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn start(&mut self) -> Result<(), ErrorCode> {
+        if self.with(|m| link_wire::live(m)) {
+            self.motion.get_mut().lock(link_wire::start)?;
+            self.wake_feeder = true;
+            return Ok(());
+        }
         self.command(MachineCommand::Start)?;
         self.wake_feeder = true;
         Ok(())
@@ -520,10 +562,14 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn events_pending(&self) -> bool {
-        self.with(|m| m.machine.events_queued() || m.machine.event_job())
+        // A wire job is a source job too, but its segments come through QueueSegments.
+        self.with(|m| (m.machine.events_queued() || m.machine.event_job()) && !link_wire::live(m))
     }
 
     fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
+        if self.with(|m| link_wire::live(m)) {
+            return Err(ErrorCode::OutOfState);
+        }
         let fresh = !self.with(|m| m.machine.events_queued());
         let state = self.command(MachineCommand::QueueEvents)?;
         if fresh {
@@ -539,6 +585,9 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
+        if self.with(|m| link_wire::live(m)) {
+            return Err(ErrorCode::OutOfState);
+        }
         // Decode the first events outside the lock, from a copy (a refused start changes
         // nothing), then start the job and fill its playback in one critical section: the
         // first tick of the job already has events.
@@ -562,6 +611,19 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         self.link.events = feed;
         self.wake_feeder = true;
         Ok(())
+    }
+
+    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
+    }
+
+    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
+        if board::MachineIo::inject_wire_stall(wire_stall) {
+            Ok(())
+        } else {
+            Err(ErrorCode::Unsupported)
+        }
     }
 }
 

@@ -141,7 +141,9 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
-            let out = if m.machine.event_job() {
+            let out = if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
+                out
+            } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
                 m.machine.tick(&mut m.dda, &inputs)
@@ -162,7 +164,8 @@ mod app {
             let events = EVENTS_WAITING.load(Relaxed)
                 && m.machine.event_job()
                 && m.playback.free() >= EVENT_REFILL;
-            if room || events || m.machine.wants_background() {
+            let wire = link::link_wire::wants_feed(m);
+            if room || events || wire || m.machine.wants_background() {
                 FEEDER_BLOCKED.store(false, Relaxed);
                 l.tick_wakes_feeder.write(());
             }
@@ -197,6 +200,7 @@ mod app {
         loop {
             cx.local.feeder_waits.wait().await;
             link.lock(|l| l.feed_events(&mut motion));
+            link.lock(|l| l.feed_wire(&mut motion));
             loop {
                 let full = motion.lock(|m| {
                     let full = m.dda.ready_free() == 0;

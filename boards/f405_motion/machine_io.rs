@@ -3,19 +3,21 @@
 //! read from the three ports' IDR (read-only, so sharing the ports with the step port is safe);
 //! outputs go through GPIOB's BSRR (atomic set/reset, no read-modify-write).
 
-use super::pins::{Port, ESTOP, LIMIT_MAX, LIMIT_MIN, SPINDLE_EN, WIRE_POWER};
+use super::pins::{Port, ESTOP, LIMIT_MAX, LIMIT_MIN, SPINDLE_EN, WIRE_POWER, WIRE_STALL};
 use super::z_dac::ZDac;
 use motion::machine::Outputs;
 use stm32f4::stm32f405 as pac;
 
-/// Levels read in one tick. (The wire-stall switch, `pins::WIRE_STALL`, belongs to the wire
-/// manipulator's retrace controller, not to the fault model.)
+/// Levels read in one tick. (The wire-stall switch belongs to the wire manipulator's retrace
+/// controller, not to the fault model: only a stall that outlasts the retrace is a fault.)
 #[derive(Clone, Copy, Default)]
 pub struct RawInputs {
     pub estop: bool,
     /// Bit i = axis i's switch open (tripped).
     pub limit_min: u8,
     pub limit_max: u8,
+    /// The wire-lag micro-switch (`pins::WIRE_STALL`, PA8) is closed: the wire stalls.
+    pub wire_stall: bool,
 }
 
 pub struct MachineIo {
@@ -50,6 +52,14 @@ fn gather(pins: &[(Port, u8); 6], a: u32, b: u32, c: u32) -> u8 {
 }
 
 impl MachineIo {
+    /// The real board reads real inputs: no `SimInject`.
+    pub const SIM_INPUTS: bool = false;
+
+    /// `SimInject` is not honoured here (false: refused).
+    pub fn inject_wire_stall(_stalled: bool) -> bool {
+        false
+    }
+
     /// Pins are configured by `pins::init`.
     pub fn new(z_dac: ZDac) -> Self {
         MachineIo { z_dac }
@@ -64,6 +74,8 @@ impl MachineIo {
             estop: (b >> ESTOP) & 1 != 0,
             limit_min: gather(&LIMIT_MIN, a, b, c),
             limit_max: gather(&LIMIT_MAX, a, b, c),
+            // Closed to ground (pulled up): low = stalled.
+            wire_stall: (a >> WIRE_STALL) & 1 == 0,
         }
     }
 

@@ -93,18 +93,38 @@ pub struct RawInputs {
     pub estop: bool,
     pub limit_min: u8,
     pub limit_max: u8,
+    /// The wire-stall switch: here the level the host set with `SimInject`.
+    pub wire_stall: bool,
 }
+
+/// The simulated wire-stall switch (`SimInject`): written by the USART task, read by the tick.
+#[cfg(feature = "link")]
+static SIM_WIRE_STALL: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
 
 /// QEMU models no GPIO: no switch is ever open, and the outputs go nowhere. The fault paths
 /// these inputs drive are exercised by the scenario firmware's `fault_*` scenarios instead.
+/// The one simulated input is the wire-stall switch, which the host drives with `SimInject`
+/// (announced by `CAP_SIM_INPUTS`) to test the wire-stall retrace end to end.
 #[cfg(feature = "link")]
 pub struct MachineIo;
 
 #[cfg(feature = "link")]
 impl MachineIo {
+    /// The host drives the simulated inputs (`SimInject`).
+    pub const SIM_INPUTS: bool = true;
+
+    /// Sets the simulated wire-stall switch from the next tick on; true (honoured).
+    pub fn inject_wire_stall(stalled: bool) -> bool {
+        SIM_WIRE_STALL.store(stalled, core::sync::atomic::Ordering::Relaxed);
+        true
+    }
+
     #[inline]
     pub fn read(&mut self) -> RawInputs {
-        RawInputs::default()
+        RawInputs {
+            wire_stall: SIM_WIRE_STALL.load(core::sync::atomic::Ordering::Relaxed),
+            ..RawInputs::default()
+        }
     }
 
     #[inline]

@@ -132,6 +132,15 @@ fn all_requests() -> Vec<Request> {
             last: false,
         }),
         RequestBody::StartPlayback { m: 3, k: 2 },
+        RequestBody::ArmWire(WireJobParams {
+            debounce_ticks: 50,
+            retrace_limit_steps: 40_000,
+            retrace_override_bits: 1 << 29,
+            resume_override_bits: 1 << 29,
+            resume_segments: 2,
+            segments: 91,
+        }),
+        RequestBody::SimInject { wire_stall: true },
     ]
     .into_iter()
     .enumerate()
@@ -159,6 +168,11 @@ fn all_responses() -> Vec<Response> {
         event_credits: 7,
         events_fired: 19_036,
         event_blocks: 1,
+        wire_stalls: 2,
+        wire_retraces: 3,
+        wire_returns: 4,
+        wire_max_retrace_steps: 8_738,
+        wire_power: true,
     };
     let hello = HelloInfo {
         version: PROTOCOL_VERSION,
@@ -223,7 +237,7 @@ fn every_message_round_trips_through_frames() {
     }
     // The kinds are all covered.
     let kinds: HashSet<u8> = reqs.iter().map(|r| r.body.kind()).collect();
-    assert_eq!(kinds.len(), 17);
+    assert_eq!(kinds.len(), 19);
 }
 
 #[test]

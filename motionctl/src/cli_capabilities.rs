@@ -178,6 +178,8 @@ fn fault_name(code: u8) -> String {
 }
 
 #[derive(Subcommand, Debug)]
+// Parsed once per process: boxing the link arguments would buy nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum WireCmd {
     /// Plan the circle -> complex die (Bhatti Table 11) as one continuous 4-axis job and run it
     /// through the host model of the firmware.
@@ -192,10 +194,33 @@ pub enum WireCmd {
         plan: WirePlanArgs,
         #[command(flatten)]
         link: crate::cli::LinkArgs,
-        /// Write every board status report to this CSV file.
+        /// Write every board status report to this CSV file (plain-segment runs only).
         #[arg(long, value_name = "FILE")]
         log_csv: Option<PathBuf>,
+        /// Run the job as plain segments even on a board with wire jobs (no stall handling).
+        #[arg(long)]
+        plain: bool,
+        /// Only the job's segments FROM..TO (0-based, TO exclusive), e.g. a short QEMU test.
+        #[arg(long, value_name = "FROM..TO", value_parser = parse_range)]
+        segments: Option<std::ops::Range<usize>>,
+        /// With --qemu: close the simulated wire-stall switch this many seconds of machine time
+        /// after the start ...
+        #[arg(long, value_name = "S", requires = "stall_for")]
+        stall_at: Option<f64>,
+        /// ... for this many seconds.
+        #[arg(long, value_name = "S", requires = "stall_at")]
+        stall_for: Option<f64>,
     },
+}
+
+fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
+    let (a, b) = s.split_once("..").ok_or("expected FROM..TO")?;
+    let a: usize = a.parse().map_err(|e| format!("{e}"))?;
+    let b: usize = b.parse().map_err(|e| format!("{e}"))?;
+    if a >= b {
+        return Err("FROM must be below TO".into());
+    }
+    Ok(a..b)
 }
 
 /// The wire manipulator as a job's machine: the DDA's axes 0..3 with their step scales
@@ -234,7 +259,24 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     let (fr, tolerance) = (prm.fr_mm2_per_min, prm.tol_mm);
     let path = continuous::circle_complex_path()?;
     let cfg = motion::wire::machine::config();
-    let job = continuous::plan(&path, &cfg, &prm)?;
+    let mut job = continuous::plan(&path, &cfg, &prm)?;
+    if let WireCmd::Run { segments: Some(r), .. } = &cmd {
+        let n = job.segments.len();
+        let mut part = job
+            .segments
+            .get(r.clone())
+            .ok_or_else(|| anyhow::anyhow!("--segments {r:?} outside the job's {n} segments"))?
+            .to_vec();
+        // A part of the job ends at rest like the whole one.
+        if let Some(last) = part.last_mut() {
+            last.exit_rate = motion::segment::Rate::ZERO;
+        }
+        if let Some(first) = part.first_mut() {
+            first.entry_rate = motion::segment::Rate::ZERO;
+        }
+        job.segments = part;
+        println!("  only segments       {r:?} of {n}");
+    }
     println!("circle -> complex die, ZT 39 mm, FR {fr} mm^2/min, tolerance {tolerance} mm");
     println!("  segments            {}", job.segments.len());
     println!(
@@ -271,7 +313,9 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             bare_s
         );
     }
-    let WireCmd::Run { link, log_csv, .. } = cmd else { return Ok(()) };
+    let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, .. } = cmd else {
+        return Ok(());
+    };
     let parsed = wire_job_machine(&cfg);
     let mut final_steps = [0i64; motion::MAX_AXES];
     final_steps.copy_from_slice(&report.positions[..motion::MAX_AXES]);
@@ -283,6 +327,13 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         final_steps,
         skipped_moves: 0,
     };
+    if link.qemu && !plain {
+        let stall = stall_at.zip(stall_for).map(|(at, len)| crate::wire::run::SimStall {
+            at_ticks: (at * cfg.tick_hz as f64).round() as u64,
+            for_ticks: (len * cfg.tick_hz as f64).round() as u64,
+        });
+        return run_wire_job(&parsed, &program, &job.segments, &report, t, &link, stall);
+    }
     let outputs: Vec<crate::plan::Output> =
         job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
     crate::cli::stream(
@@ -296,4 +347,77 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         true,
         crate::runner::DEFAULT_STATUS_PERIOD_MS,
     )
+}
+
+/// `wire run --qemu`: the job as a wire job (stall retrace on the board), checked against the
+/// host model.
+fn run_wire_job(
+    parsed: &crate::job::Job,
+    program: &crate::convert::Program,
+    segments: &[motion::segment::Segment],
+    model: &motion::report::Report,
+    model_s: f64,
+    link: &crate::cli::LinkArgs,
+    stall: Option<crate::wire::run::SimStall>,
+) -> Result<()> {
+    use motion::wire::scenario::STALL_PARAMS as P;
+    let (mut t, qemu_guard) = link.open()?;
+    let opts = crate::wire::run::WireRunOptions {
+        params: motion::protocol::WireJobParams {
+            debounce_ticks: P.debounce_ticks,
+            retrace_limit_steps: P.retrace_limit_steps,
+            retrace_override_bits: P.retrace_override.to_bits(),
+            resume_override_bits: P.resume_override.to_bits(),
+            resume_segments: P.resume_segments,
+            segments: segments.len() as u32,
+        },
+        host: motion::protocol::HostConfig { rto_ms: 100, window: 8 },
+        home: true,
+        progress: true,
+        stall,
+        slack: crate::wire::run::SLACK,
+    };
+    let mut expected = [0i64; 4];
+    expected.copy_from_slice(&model.positions[..4]);
+    let cfg = crate::runner::wire_config(parsed, program);
+    let nominal = std::time::Duration::from_secs_f64(model_s * 4.0);
+    let result = crate::wire::run::run(&mut *t, cfg, segments, expected, nominal, &opts);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    println!(
+        "wire job   {} segments, {:.2} s wall, {} board ticks",
+        r.segments, r.seconds, r.board_ticks
+    );
+    println!("positions  {:?} steps; host model {:?}", r.positions, r.expected_positions);
+    println!(
+        "stall      {} stalls, {} retrace and {} return segments, largest retrace {} steps",
+        r.stalls, r.retraces, r.returns, r.max_retrace_steps
+    );
+    // One machine-readable line for scripts (xtask wire-e2e).
+    println!(
+        "wire-summary x={} y={} beta={} alpha={} stalls={} retraces={} returns={} \
+         max_retrace_steps={} board_ticks={} segments={}",
+        r.positions[0],
+        r.positions[1],
+        r.positions[2],
+        r.positions[3],
+        r.stalls,
+        r.retraces,
+        r.returns,
+        r.max_retrace_steps,
+        r.board_ticks,
+        r.segments
+    );
+    if !r.ok() {
+        for p in &r.problems {
+            eprintln!("motionctl: {p}");
+        }
+        anyhow::bail!("the wire job failed {} check(s)", r.problems.len());
+    }
+    println!("result     OK");
+    Ok(())
 }

@@ -131,6 +131,13 @@ pub enum MachineCommand<'a> {
     /// (`motion::zslide::link_job::ZJob`) steps X and Z through [`Machine::tick_with`]; the job
     /// ends when the source is idle. Refused while segments or events are queued.
     StartZ,
+    /// Admit one segment for a wire job (the table's Queue column): checked like `Queue`
+    /// (segment and soft limits) but held by the caller's wire job (`motion::wire::link_job`),
+    /// not fed by the link's feeder. A wire job is a source job like an event job: it runs
+    /// through [`Machine::tick_with`] and never shares a job with plain segments or events.
+    QueueWire(&'a Segment),
+    /// Start the wire job (the table's Start column): like `StartEvents`.
+    StartWire,
 }
 
 impl MachineCommand<'_> {
@@ -148,6 +155,8 @@ impl MachineCommand<'_> {
             MachineCommand::QueueEvents => CommandKind::Queue,
             MachineCommand::StartEvents => CommandKind::Start,
             MachineCommand::StartZ => CommandKind::Start,
+            MachineCommand::QueueWire(_) => CommandKind::Queue,
+            MachineCommand::StartWire => CommandKind::Start,
         }
     }
 }
@@ -429,6 +438,10 @@ impl Machine {
             MachineCommand::QueueEvents => self.in_flight(dda) != 0,
             MachineCommand::StartEvents => !self.events_queued || self.event_job,
             MachineCommand::StartZ => events || self.in_flight(dda) != 0,
+            // During a source job the DDA also runs the source's own segments: only a plain
+            // job's segments count against it.
+            MachineCommand::QueueWire(_) => !events && self.in_flight(dda) != 0,
+            MachineCommand::StartWire => !self.events_queued || self.event_job,
             _ => false,
         };
         if mixed {
@@ -455,6 +468,19 @@ impl Machine {
                 self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
             }
             MachineCommand::QueueEvents => self.events_queued = true,
+            MachineCommand::QueueWire(seg) => {
+                seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
+                let end = self
+                    .limits
+                    .check_move(&self.planned_end, &seg.steps)
+                    .map_err(|axis| Refusal::SoftLimit { axis })?;
+                self.planned_end = end;
+                self.events_queued = true;
+            }
+            MachineCommand::StartWire => {
+                self.event_job = true;
+                self.paused = false;
+            }
             MachineCommand::StartEvents => {
                 self.event_job = true;
                 self.paused = false;

@@ -37,6 +37,10 @@ pub const CAP_SOFT_LIMITS: u32 = 1 << 4;
 pub const CAP_SENSORS: u32 = 1 << 5;
 /// `QueueEvents` / `StartPlayback` (recorded step-event jobs) are honoured.
 pub const CAP_EVENTS: u32 = 1 << 6;
+/// `ArmWire` (wire-manipulator jobs with wire-stall retrace) is honoured.
+pub const CAP_WIRE_JOB: u32 = 1 << 7;
+/// `SimInject` drives simulated inputs (a simulator board only: QEMU has no GPIO).
+pub const CAP_SIM_INPUTS: u32 = 1 << 8;
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -92,6 +96,32 @@ pub enum RequestBody {
     },
     /// After a limit fault: move the tripped axes slowly off their switches (`Fault` only).
     JogOffLimit,
+    /// Arm a wire-manipulator job (`Ready`, nothing queued; needs `CAP_WIRE_JOB`): the next
+    /// `segments` segments queued with `QueueSegments` (4 axes: X, Y, beta, alpha) form the
+    /// job, and `Start` runs it through the wire-stall retrace controller instead of the plain
+    /// feeder. Parameters out of range -> `OutOfRange`.
+    ArmWire(WireJobParams),
+    /// Simulated inputs (only with `CAP_SIM_INPUTS`, else `Unsupported`): the wire-stall
+    /// switch level the board reads from its next tick on, until the next `SimInject`.
+    SimInject {
+        wire_stall: bool,
+    },
+}
+
+/// A wire job's stall handling (`motion::wire::controller::StallParams`) and length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WireJobParams {
+    /// Consecutive ticks the stall switch must agree before a change counts (>= 1).
+    pub debounce_ticks: u16,
+    /// Largest retraced distance of one stall, sum of absolute steps over the four axes (>= 1).
+    pub retrace_limit_steps: u64,
+    /// Feed override while retracing and after the return, `Rate` bits (0 < x <= 2.0).
+    pub retrace_override_bits: u32,
+    pub resume_override_bits: u32,
+    /// Job segments run at `resume_override_bits` after a return.
+    pub resume_segments: u32,
+    /// Segments in the job (>= 1).
+    pub segments: u32,
 }
 
 /// How the machine homes: `order[..count]` are the axes homed in turn (0 = home where it
@@ -130,6 +160,8 @@ impl RequestBody {
             RequestBody::QueueEvents(_) => 14,
             RequestBody::StartPlayback { .. } => 15,
             RequestBody::JogOffLimit => 16,
+            RequestBody::ArmWire(_) => 17,
+            RequestBody::SimInject { .. } => 18,
         }
     }
 
@@ -287,6 +319,13 @@ pub struct Status {
     pub events_fired: u32,
     /// Event blocks queued and not yet decoded into the playback.
     pub event_blocks: u16,
+    /// The current (or last) wire job: stalls detected, retrace and return segments run, the
+    /// largest retraced distance of one stall (L1 steps), and the wire power output now.
+    pub wire_stalls: u32,
+    pub wire_retraces: u32,
+    pub wire_returns: u32,
+    pub wire_max_retrace_steps: u64,
+    pub wire_power: bool,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

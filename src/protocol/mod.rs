@@ -34,7 +34,7 @@ pub use frame::{
 };
 pub use host::{HostConfig, HostEvent, HostLink, Rejection, SendError};
 pub use messages::*;
-pub use session::{command_kind, BoardLink, LinkTarget, RESULT_MEMORY};
+pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_MEMORY};
 pub use sim::SimTarget;
 
 #[cfg(test)]

@@ -105,6 +105,26 @@ pub trait LinkTarget {
     fn start_playback(&mut self, _scale: SizeScale) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+    /// Arms a wire job with checked parameters (`Ready`, empty queue, no events); refused
+    /// with `OutOfState` otherwise. Targets without wire jobs: `Unsupported`.
+    fn arm_wire(&mut self, _params: &WireJobParams) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// Sets the simulated wire-stall switch (only called when the board announces
+    /// `CAP_SIM_INPUTS`).
+    fn sim_inject(&mut self, _wire_stall: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+}
+
+/// `ArmWire`'s parameters are usable: counts and limits at least 1, overrides in (0, 2.0].
+pub fn wire_params_ok(p: &WireJobParams) -> bool {
+    let rate_ok = |b: u32| b != 0 && b <= MAX_OVERRIDE_BITS;
+    p.debounce_ticks >= 1
+        && p.retrace_limit_steps >= 1
+        && p.segments >= 1
+        && rate_ok(p.retrace_override_bits)
+        && rate_ok(p.resume_override_bits)
 }
 
 /// The machine command a request is, if it is one (queries and link settings are not).
@@ -113,7 +133,9 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::SetConfig(_) | RequestBody::SetHoming(_) => CommandKind::SetConfig,
         RequestBody::Home => CommandKind::Home,
         RequestBody::QueueSegments(_) | RequestBody::QueueEvents(_) => CommandKind::Queue,
-        RequestBody::Start | RequestBody::StartPlayback { .. } => CommandKind::Start,
+        RequestBody::Start | RequestBody::StartPlayback { .. } | RequestBody::ArmWire(_) => {
+            CommandKind::Start
+        }
         RequestBody::Hold => CommandKind::Hold,
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
@@ -123,7 +145,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::GetConfig
         | RequestBody::GetStatus
         | RequestBody::SetOverride { .. }
-        | RequestBody::SetStatusPeriod { .. } => return None,
+        | RequestBody::SetStatusPeriod { .. }
+        | RequestBody::SimInject { .. } => return None,
     })
 }
 
@@ -510,6 +533,24 @@ impl BoardLink {
                 }
                 self.status_period_ms = *ms;
                 self.status_due_ms = None;
+                Ok(Reply::None)
+            }
+            RequestBody::ArmWire(p) => {
+                if !wire_params_ok(p) {
+                    return Err(plain(ErrorCode::OutOfRange));
+                }
+                t.config().validate().map_err(config_nak)?;
+                t.arm_wire(p).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
+                Ok(Reply::None)
+            }
+            RequestBody::SimInject { wire_stall } => {
+                if self.capabilities & CAP_SIM_INPUTS == 0 {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                t.sim_inject(*wire_stall).map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {

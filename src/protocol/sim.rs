@@ -12,7 +12,7 @@
 use heapless::Deque;
 
 use super::errors::{ErrorCode, FaultCode};
-use super::messages::{HomingConfig, Status, WireConfig, WireState};
+use super::messages::{HomingConfig, Status, WireConfig, WireJobParams, WireState};
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
@@ -58,6 +58,10 @@ pub struct SimTarget {
     pub event_job: bool,
     /// Machine positions when the event job started (the playback counts from there).
     event_base: [i64; MAX_AXES],
+    /// An armed wire job's parameters (`ArmWire`); the sim runs its segments as plain ones.
+    pub wire_armed: Option<WireJobParams>,
+    /// The simulated wire-stall switch (`SimInject`).
+    pub sim_wire_stall: bool,
 }
 
 impl PartialEq for SimTarget {
@@ -74,6 +78,7 @@ impl PartialEq for SimTarget {
             && (self.events.events_admitted, self.events.blocks(), self.event_job)
                 == (o.events.events_admitted, o.events.blocks(), o.event_job)
             && self.playback.fired() == o.playback.fired()
+            && (self.wire_armed, self.sim_wire_stall) == (o.wire_armed, o.sim_wire_stall)
     }
 }
 
@@ -105,6 +110,8 @@ impl SimTarget {
             playback: Playback::new(SizeScale::ONE),
             event_job: false,
             event_base: [0; MAX_AXES],
+            wire_armed: None,
+            sim_wire_stall: false,
         }
     }
 
@@ -257,6 +264,7 @@ impl LinkTarget for SimTarget {
             event_credits: self.events.credits(),
             events_fired: self.playback.fired(),
             event_blocks: self.events.blocks() as u16,
+            ..Status::default()
         }
     }
 
@@ -376,6 +384,22 @@ impl LinkTarget for SimTarget {
         self.event_job = true;
         self.running = true;
         self.take(CommandKind::Start);
+        Ok(())
+    }
+
+    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
+        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
+        if self.machine != MachineState::Ready || busy || self.wire_armed.is_some() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.wire_armed = Some(*params);
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
+        self.sim_wire_stall = wire_stall;
+        self.mutations += 1;
         Ok(())
     }
 }

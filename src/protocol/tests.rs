@@ -79,6 +79,11 @@ fn extreme_status() -> Status {
         event_credits: u16::MAX,
         events_fired: u32::MAX,
         event_blocks: u16::MAX,
+        wire_stalls: u32::MAX,
+        wire_retraces: u32::MAX,
+        wire_returns: u32::MAX,
+        wire_max_retrace_steps: u64::MAX,
+        wire_power: true,
     }
 }
 
@@ -125,6 +130,15 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             last: true,
         }),
         RequestBody::StartPlayback { m: u8::MAX, k: u8::MAX },
+        RequestBody::ArmWire(WireJobParams {
+            debounce_ticks: u16::MAX,
+            retrace_limit_steps: u64::MAX,
+            retrace_override_bits: u32::MAX,
+            resume_override_bits: u32::MAX,
+            resume_segments: u32::MAX,
+            segments: u32::MAX,
+        }),
+        RequestBody::SimInject { wire_stall: true },
     ]
     .into_iter()
     .map(|body| Request { seq, body })
@@ -582,4 +596,96 @@ fn event_credits_count_blocks_and_the_machine_table_decides_the_state() {
         panic!()
     };
     assert_eq!((st.events_fired, st.event_credits), (admitted, cap));
+}
+
+fn wire_params() -> WireJobParams {
+    WireJobParams {
+        debounce_ticks: 20,
+        retrace_limit_steps: 40_000,
+        retrace_override_bits: Rate::ONE.to_bits(),
+        resume_override_bits: Rate::lit("0.5").to_bits(),
+        resume_segments: 2,
+        segments: 12,
+    }
+}
+
+#[test]
+fn arm_wire_checks_its_parameters_and_the_state_and_refusals_change_nothing() {
+    let mut t = SimTarget::new(config(), 4);
+    let mut b = BoardLink::new("test", CAP_DDA | CAP_WIRE_JOB);
+    b.handle(&hello(0, 1), &mut t);
+    let mut s = 1;
+    let mut send = |b: &mut BoardLink, t: &mut SimTarget, body: RequestBody| {
+        let r = b.handle(&req(s, body), t);
+        s += 1;
+        r
+    };
+    let before = t.clone();
+    let bad: [fn(&mut WireJobParams); 6] = [
+        |p| p.debounce_ticks = 0,
+        |p| p.retrace_limit_steps = 0,
+        |p| p.segments = 0,
+        |p| p.retrace_override_bits = 0,
+        |p| p.resume_override_bits = MAX_OVERRIDE_BITS + 1,
+        |p| p.retrace_override_bits = u32::MAX,
+    ];
+    for f in bad {
+        let mut p = wire_params();
+        f(&mut p);
+        let r = send(&mut b, &mut t, RequestBody::ArmWire(p));
+        assert_eq!(code(&r), Some(ErrorCode::OutOfRange), "{p:?}");
+    }
+    // No simulated inputs on this board.
+    let r = send(&mut b, &mut t, RequestBody::SimInject { wire_stall: true });
+    assert_eq!(code(&r), Some(ErrorCode::Unsupported));
+    assert_eq!(t, before, "refusals change nothing");
+    // With segments queued (a plain job in the making): out of state, nothing changes.
+    let r = send(
+        &mut b,
+        &mut t,
+        RequestBody::QueueSegments(SegmentBatch::from_slice(&[seg(1, 10)]).unwrap()),
+    );
+    assert!(matches!(r, Response::Ack { .. }), "{r:?}");
+    let queued = t.clone();
+    let r = send(&mut b, &mut t, RequestBody::ArmWire(wire_params()));
+    assert_eq!(code(&r), Some(ErrorCode::OutOfState));
+    assert_eq!(t, queued);
+    // In Fault the table refuses it before the target sees it.
+    let _ = send(&mut b, &mut t, RequestBody::Abort);
+    t.raise_fault(FaultCode::LimitSwitch);
+    let faulted = t.clone();
+    let r = send(&mut b, &mut t, RequestBody::ArmWire(wire_params()));
+    assert!(
+        matches!(
+            r,
+            Response::Nak {
+                code: ErrorCode::OutOfState,
+                detail: NakDetail::State(crate::machine::MachineState::Fault),
+                ..
+            }
+        ),
+        "{r:?}"
+    );
+    assert_eq!(t, faulted);
+}
+
+#[test]
+fn arm_wire_in_ready_arms_and_sim_inject_needs_the_capability() {
+    let mut t = SimTarget::new(config(), 4);
+    let mut b = BoardLink::new("test", CAP_DDA | CAP_WIRE_JOB | CAP_SIM_INPUTS);
+    b.handle(&hello(0, 1), &mut t);
+    let r = b.handle(&req(1, RequestBody::ArmWire(wire_params())), &mut t);
+    assert!(matches!(r, Response::Ack { seq: 1, .. }), "{r:?}");
+    assert_eq!(t.wire_armed, Some(wire_params()));
+    // Armed twice: refused, the first arming stays.
+    let r = b.handle(
+        &req(2, RequestBody::ArmWire(WireJobParams { segments: 3, ..wire_params() })),
+        &mut t,
+    );
+    assert_eq!(code(&r), Some(ErrorCode::OutOfState));
+    assert_eq!(t.wire_armed, Some(wire_params()));
+    let r = b.handle(&req(3, RequestBody::SimInject { wire_stall: true }), &mut t);
+    assert!(matches!(r, Response::Ack { seq: 3, .. }), "{r:?}");
+    assert!(t.sim_wire_stall);
+    assert!(wire_params_ok(&wire_params()));
 }

@@ -91,10 +91,35 @@ pub struct StallStats {
     pub first_resume_tick: u64,
 }
 
-pub struct WireController<'a> {
-    dda: Dda,
+/// Where the controller reads the job's segments: a constant table ([`JobSegment`] slices, the
+/// scenarios) or the link's streamed window ([`super::link_job::WireQueue`]). Segment `k` is the
+/// `k`th of the job; the controller asks again for a segment it fed but did not start (after a
+/// stall), so a stream must keep every segment from the oldest one not yet completed
+/// ([`WireCore::oldest_needed`]). Cheap and division-free: asked from the tick.
+pub trait JobTable {
+    /// Segment `k`, if it is here (a stream may not have received it yet).
+    fn segment(&self, k: usize) -> Option<JobSegment>;
+    /// The job has no segment `k` and never will: it has `k` or fewer segments.
+    fn ended(&self, k: usize) -> bool;
+}
+
+impl JobTable for [JobSegment] {
+    #[inline]
+    fn segment(&self, k: usize) -> Option<JobSegment> {
+        self.get(k).copied()
+    }
+
+    #[inline]
+    fn ended(&self, k: usize) -> bool {
+        k >= self.len()
+    }
+}
+
+/// The retrace controller without its DDA and job: the DDA is the caller's (the link
+/// firmware's `Motion` resource, or [`WireController`]'s own), the job any [`JobTable`].
+#[derive(Clone, Debug)]
+pub struct WireCore {
     prep: Preparer,
-    job: &'a [JobSegment],
     next_job: usize,
     in_flight: Deque<Flight, { READY_DEPTH + 2 }>,
     /// End of the last segment handed to the DDA (the position once it is idle).
@@ -113,6 +138,13 @@ pub struct WireController<'a> {
     stats: StallStats,
 }
 
+/// [`WireCore`] with a DDA and a constant job of its own (the scenarios and their tests).
+pub struct WireController<'a> {
+    dda: Dda,
+    core: WireCore,
+    job: &'a [JobSegment],
+}
+
 fn pos4(p: [i64; MAX_AXES]) -> [i32; 4] {
     // Wire positions stay within +-2^31 steps (a few metres of travel); saturate otherwise.
     p[..4].iter().enumerate().fold([0; 4], |mut a, (i, &v)| {
@@ -127,10 +159,62 @@ impl<'a> WireController<'a> {
         job: &'a [JobSegment],
         params: StallParams,
     ) -> Result<Self, ConfigError> {
-        Ok(WireController {
-            dda: Dda::new(cfg)?,
+        Ok(WireController { dda: Dda::new(cfg)?, core: WireCore::new(cfg, params)?, job })
+    }
+
+    /// Timer interrupt: see [`WireCore::tick`].
+    #[inline]
+    pub fn tick(&mut self, stall_raw: bool, estop_raw: bool) -> StepOutput {
+        self.core.tick(&mut self.dda, self.job, stall_raw, estop_raw)
+    }
+
+    /// See [`WireCore::wants_feed`].
+    pub fn wants_feed(&self) -> bool {
+        self.core.wants_feed(&self.dda, self.job)
+    }
+
+    /// Feeder task: see [`WireCore::feed`].
+    pub fn feed(&mut self) -> Result<(), SegmentError> {
+        self.core.feed(&mut self.dda, self.job)
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.core.phase()
+    }
+
+    /// See [`WireCore::wire_power`].
+    pub fn wire_power(&self) -> bool {
+        self.core.wire_power()
+    }
+
+    pub fn fault_code(&self) -> Option<FaultCode> {
+        self.core.fault_code()
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.core.is_finished()
+    }
+
+    pub fn dda(&self) -> &Dda {
+        &self.dda
+    }
+
+    pub fn stats(&self) -> StallStats {
+        self.core.stats()
+    }
+
+    /// Absolute position the job ends at, relative to where it started.
+    pub fn job_end(&self) -> [i64; 4] {
+        super::job::total_steps(self.job)
+    }
+}
+
+impl WireCore {
+    /// A controller about to run a job from the DDA's position `[0; 4]` relative (positions it
+    /// books are relative to where the job starts). Setup time (the preparer divides).
+    pub fn new(cfg: &MachineConfig, params: StallParams) -> Result<Self, ConfigError> {
+        Ok(WireCore {
             prep: Preparer::new(cfg)?,
-            job,
             next_job: 0,
             in_flight: Deque::new(),
             pos: [0; 4],
@@ -149,37 +233,50 @@ impl<'a> WireController<'a> {
         })
     }
 
+    /// Takes over `dda` as it stands (idle, its queue empty): the job's positions start at the
+    /// DDA's current positions, and completions count from its current `segments_done`.
+    pub fn attach(&mut self, dda: &Dda) {
+        self.pos = pos4(dda.positions());
+        self.done_seen = dda.segments_done();
+    }
+
     /// Timer interrupt: samples the inputs, reacts to e-stop and stall, ticks the DDA and books
     /// completed segments. Bounded, integer only, no division.
     #[inline]
-    pub fn tick(&mut self, stall_raw: bool, estop_raw: bool) -> StepOutput {
+    pub fn tick<J: JobTable + ?Sized>(
+        &mut self,
+        dda: &mut Dda,
+        job: &J,
+        stall_raw: bool,
+        estop_raw: bool,
+    ) -> StepOutput {
         if estop_raw && !matches!(self.phase, Phase::Faulted(_)) {
-            self.fault(FaultCode::EStop);
+            self.fault(dda, FaultCode::EStop);
         }
         self.stalled = self.stall_in.sample(stall_raw);
         match self.phase {
             Phase::Running | Phase::Returning if self.stalled => {
                 self.wire_on = false;
-                self.dda.apply(Command::Hold);
+                dda.apply(Command::Hold);
                 self.phase = Phase::Stopping;
                 if self.stats.stalls == 0 {
-                    self.stats.first_stall_tick = self.dda.now();
+                    self.stats.first_stall_tick = dda.now();
                 }
                 self.stats.stalls += 1;
             }
-            Phase::Retracing if !self.stalled && self.dda.state() == MotionState::Moving => {
-                self.dda.apply(Command::Hold);
+            Phase::Retracing if !self.stalled && dda.state() == MotionState::Moving => {
+                dda.apply(Command::Hold);
                 self.phase = Phase::RetraceStopping;
                 self.stats.retrace_interrupts += 1;
             }
             _ => {}
         }
-        let out = self.dda.tick();
-        while self.done_seen != self.dda.segments_done() {
-            self.done_seen = self.dda.segments_done();
-            self.complete_front();
-            let job_done = self.next_job >= self.job.len() && self.in_flight.is_empty();
-            if self.phase == Phase::Running && job_done && self.dda.is_idle() {
+        let out = dda.tick();
+        while self.done_seen != dda.segments_done() {
+            self.done_seen = dda.segments_done();
+            self.complete_front(dda);
+            let job_done = job.ended(self.next_job) && self.in_flight.is_empty();
+            if self.phase == Phase::Running && job_done && dda.is_idle() {
                 self.phase = Phase::Done;
             }
         }
@@ -187,7 +284,7 @@ impl<'a> WireController<'a> {
     }
 
     #[cold]
-    fn complete_front(&mut self) {
+    fn complete_front(&mut self, dda: &mut Dda) {
         let Some(f) = self.in_flight.pop_front() else {
             return;
         };
@@ -197,7 +294,7 @@ impl<'a> WireController<'a> {
                 if self.resume_left > 0 {
                     self.resume_left -= 1;
                     if self.resume_left == 0 {
-                        self.dda.apply(Command::SetOverride(Rate::ONE));
+                        dda.apply(Command::SetOverride(Rate::ONE));
                     }
                 }
             }
@@ -206,64 +303,68 @@ impl<'a> WireController<'a> {
         }
     }
 
-    fn fault(&mut self, code: FaultCode) {
-        self.dda.abort();
+    fn fault(&mut self, dda: &mut Dda, code: FaultCode) {
+        dda.abort();
         self.in_flight.clear();
-        self.done_seen = self.dda.segments_done();
+        self.done_seen = dda.segments_done();
         self.wire_on = false;
         self.phase = Phase::Faulted(code);
     }
 
-    /// Feeder task: hands segments to the DDA and plans the recovery moves.
-    /// True when [`WireController::feed`] has work: a free DDA slot for the job, or a stop,
-    /// retrace or return step due. Cheap and division-free: the timer interrupt asks it every
-    /// tick and hands `feed` to the feeder task only when it is true.
-    pub fn wants_feed(&self) -> bool {
-        let settled = self.in_flight.is_empty() && self.dda.is_idle();
+    /// True when [`WireCore::feed`] has work: a free DDA slot and a job segment to fill it, or a
+    /// stop, retrace or return step due. Cheap and division-free: the timer interrupt asks it
+    /// every tick and hands `feed` to the feeder task only when it is true.
+    pub fn wants_feed<J: JobTable + ?Sized>(&self, dda: &Dda, job: &J) -> bool {
+        let settled = self.in_flight.is_empty() && dda.is_idle();
         match self.phase {
             Phase::Running => {
-                (self.dda.ready_free() > 0
+                (dda.ready_free() > 0
                     && !self.in_flight.is_full()
-                    && self.next_job < self.job.len())
-                    || (self.next_job >= self.job.len() && settled)
+                    && job.segment(self.next_job).is_some())
+                    || (job.ended(self.next_job) && settled)
             }
             Phase::Stopping | Phase::RetraceStopping => {
-                matches!(self.dda.state(), MotionState::Held | MotionState::Idle)
+                matches!(dda.state(), MotionState::Held | MotionState::Idle)
             }
             Phase::Retracing | Phase::Returning => settled,
             Phase::Done | Phase::Faulted(_) => false,
         }
     }
 
-    pub fn feed(&mut self) -> Result<(), SegmentError> {
+    /// Feeder task: hands segments to the DDA and plans the recovery moves (divides).
+    pub fn feed<J: JobTable + ?Sized>(
+        &mut self,
+        dda: &mut Dda,
+        job: &J,
+    ) -> Result<(), SegmentError> {
         match self.phase {
-            Phase::Running => self.feed_job()?,
+            Phase::Running => self.feed_job(dda, job)?,
             Phase::Stopping | Phase::RetraceStopping => {
-                let s = self.dda.state();
-                if (s == MotionState::Held || s == MotionState::Idle) && self.stop_here() {
+                let s = dda.state();
+                if (s == MotionState::Held || s == MotionState::Idle) && self.stop_here(dda) {
                     self.phase = if self.phase == Phase::Stopping && self.stalled {
-                        self.dda.apply(Command::SetOverride(self.params.retrace_override));
+                        dda.apply(Command::SetOverride(self.params.retrace_override));
                         self.retraced_steps = 0;
                         Phase::Retracing
                     } else {
-                        self.start_return();
+                        self.start_return(dda);
                         Phase::Returning
                     };
                 }
             }
             Phase::Retracing => {
-                if self.in_flight.is_empty() && self.dda.is_idle() {
+                if self.in_flight.is_empty() && dda.is_idle() {
                     if !self.stalled {
-                        self.start_return();
+                        self.start_return(dda);
                         self.phase = Phase::Returning;
                     } else {
-                        self.retrace_next()?;
+                        self.retrace_next(dda)?;
                     }
                 }
             }
             Phase::Returning => {
-                if self.in_flight.is_empty() && self.dda.is_idle() {
-                    self.return_next()?;
+                if self.in_flight.is_empty() && dda.is_idle() {
+                    self.return_next(dda, job)?;
                 }
             }
             Phase::Done | Phase::Faulted(_) => {}
@@ -271,16 +372,20 @@ impl<'a> WireController<'a> {
         Ok(())
     }
 
-    fn feed_job(&mut self) -> Result<(), SegmentError> {
-        while self.dda.ready_free() > 0 && !self.in_flight.is_full() {
-            let Some(js) = self.job.get(self.next_job) else {
-                if self.in_flight.is_empty() && self.dda.is_idle() {
+    fn feed_job<J: JobTable + ?Sized>(
+        &mut self,
+        dda: &mut Dda,
+        job: &J,
+    ) -> Result<(), SegmentError> {
+        while dda.ready_free() > 0 && !self.in_flight.is_full() {
+            let Some(js) = job.segment(self.next_job) else {
+                if job.ended(self.next_job) && self.in_flight.is_empty() && dda.is_idle() {
                     self.phase = Phase::Done;
                 }
                 return Ok(());
             };
             let mut seg = js.segment(self.next_job as u32);
-            if self.next_job + 1 == self.job.len() {
+            if job.ended(self.next_job + 1) {
                 // A job (or a slice of one) always ends at rest.
                 seg.exit_rate = Rate::ZERO;
             }
@@ -291,15 +396,21 @@ impl<'a> WireController<'a> {
                 duration_ticks: js.duration_ticks,
                 accel_q30: js.accel_q30,
             };
-            self.push(seg, Kind::Job(self.next_job as u32), piece)?;
+            self.push(dda, seg, Kind::Job(self.next_job as u32), piece)?;
             self.next_job += 1;
         }
         Ok(())
     }
 
-    fn push(&mut self, seg: Segment, kind: Kind, piece: Piece) -> Result<(), SegmentError> {
+    fn push(
+        &mut self,
+        dda: &mut Dda,
+        seg: Segment,
+        kind: Kind,
+        piece: Piece,
+    ) -> Result<(), SegmentError> {
         let p = self.prep.prepare(&seg)?;
-        if self.dda.push(&p).is_err() || self.in_flight.push_back(Flight { kind, piece }).is_err() {
+        if dda.push(&p).is_err() || self.in_flight.push_back(Flight { kind, piece }).is_err() {
             // Callers check room first.
             return Err(SegmentError::Duration);
         }
@@ -309,7 +420,12 @@ impl<'a> WireController<'a> {
 
     /// A rest-to-rest recovery segment from the current position to `piece.end` over the
     /// piece's duration and ramp; nothing when already there.
-    fn push_recovery(&mut self, kind: Kind, piece: Piece) -> Result<bool, SegmentError> {
+    fn push_recovery(
+        &mut self,
+        dda: &mut Dda,
+        kind: Kind,
+        piece: Piece,
+    ) -> Result<bool, SegmentError> {
         // Mid-piece after an interrupted retrace: only the part left, in its share of time.
         let piece = if self.pos == piece.start { piece } else { piece.part(self.pos, piece.end) };
         let d = piece.steps_to_end(self.pos);
@@ -327,18 +443,18 @@ impl<'a> WireController<'a> {
             accel_per_tick: Rate::from_bits(piece.accel_q30.max(1)),
             id: RECOVERY_ID | (self.recovery_ids & !RECOVERY_ID),
         };
-        self.push(seg, kind, piece)?;
+        self.push(dda, seg, kind, piece)?;
         Ok(true)
     }
 
     /// After a hold: abort where the DDA stands and book the interrupted segment: its executed
     /// part joins the history, its rest goes on the replay stack; unstarted job segments are
     /// fed again later from the table.
-    fn stop_here(&mut self) -> bool {
-        let p = pos4(self.dda.positions());
-        self.dda.abort();
+    fn stop_here(&mut self, dda: &mut Dda) -> bool {
+        let p = pos4(dda.positions());
+        dda.abort();
         self.prep.reset_junction();
-        self.done_seen = self.dda.segments_done();
+        self.done_seen = dda.segments_done();
         let mut ok = true;
         if let Some(f) = self.in_flight.pop_front() {
             if let Kind::Job(k) = f.kind {
@@ -357,39 +473,43 @@ impl<'a> WireController<'a> {
         self.in_flight.clear();
         self.pos = p;
         if !ok {
-            self.fault(FaultCode::WireStall);
+            self.fault(dda, FaultCode::WireStall);
         }
         ok
     }
 
-    fn retrace_next(&mut self) -> Result<(), SegmentError> {
+    fn retrace_next(&mut self, dda: &mut Dda) -> Result<(), SegmentError> {
         let Some(h) = self.history.pop() else {
-            self.fault(FaultCode::WireStall);
+            self.fault(dda, FaultCode::WireStall);
             return Ok(());
         };
         let d = l1_steps(sub(h.start, self.pos));
         if self.retraced_steps + d > self.params.retrace_limit_steps || !self.replay.push(h) {
-            self.fault(FaultCode::WireStall);
+            self.fault(dda, FaultCode::WireStall);
             return Ok(());
         }
         self.retraced_steps += d;
         self.stats.max_retrace_steps = self.stats.max_retrace_steps.max(self.retraced_steps);
         // Backwards: to the piece's start.
         let back = Piece { start: h.end, end: h.start, ..h };
-        if self.push_recovery(Kind::Retrace, back)? {
+        if self.push_recovery(dda, Kind::Retrace, back)? {
             self.stats.retrace_segments += 1;
         }
         Ok(())
     }
 
-    fn start_return(&mut self) {
+    fn start_return(&mut self, dda: &mut Dda) {
         self.wire_on = true;
-        self.dda.apply(Command::SetOverride(self.params.resume_override));
+        dda.apply(Command::SetOverride(self.params.resume_override));
     }
 
-    fn return_next(&mut self) -> Result<(), SegmentError> {
+    fn return_next<J: JobTable + ?Sized>(
+        &mut self,
+        dda: &mut Dda,
+        job: &J,
+    ) -> Result<(), SegmentError> {
         while let Some(r) = self.replay.pop() {
-            if self.push_recovery(Kind::Return, r)? {
+            if self.push_recovery(dda, Kind::Return, r)? {
                 self.stats.return_segments += 1;
                 return Ok(());
             }
@@ -397,12 +517,35 @@ impl<'a> WireController<'a> {
         self.phase = Phase::Running;
         self.resume_left = self.params.resume_segments;
         if self.stats.first_resume_tick == 0 {
-            self.stats.first_resume_tick = self.dda.now();
+            self.stats.first_resume_tick = dda.now();
         }
         if self.resume_left == 0 {
-            self.dda.apply(Command::SetOverride(Rate::ONE));
+            dda.apply(Command::SetOverride(Rate::ONE));
         }
-        self.feed_job()
+        self.feed_job(dda, job)
+    }
+
+    /// The oldest job segment the controller may still ask its [`JobTable`] for: the first job
+    /// segment in flight (a stall re-feeds the ones after it), else the next to feed. A stream
+    /// may forget the segments before it.
+    pub fn oldest_needed(&self) -> usize {
+        self.in_flight
+            .iter()
+            .find_map(|f| match f.kind {
+                Kind::Job(k) => Some(k as usize),
+                _ => None,
+            })
+            .unwrap_or(self.next_job)
+    }
+
+    /// Job segments handed to the DDA so far (the index of the next one to feed).
+    pub fn next_job(&self) -> usize {
+        self.next_job
+    }
+
+    /// Nothing in flight and the DDA at rest (no segment of this controller is running).
+    pub fn settled(&self, dda: &Dda) -> bool {
+        self.in_flight.is_empty() && dda.is_idle()
     }
 
     pub fn phase(&self) -> Phase {
@@ -426,17 +569,8 @@ impl<'a> WireController<'a> {
         matches!(self.phase, Phase::Done | Phase::Faulted(_))
     }
 
-    pub fn dda(&self) -> &Dda {
-        &self.dda
-    }
-
     pub fn stats(&self) -> StallStats {
         self.stats
-    }
-
-    /// Absolute position the job ends at, relative to where it started.
-    pub fn job_end(&self) -> [i64; 4] {
-        super::job::total_steps(self.job)
     }
 }
 

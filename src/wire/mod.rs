@@ -12,5 +12,6 @@ pub mod controller;
 pub mod debounce;
 pub mod history;
 pub mod job;
+pub mod link_job;
 pub mod machine;
 pub mod scenario;

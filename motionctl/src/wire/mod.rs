@@ -25,6 +25,7 @@ pub mod ik;
 pub mod job_file;
 pub mod limits;
 pub mod path;
+pub mod run;
 pub mod shapes;
 
 use thiserror::Error;
