@@ -327,7 +327,9 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         final_steps,
         skipped_moves: 0,
     };
-    if link.qemu && !plain {
+    // Every board link gets the wire mode (stall retrace on the board) unless asked for plain
+    // segments; the in-process sim board has no wire jobs.
+    if !plain && !link.sim {
         let stall = stall_at.zip(stall_for).map(|(at, len)| crate::wire::run::SimStall {
             at_ticks: (at * cfg.tick_hz as f64).round() as u64,
             for_ticks: (len * cfg.tick_hz as f64).round() as u64,
@@ -349,8 +351,8 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     )
 }
 
-/// `wire run --qemu`: the job as a wire job (stall retrace on the board), checked against the
-/// host model.
+/// `wire run` on a board link: the job as a wire job (stall retrace on the board), checked
+/// against the host model.
 fn run_wire_job(
     parsed: &crate::job::Job,
     program: &crate::convert::Program,
@@ -372,7 +374,8 @@ fn run_wire_job(
             segments: segments.len() as u32,
         },
         host: motion::protocol::HostConfig { rto_ms: 100, window: 8 },
-        home: true,
+        // QEMU's machine has no switches: homing there takes it where it stands.
+        home: link.home || link.qemu,
         progress: true,
         stall,
         slack: crate::wire::run::SLACK,

@@ -24,8 +24,13 @@ use std::time::{Duration, Instant};
 
 /// Status period during the job.
 pub const STATUS_PERIOD_MS: u16 = 40;
-/// Longest a run may take beyond the model's duration at the chosen speed.
+/// Longest a run may take beyond the model's duration at the chosen speed, times
+/// [`SLOWDOWN`]: a simulator (QEMU runs a 100 kHz tick ~3x slower than real time) is slow but
+/// steady; a stuck job is caught sooner by [`NO_PROGRESS`].
 pub const SLACK: Duration = Duration::from_secs(30);
+pub const SLOWDOWN: f64 = 8.0;
+/// A job whose fired-event count does not move for this long is stuck: aborted.
+pub const NO_PROGRESS: Duration = Duration::from_secs(15);
 
 /// What `run` needs besides the stream.
 #[derive(Clone, Debug)]
@@ -269,7 +274,9 @@ pub fn run(
     let mut last_poll = Instant::now();
     let mut last_tx = (s.host.sent_frames, Instant::now());
     let mut last_say = Instant::now();
-    let deadline = Duration::from_secs_f64(model.ticks as f64 / cfg.machine.tick_hz as f64) + SLACK;
+    let deadline =
+        Duration::from_secs_f64(SLOWDOWN * model.ticks as f64 / cfg.machine.tick_hz as f64) + SLACK;
+    let mut progress_at = (0u32, Instant::now());
     let stream_t0 = Instant::now();
 
     loop {
@@ -380,11 +387,19 @@ pub fn run(
         if started && after_start && latest.machine == MachineState::Ready && next == blocks.len() {
             break;
         }
-        if stream_t0.elapsed() > deadline {
+        if latest.events_fired != progress_at.0 {
+            progress_at = (latest.events_fired, Instant::now());
+        }
+        let stuck = started && progress_at.1.elapsed() > NO_PROGRESS;
+        if stream_t0.elapsed() > deadline || stuck {
             let _ = s.request(RequestBody::Abort);
             bail!(
-                "the job took longer than {:.0} s: aborted after {} of {} events",
-                deadline.as_secs_f64(),
+                "the job {}: aborted after {} of {} events",
+                if stuck {
+                    format!("fired no event for {} s", NO_PROGRESS.as_secs())
+                } else {
+                    format!("took longer than {:.0} s", deadline.as_secs_f64())
+                },
                 latest.events_fired,
                 model.events
             );
