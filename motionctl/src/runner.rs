@@ -272,6 +272,69 @@ fn link_err(e: LinkFailure) -> RunError {
     err(e.to_string())
 }
 
+/// Brings a connected board to `Ready` with `cfg`, as every job runner starts: refuses a board
+/// with a latched fault other than `ConfigMissing` or one that is busy, sends `cfg` when the
+/// board's differs (or a fault is latched), clears `ConfigMissing` (the one fault sending the
+/// config removes), and homes when the board is not homed and `home` allows it. `what` names
+/// the machine in messages. Returns the board's status from before the config was sent.
+pub fn ready_board(
+    s: &mut Session,
+    cfg: WireConfig,
+    home_allowed: bool,
+    what: &str,
+    say: &dyn Fn(&str),
+) -> Result<Status, String> {
+    let query = |s: &mut Session, body: RequestBody, name: &str| -> Result<Reply, String> {
+        match s.request(body).map_err(|e| e.to_string())? {
+            Ok(r) => Ok(r),
+            Err(r) => Err(format!("{name} refused: {}", describe_rejection(&r))),
+        }
+    };
+    let status = |s: &mut Session| -> Result<Status, String> {
+        match query(s, RequestBody::GetStatus, "GetStatus")? {
+            Reply::Status(st) => Ok(st),
+            _ => Err("the board answered GetStatus without a status".into()),
+        }
+    };
+    let st = status(s)?;
+    let config_missing = FaultCode::ConfigMissing.bit();
+    if st.faults & !config_missing != 0 {
+        return Err(format!(
+            "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
+            fault_names(st.faults)
+        ));
+    }
+    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault)
+        || st.queue_depth != 0
+    {
+        return Err(format!(
+            "the board is busy (state {:?}, {} segments queued): run `motionctl abort` first",
+            st.machine, st.queue_depth
+        ));
+    }
+    if query(s, RequestBody::GetConfig, "GetConfig")? == Reply::Config(cfg) && st.faults == 0 {
+        say(&format!("the board already has the {what}'s config"));
+    } else {
+        query(s, RequestBody::SetConfig(cfg), &format!("SetConfig ({what})"))?;
+        say(&format!("sent the {what}'s config"));
+    }
+    if st.faults == config_missing {
+        query(s, RequestBody::ClearFault, "ClearFault")?;
+        say("cleared ConfigMissing (the board had no stored config)");
+    }
+    let now = status(s)?;
+    if now.machine != MachineState::Ready {
+        if !home_allowed {
+            return Err(format!(
+                "the board is not homed (state {:?}): home it (`motionctl home`) or pass --home",
+                now.machine
+            ));
+        }
+        home(s, say).map_err(|e| e.to_string())?;
+    }
+    Ok(st)
+}
+
 /// Longest a homing sequence may take (board time is not visible here: wall clock).
 pub const HOMING_TIMEOUT: Duration = Duration::from_secs(120);
 
@@ -364,57 +427,11 @@ pub fn run(
             Err(r) => Err(err(format!("{what} refused: {}", describe_rejection(&r)))),
         }
     };
-    let st = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
-        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
-    // A board without a stored config boots with ConfigMissing latched; sending the job's
-    // config removes that cause, so that one fault (alone) is cleared here. Any other fault is
-    // the operator's to look at.
-    let config_missing = FaultCode::ConfigMissing.bit();
-    if st.faults & !config_missing != 0 {
-        return Err(err(format!(
-            "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
-            fault_names(st.faults)
-        )));
-    }
-    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault)
-        || st.queue_depth != 0
-    {
-        return Err(err(format!(
-            "the board is busy (state {:?}, {} segments queued): run `motionctl abort` first",
-            st.machine, st.queue_depth
-        )));
-    }
     let want = wire_config(job, program);
-    let have = query(&mut s, RequestBody::GetConfig, "GetConfig")?;
-    if have == Reply::Config(want) && st.faults == 0 {
-        say(&progress, "the board already has the job's machine config");
-    } else {
-        match s.request(RequestBody::SetConfig(want)).map_err(link_err)? {
-            Ok(_) => say(&progress, "sent the job's machine config"),
-            Err(r) => {
-                let why = want.validate().err().map(|e| format!(": {e:?}")).unwrap_or_default();
-                return Err(err(format!(
-                    "the board refused the job's machine config: {}{why}",
-                    describe_rejection(&r)
-                )));
-            }
-        }
-    }
-    if st.faults == config_missing {
-        query(&mut s, RequestBody::ClearFault, "ClearFault")?;
-        say(&progress, "cleared ConfigMissing (the board had no stored config)");
-    }
-    let st = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)
-        .ok_or_else(|| err("the board answered GetStatus without a status"))?;
-    if st.machine != MachineState::Ready {
-        if !opts.home {
-            return Err(err(format!(
-                "the board is not homed (state {:?}): home it (`motionctl home`) or pass --home",
-                st.machine
-            )));
-        }
-        home(&mut s, &|m| say(&progress, m))?;
-    }
+    ready_board(&mut s, want, opts.home, "job's machine", &|m| say(&progress, m)).map_err(|e| {
+        let why = want.validate().err().map(|e| format!(" ({e:?})")).unwrap_or_default();
+        err(format!("{e}{why}"))
+    })?;
     query(&mut s, RequestBody::SetStatusPeriod { ms: opts.status_period_ms }, "SetStatusPeriod")?;
     s.streaming = opts.status_period_ms > 0;
     let base = status_of(query(&mut s, RequestBody::GetStatus, "GetStatus")?)

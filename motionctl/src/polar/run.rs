@@ -227,30 +227,8 @@ pub fn run(
             _ => bail!("the board answered GetStatus without a status"),
         }
     };
-    let st = status(&mut s)?;
-    let config_missing = FaultCode::ConfigMissing.bit();
-    if st.faults & !config_missing != 0 {
-        bail!(
-            "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
-            fault_names(st.faults)
-        );
-    }
-    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault) {
-        bail!("the board is busy (state {:?}): run `motionctl abort` first", st.machine);
-    }
-    if query(&mut s, RequestBody::GetConfig, "GetConfig")? != Reply::Config(cfg) || st.faults != 0 {
-        query(&mut s, RequestBody::SetConfig(cfg), "SetConfig (the polar machine)")?;
-        say("sent the polar machine's config (2 axes, theta and r, at the stream's tick rate)");
-    }
-    if st.faults == config_missing {
-        query(&mut s, RequestBody::ClearFault, "ClearFault")?;
-    }
-    if status(&mut s)?.machine != MachineState::Ready {
-        if !opts.home {
-            bail!("the board is not homed: home it (`motionctl home`) or pass --home");
-        }
-        runner::home(&mut s, &|m| say(m)).map_err(|e| anyhow!("{e}"))?;
-    }
+    runner::ready_board(&mut s, cfg, opts.home, "polar machine (theta, r)", &|m| say(m))
+        .map_err(|e| anyhow!("{e}"))?;
     query(&mut s, RequestBody::SetOverride { rate_bits: speed.to_bits() }, "SetOverride")?;
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;

@@ -135,27 +135,8 @@ pub fn run(
             _ => bail!("the board answered GetStatus without a status"),
         }
     };
-    let st = status(&mut s)?;
-    let config_missing = FaultCode::ConfigMissing.bit();
-    if st.faults & !config_missing != 0 {
-        bail!("the board has faults latched ({}): `motionctl clear-fault`", fault_names(st.faults));
-    }
-    if !matches!(st.machine, MachineState::Idle | MachineState::Ready | MachineState::Fault) {
-        bail!("the board is busy (state {:?}): run `motionctl abort` first", st.machine);
-    }
-    if query(&mut s, RequestBody::GetConfig, "GetConfig")? != Reply::Config(cfg) || st.faults != 0 {
-        query(&mut s, RequestBody::SetConfig(cfg), "SetConfig (the wire machine)")?;
-        say("sent the wire machine's config (X, Y, beta, alpha)");
-    }
-    if st.faults == config_missing {
-        query(&mut s, RequestBody::ClearFault, "ClearFault")?;
-    }
-    if status(&mut s)?.machine != MachineState::Ready {
-        if !opts.home {
-            bail!("the board is not homed: home it (`motionctl home`) or pass --home");
-        }
-        runner::home(&mut s, &|m| say(m)).map_err(|e| anyhow!("{e}"))?;
-    }
+    runner::ready_board(&mut s, cfg, opts.home, "wire machine (X, Y, beta, alpha)", &|m| say(m))
+        .map_err(|e| anyhow!("{e}"))?;
     if opts.stall.is_some() {
         query(&mut s, RequestBody::SimInject { wire_stall: false }, "SimInject")?;
     }
