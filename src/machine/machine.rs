@@ -458,30 +458,16 @@ impl Machine {
                 self.freeze();
             }
             MachineCommand::Queue(seg) => {
-                seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
-                let end = self
-                    .limits
-                    .check_move(&self.planned_end, &seg.steps)
-                    .map_err(|axis| Refusal::SoftLimit { axis })?;
-                self.planned_end = end;
+                self.admit(seg)?;
                 self.admitted = self.admitted.wrapping_add(1);
                 self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
             }
             MachineCommand::QueueEvents => self.events_queued = true,
             MachineCommand::QueueWire(seg) => {
-                seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
-                let end = self
-                    .limits
-                    .check_move(&self.planned_end, &seg.steps)
-                    .map_err(|axis| Refusal::SoftLimit { axis })?;
-                self.planned_end = end;
+                self.admit(seg)?;
                 self.events_queued = true;
             }
-            MachineCommand::StartWire => {
-                self.event_job = true;
-                self.paused = false;
-            }
-            MachineCommand::StartEvents => {
+            MachineCommand::StartWire | MachineCommand::StartEvents => {
                 self.event_job = true;
                 self.paused = false;
             }
@@ -684,6 +670,17 @@ impl Machine {
             // The background resets the job bookkeeping to the homed position.
             self.freeze();
         }
+    }
+
+    /// A segment's machine checks and the soft limits at the end of everything admitted before
+    /// it; on success the planned end moves there (a refusal changes nothing).
+    fn admit(&mut self, seg: &Segment) -> Result<(), Refusal> {
+        seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
+        self.planned_end = self
+            .limits
+            .check_move(&self.planned_end, &seg.steps)
+            .map_err(|axis| Refusal::SoftLimit { axis })?;
+        Ok(())
     }
 
     /// The jog off a limit switch: stop once every tripped switch opened, at once if another
