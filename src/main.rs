@@ -183,7 +183,7 @@ mod app {
     #[idle]
     fn idle(_: idle::Context) -> ! {
         loop {
-            cortex_m::asm::wfi();
+            board::idle_wait();
         }
     }
 

@@ -503,8 +503,9 @@ fn home_board(link: &LinkArgs) -> Result<()> {
     let target = link.target()?;
     let (mut t, _guard) = link.open()?;
     let mut s = Session::new(&mut t, link.host_config(&target));
-    s.connect()?;
-    runner::home(&mut s, &|m: &str| println!("motionctl: {m}")).map_err(|e| anyhow!("{e}"))
+    let info = s.connect()?;
+    runner::home(&mut s, info.tick_hz, &|m: &str| println!("motionctl: {m}"))
+        .map_err(|e| anyhow!("{e}"))
 }
 
 fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {

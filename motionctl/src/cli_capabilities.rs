@@ -334,7 +334,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             at_ticks: (at * cfg.tick_hz as f64).round() as u64,
             for_ticks: (len * cfg.tick_hz as f64).round() as u64,
         });
-        return run_wire_job(&parsed, &program, &job.segments, &report, t, &link, stall);
+        return run_wire_job(&parsed, &program, &job.segments, &report, &link, stall);
     }
     let outputs: Vec<crate::plan::Output> =
         job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
@@ -358,7 +358,6 @@ fn run_wire_job(
     program: &crate::convert::Program,
     segments: &[motion::segment::Segment],
     model: &motion::report::Report,
-    model_s: f64,
     link: &crate::cli::LinkArgs,
     stall: Option<crate::wire::run::SimStall>,
 ) -> Result<()> {
@@ -383,8 +382,7 @@ fn run_wire_job(
     let mut expected = [0i64; 4];
     expected.copy_from_slice(&model.positions[..4]);
     let cfg = crate::runner::wire_config(parsed, program);
-    let nominal = std::time::Duration::from_secs_f64(model_s * 4.0);
-    let result = crate::wire::run::run(&mut *t, cfg, segments, expected, nominal, &opts);
+    let result = crate::wire::run::run(&mut *t, cfg, segments, expected, model.ticks, &opts);
     let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
     drop(qemu_guard);
     let r = match result {

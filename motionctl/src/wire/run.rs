@@ -27,8 +27,13 @@ use std::time::{Duration, Instant};
 pub const STATUS_PERIOD_MS: u16 = 40;
 /// Status poll interval (wall clock), also the link heartbeat.
 pub const POLL_EVERY: Duration = Duration::from_millis(5);
-/// Longest a run may take beyond the job's nominal duration (wall clock; QEMU runs slower).
-pub const SLACK: Duration = Duration::from_secs(60);
+/// Longest a run may take in board time: the host model's ticks (stall and retrace included)
+/// times [`SLOWDOWN`] plus `slack`. Board time, so a simulator slower than real time is not
+/// taken for a slow job (see [`runner::JobWatch`]).
+pub const SLACK: Duration = Duration::from_secs(10);
+pub const SLOWDOWN: f64 = 2.0;
+/// A job whose board clock and positions do not move for this long (wall clock) is stuck.
+pub const NO_PROGRESS: Duration = Duration::from_secs(15);
 
 /// A simulated stall: the switch closes `at_ticks` board ticks after the start, for `for_ticks`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,7 +51,7 @@ pub struct WireRunOptions {
     pub home: bool,
     pub progress: bool,
     pub stall: Option<SimStall>,
-    /// Wall-clock limit on top of the job's nominal duration.
+    /// Board-time limit on top of [`SLOWDOWN`] times the model's duration.
     pub slack: Duration,
 }
 
@@ -90,14 +95,14 @@ fn seq_at_or_after(a: u32, b: u32) -> bool {
 }
 
 /// Connects, configures and runs `segments` as a wire job; see the module doc. `expected` is
-/// the host model's final X, Y, beta, alpha steps (relative to the start); `nominal` the job's
-/// duration at full feed.
+/// the host model's final X, Y, beta, alpha steps (relative to the start); `model_ticks` the
+/// host model's duration in board ticks.
 pub fn run(
     transport: &mut dyn Transport,
     cfg: WireConfig,
     segments: &[Segment],
     expected: [i64; 4],
-    nominal: Duration,
+    model_ticks: u64,
     opts: &WireRunOptions,
 ) -> anyhow::Result<WireRunReport> {
     let t0 = Instant::now();
@@ -161,8 +166,8 @@ pub fn run(
     let mut poll_in_flight = false;
     let mut last_poll = Instant::now();
     let mut last_say = Instant::now();
-    let deadline = nominal + opts.slack;
-    let stream_t0 = Instant::now();
+    let slack_ticks = (opts.slack.as_secs_f64() * f64::from(cfg.machine.tick_hz)) as u64;
+    let mut watch = runner::JobWatch::new(model_ticks, SLOWDOWN, slack_ticks, NO_PROGRESS);
 
     loop {
         s.pump(Duration::from_millis(5)).map_err(link)?;
@@ -275,9 +280,14 @@ pub fn run(
             }
             break;
         }
-        if stream_t0.elapsed() > deadline {
+        let moved = latest.positions.iter().fold(latest.tick, |h, &p| h.rotate_left(7) ^ p as u64);
+        let overdue = match started {
+            true => watch.check(latest.tick, moved).err(),
+            false => None,
+        };
+        if let Some(why) = overdue {
             let _ = s.request(RequestBody::Abort);
-            bail!("the job took longer than {:.0} s: aborted", deadline.as_secs_f64());
+            bail!("the job {why}: aborted");
         }
     }
     if opts.stall.is_some() {
