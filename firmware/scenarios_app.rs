@@ -107,7 +107,7 @@ mod app {
     #[idle]
     fn idle(_: idle::Context) -> ! {
         loop {
-            board::idle_wait();
+            cortex_m::asm::wfi();
         }
     }
 

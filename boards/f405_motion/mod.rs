@@ -141,12 +141,6 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     }
 }
 
-/// Waits for the next interrupt, from `idle`: the core sleeps.
-#[inline(always)]
-pub fn idle_wait() {
-    cortex_m::asm::wfi();
-}
-
 /// Ends the run. Outputs go to their safe state (drivers disabled, STEP low). Under a debugger the
 /// core halts on a breakpoint so `probe-rs run` returns; standalone it parks in `wfi` (a motion
 /// controller must not restart a job by itself after a fault).

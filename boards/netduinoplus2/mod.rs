@@ -76,24 +76,6 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
     }
 }
 
-/// Waits for the next interrupt, from `idle`. Under QEMU (`-icount shift=0,sleep=off`) a `wfi`
-/// costs a round trip between QEMU's vCPU and main-loop threads to advance the virtual clock to
-/// the next timer deadline; at a 100 kHz tick those round trips, not the guest's code, set the
-/// wall time (measured: the polar end-to-end arc took 129 s with `wfi`, 22 s spinning). A spin
-/// keeps the vCPU running, so idle virtual time costs only emulated no-ops. The guest sees the
-/// same clock and the same interrupts either way (`-icount` counts instructions, not host time).
-#[inline(always)]
-pub fn idle_wait() {
-    // A straight run of no-ops translates into one cheap block per pass.
-    for _ in 0..IDLE_SPIN_NOPS {
-        cortex_m::asm::nop();
-    }
-}
-
-/// No-ops per [`idle_wait`] pass: interrupts are taken between passes, so this bounds the
-/// extra entry latency idling adds under QEMU (ns at `shift=0`).
-const IDLE_SPIN_NOPS: u32 = 16;
-
 /// Ends the run: QEMU exits with status 0 (`ok`) or 1.
 pub fn exit(ok: bool) -> ! {
     use cortex_m_semihosting::debug;
