@@ -442,7 +442,7 @@ mod tests {
         assert!(m.command(MachineCommand::StartCopy, &mut dda).is_err());
         assert!(m.command(MachineCommand::Start, &mut dda).is_err());
         let mut copy = CopyMode::new([0, 0], SizeScale::new(3, 2).unwrap(), false);
-        let mut tick = |m: &mut Machine, dda: &mut Dda, copy: &mut CopyMode, counts| {
+        let tick = |m: &mut Machine, dda: &mut Dda, copy: &mut CopyMode, counts| {
             m.tick_with(dda, &Inputs::QUIET, &mut CopySource { copy, counts });
         };
         for _ in 0..200 {
