@@ -183,10 +183,11 @@ static SIM_ENCODER_TARGET: [core::sync::atomic::AtomicI32; 2] =
     [core::sync::atomic::AtomicI32::new(0), core::sync::atomic::AtomicI32::new(0)];
 
 /// Copy-mode encoders under QEMU: two counters that slew toward the host's `SimEncoders` target
-/// at `SIM_SLEW_COUNTS_PER_TICK` counts per tick each, like a template moved at a bounded speed.
+/// at one count per `SIM_TICKS_PER_COUNT` ticks each, like a template moved at a bounded speed
+/// (`motion::polar::copy_link::SimEncoderSlew`).
 #[cfg(feature = "link")]
 pub struct CopyEncoders {
-    counts: [i32; 2],
+    slew: motion::polar::copy_link::SimEncoderSlew,
 }
 
 #[cfg(feature = "link")]
@@ -195,7 +196,7 @@ impl CopyEncoders {
     pub const ROUTED: bool = true;
 
     pub const fn new() -> Self {
-        CopyEncoders { counts: [0; 2] }
+        CopyEncoders { slew: motion::polar::copy_link::SimEncoderSlew::new() }
     }
 
     /// Sets the simulated encoders' target from the next tick on; true (honoured).
@@ -206,15 +207,12 @@ impl CopyEncoders {
         true
     }
 
-    /// One tick: (arm, carriage) counts. Two loads, two clamped adds.
+    /// One tick: (arm, carriage) counts. Two loads, a countdown, two clamped adds.
     #[inline]
     pub fn read(&mut self) -> [i32; 2] {
-        use motion::polar::copy_link::{slew_toward, SIM_SLEW_COUNTS_PER_TICK};
-        for (c, t) in self.counts.iter_mut().zip(&SIM_ENCODER_TARGET) {
-            let target = t.load(core::sync::atomic::Ordering::Relaxed);
-            *c = slew_toward(*c, target, SIM_SLEW_COUNTS_PER_TICK);
-        }
-        self.counts
+        use core::sync::atomic::Ordering::Relaxed;
+        let target = [SIM_ENCODER_TARGET[0].load(Relaxed), SIM_ENCODER_TARGET[1].load(Relaxed)];
+        self.slew.tick(target)
     }
 }
 

@@ -97,6 +97,11 @@ impl CopyMode {
         self.taught.pop_front()
     }
 
+    /// Every count seen so far (`counts`) is taken and stepped: the tool is where the template is.
+    pub fn caught_up(&self, counts: [i32; 2]) -> bool {
+        self.taken == counts && self.pins.idle()
+    }
+
     /// Net steps emitted per axis (theta, r), after the size scale.
     pub fn position(&self) -> [i64; 2] {
         self.pins.position

@@ -18,9 +18,40 @@ use heapless::{Deque, Vec};
 pub const TEACH_BLOCKS: usize = 16;
 /// Taught events the link task moves per pass (one short critical section).
 pub const TEACH_BATCH: usize = 32;
-/// Counts per tick the simulated encoders move toward the host's target: below
-/// `copy::MAX_COUNTS_PER_TICK`, so the copy never lags the simulated template.
+/// Counts per tick the simulated encoders move toward the host's target (on the ticks
+/// [`SIM_TICKS_PER_COUNT`] allows).
 pub const SIM_SLEW_COUNTS_PER_TICK: u32 = 1;
+/// Ticks per simulated encoder count: a step pin rises at most every second tick, so a template
+/// at one count per 4 ticks is copied without lag, and its recording replays at speed 2 within
+/// the step rate.
+pub const SIM_TICKS_PER_COUNT: u32 = 4;
+
+/// The simulated encoders (QEMU, host sim): each moves one count toward its target every
+/// [`SIM_TICKS_PER_COUNT`] ticks. Interrupt rate: a countdown and two clamped adds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SimEncoderSlew {
+    pub counts: [i32; 2],
+    countdown: u32,
+}
+
+impl SimEncoderSlew {
+    pub const fn new() -> Self {
+        SimEncoderSlew { counts: [0; 2], countdown: SIM_TICKS_PER_COUNT }
+    }
+
+    /// One tick toward `target`; the counts now.
+    #[inline]
+    pub fn tick(&mut self, target: [i32; 2]) -> [i32; 2] {
+        self.countdown = self.countdown.saturating_sub(1);
+        if self.countdown == 0 {
+            self.countdown = SIM_TICKS_PER_COUNT;
+            for (c, t) in self.counts.iter_mut().zip(target) {
+                *c = slew_toward(*c, t, SIM_SLEW_COUNTS_PER_TICK);
+            }
+        }
+        self.counts
+    }
+}
 
 /// A 16-bit hardware encoder counter extended to i32: exact as long as the counter moves less
 /// than 32768 counts between two reads (at a 10 kHz tick: 327 M counts/s).

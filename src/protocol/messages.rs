@@ -127,8 +127,8 @@ pub enum RequestBody {
         block: u16,
     },
     /// Simulated encoders (only with `CAP_SIM_INPUTS`, else `Unsupported`): the counts the
-    /// simulated arm and carriage encoders slew to, at most
-    /// `polar::copy_link::SIM_SLEW_COUNTS_PER_TICK` counts per tick each.
+    /// simulated arm and carriage encoders slew to, one count per
+    /// `polar::copy_link::SIM_TICKS_PER_COUNT` ticks each.
     SimEncoders {
         arm_counts: i32,
         carriage_counts: i32,

@@ -12,7 +12,7 @@ use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::copy::CopyMode;
 use crate::polar::copy_link::{
-    slew_toward, take_batch, TeachRecorder, SIM_SLEW_COUNTS_PER_TICK, TEACH_BATCH, TEACH_BLOCKS,
+    take_batch, SimEncoderSlew, TeachRecorder, TEACH_BATCH, TEACH_BLOCKS,
 };
 use crate::polar::playback::SizeScale;
 use crate::polar::StepEvent;
@@ -26,8 +26,8 @@ pub struct CopySim {
     pub copy: Option<CopyMode>,
     pub copy_running: bool,
     pub teach: TeachRecorder<TEACH_BLOCKS>,
-    /// Simulated encoder counts now and the host's target.
-    pub encoders: [i32; 2],
+    /// Simulated encoders and the host's target.
+    pub encoders: SimEncoderSlew,
     pub encoder_target: [i32; 2],
     /// Machine positions (theta, r) when the copy started.
     base: [i64; 2],
@@ -40,7 +40,7 @@ impl CopySim {
             copy: None,
             copy_running: false,
             teach: TeachRecorder::new(),
-            encoders: [0; 2],
+            encoders: SimEncoderSlew::new(),
             encoder_target: [0; 2],
             base: [0; 2],
         }
@@ -54,17 +54,14 @@ impl CopySim {
     /// follow; then the link task's teach pass.
     pub fn run_copy(&mut self, ticks: u64) {
         for _ in 0..ticks {
-            for a in 0..2 {
-                self.encoders[a] =
-                    slew_toward(self.encoders[a], self.encoder_target[a], SIM_SLEW_COUNTS_PER_TICK);
-            }
+            let counts = self.encoders.tick(self.encoder_target);
             self.inner.tick += 1;
             let running = self.copy_running && self.inner.faults == 0;
             if let Some(c) = self.copy.as_mut().filter(|_| running) {
                 if self.inner.held {
                     c.tick_held();
                 } else {
-                    c.tick(self.encoders);
+                    c.tick(counts);
                 }
                 let p = c.position();
                 self.inner.positions[0] = self.base[0] + p[0];
@@ -133,7 +130,7 @@ impl LinkTarget for CopySim {
         Status {
             state: self.state(),
             copy_running: self.copy_running,
-            encoder_counts: self.encoders,
+            encoder_counts: self.encoders.counts,
             taught_events,
             lost_events,
             ..self.inner.status()
@@ -224,7 +221,7 @@ impl LinkTarget for CopySim {
         }
         self.inner.running = true;
         self.inner.mutations += 1;
-        self.copy = Some(CopyMode::new(self.encoders, scale, teach));
+        self.copy = Some(CopyMode::new(self.encoders.counts, scale, teach));
         self.copy_running = true;
         self.teach.reset(teach);
         self.base = [self.inner.positions[0], self.inner.positions[1]];
