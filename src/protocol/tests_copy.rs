@@ -111,7 +111,7 @@ fn teach_is_read_back_whole_through_retransmissions() {
         );
         assert!(matches!(r, Response::Ack { .. }), "{r:?}");
         for _ in 0..20 {
-            t.run_copy(50);
+            t.run_copy(200);
             let (r, s) = send(&mut link, &mut t, RequestBody::ReadTeach { block: next });
             let c = teach(&r);
             if !c.bytes.is_empty() {
