@@ -93,22 +93,32 @@ pub fn status(m: &Motion, rec: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
 /// and its queue is empty. Called with the link locked, so a `StartCopy` (USART task) cannot
 /// reset the recorder between the pop and the push.
 pub fn drain_teach(rec: &mut TeachRecorder<TEACH_BLOCKS>, motion: &mut impl Mutex<T = Motion>) {
-    if rec.is_ended() {
-        return;
-    }
-    let mut buf = [StepEvent::default(); TEACH_BATCH];
-    let room = rec.has_room();
-    let (n, stopped_and_empty) = motion.lock(|m| {
-        let running = live(m);
-        let Some(c) = m.copy.mode.as_mut() else { return (0, true) };
-        let n = if room { take_batch(c, &mut buf) } else { 0 };
-        (n, !running && c.taught_waiting() == 0)
-    });
-    rec.push_events(buf.get(..n).unwrap_or(&[]));
-    if stopped_and_empty {
-        rec.end();
+    // Up to TEACH_PASSES batches per run (every millisecond): 256 events/ms, above the
+    // simulated encoders' top rate (2 x 25 counts/ms at 100 kHz) with room to spare.
+    for _ in 0..TEACH_PASSES {
+        if rec.is_ended() {
+            return;
+        }
+        let mut buf = [StepEvent::default(); TEACH_BATCH];
+        let room = rec.has_room();
+        let (n, stopped_and_empty) = motion.lock(|m| {
+            let running = live(m);
+            let Some(c) = m.copy.mode.as_mut() else { return (0, true) };
+            let n = if room { take_batch(c, &mut buf) } else { 0 };
+            (n, !running && c.taught_waiting() == 0)
+        });
+        rec.push_events(buf.get(..n).unwrap_or(&[]));
+        if stopped_and_empty {
+            rec.end();
+        }
+        if n < TEACH_BATCH {
+            return;
+        }
     }
 }
+
+/// Teach batches per status-task run.
+const TEACH_PASSES: usize = 8;
 
 /// `ReadTeach { block }`.
 pub fn read(rec: &mut TeachRecorder<TEACH_BLOCKS>, m: &Motion, block: u16) -> TeachChunk {
