@@ -266,10 +266,9 @@ impl<const N: usize> TeachRecorder<N> {
     }
 }
 
-/// The link task's teach pass: moves up to [`TEACH_BATCH`] taught events from `copy` into
-/// `rec` while it has room; flushes the recording once `running` is false and the copy's queue
-/// is empty. Call with `copy` borrowed only for the pop (the firmware pops inside its `Motion`
-/// lock with [`take_batch`] and pushes outside it).
+/// Pops up to [`TEACH_BATCH`] taught events from `copy` into `buf`; returns how many. The link
+/// task calls it inside its `Motion` lock (only when [`TeachRecorder::has_room`]) and pushes the
+/// events into the recorder outside it.
 pub fn take_batch(copy: &mut CopyMode, buf: &mut [StepEvent; TEACH_BATCH]) -> usize {
     let mut n = 0;
     while n < TEACH_BATCH {
