@@ -33,14 +33,15 @@ use motion::dda::{Command, MotionState, Prepared, Preparer};
 use motion::machine::{
     BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal, WatchdogGate,
 };
+use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
     encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
-    Status, WireConfig, WireJobParams, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
-    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB, MAX_FRAME_WIRE,
-    SENSOR_CHANNELS,
+    Status, TeachChunk, WireConfig, WireJobParams, WireState, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS,
+    CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
+    CAP_WIRE_JOB, MAX_FRAME_WIRE, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::wire::link_job::WireJob;
@@ -49,6 +50,9 @@ use rtic::Mutex;
 
 use crate::board;
 
+/// Copy-mode jobs (`StartCopy`, `ReadTeach`): kept apart from the rest of the link.
+#[path = "link_copy.rs"]
+pub mod link_copy;
 /// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
 #[path = "link_wire.rs"]
 pub mod link_wire;
@@ -97,7 +101,8 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
-    | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
+    | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
+    | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes
 /// one lock.
@@ -108,6 +113,8 @@ pub struct Motion {
     pub playback: Playback,
     /// The wire job (the last one, for its counts, until the next `ArmWire`).
     pub wire: Option<WireJob>,
+    /// The copy job (the last one, for its counts, until the next `StartCopy`).
+    pub copy: link_copy::CopyState,
 }
 
 impl Motion {
@@ -121,7 +128,13 @@ impl Motion {
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
         Some((
-            Motion { dda, machine, playback: Playback::new(SizeScale::ONE), wire: None },
+            Motion {
+                dda,
+                machine,
+                playback: Playback::new(SizeScale::ONE),
+                wire: None,
+                copy: link_copy::CopyState::new(),
+            },
             preparer,
         ))
     }
@@ -168,6 +181,8 @@ struct Feed {
     announced: u32,
     /// A config accepted since the last save, to persist once the machine is at rest.
     save_pending: Option<BoardConfig>,
+    /// The copy job's teach recording, in blocks for `ReadTeach`.
+    teach: TeachRecorder<TEACH_BLOCKS>,
 }
 
 impl Link {
@@ -183,6 +198,7 @@ impl Link {
                 clock_base_ms: 0,
                 announced: 0,
                 save_pending: None,
+                teach: TeachRecorder::new(),
             },
             last_frame_ms: 0,
             next_watchdog_ms: 0,
@@ -325,6 +341,11 @@ impl Link {
         });
     }
 
+    /// The status task's teach work: taught events into stream blocks for `ReadTeach`.
+    pub fn drain_teach(&mut self, motion: &mut impl Mutex<T = Motion>) {
+        link_copy::drain_teach(&mut self.feed.teach, motion);
+    }
+
     /// Milliseconds of DDA time since boot (division: never call from the tick).
     fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
         let (now, tick_hz) =
@@ -366,6 +387,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
         self.motion.get_mut().lock(link_wire::drop_job);
+        self.motion.get_mut().lock(link_copy::drop_job);
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -456,6 +478,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             link_wire::status(m, &mut s);
+            link_copy::status(m, &self.link.teach, &mut s);
             s
         })
     }
@@ -567,7 +590,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
-        if self.with(|m| link_wire::live(m)) {
+        if self.with(|m| link_wire::live(m) || link_copy::live(m)) {
             return Err(ErrorCode::OutOfState);
         }
         let fresh = !self.with(|m| m.machine.events_queued());
@@ -620,6 +643,36 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
 
     fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
         if board::MachineIo::inject_wire_stall(wire_stall) {
+            Ok(())
+        } else {
+            Err(ErrorCode::Unsupported)
+        }
+    }
+
+    fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
+        if !board::CopyEncoders::ROUTED {
+            return Err(ErrorCode::Unsupported);
+        }
+        if !self.link.queue.is_empty() || self.link.events.blocks() != 0 {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.motion.get_mut().lock(|m| link_copy::start(m, scale, teach))?;
+        // A new recording (the last one's unread blocks go).
+        self.link.teach.reset(teach);
+        Ok(())
+    }
+
+    fn read_teach(&mut self, block: u16) -> Result<TeachChunk, ErrorCode> {
+        let rec = &mut self.link.teach;
+        Ok(self.motion.get_mut().lock(|m| link_copy::read(rec, m, block)))
+    }
+
+    fn teach_resend(&self) -> Option<TeachChunk> {
+        Some(self.with(|m| link_copy::resend(&self.link.teach, m)))
+    }
+
+    fn sim_encoders(&mut self, counts: [i32; 2]) -> Result<(), ErrorCode> {
+        if board::CopyEncoders::set_sim_target(counts) {
             Ok(())
         } else {
             Err(ErrorCode::Unsupported)

@@ -45,6 +45,7 @@ mod app {
     struct Local {
         tick_timer: board::TickTimer,
         io: board::MachineIo,
+        copy_encoders: board::CopyEncoders,
         tick_wakes_feeder: Wake,
         tick_wakes_status: Wake,
         estop: board::EStop,
@@ -61,7 +62,15 @@ mod app {
         // before it runs.
         let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
         let board::Board {
-            mut tick_timer, mut step_port, estop, host, io, iwdg, mut config, ..
+            mut tick_timer,
+            mut step_port,
+            estop,
+            host,
+            io,
+            iwdg,
+            mut config,
+            copy_encoders,
+            ..
         } = board::init(cx.device, &mut cx.core, default_hz);
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
@@ -102,6 +111,7 @@ mod app {
             Local {
                 tick_timer,
                 io,
+                copy_encoders,
                 tick_wakes_feeder: feeder_wake.clone(),
                 tick_wakes_status: status_wake,
                 estop,
@@ -125,13 +135,14 @@ mod app {
     /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
     /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
-        local = [tick_timer, io, tick_wakes_feeder, tick_wakes_status,
+        local = [tick_timer, io, copy_encoders, tick_wakes_feeder, tick_wakes_status,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true])]
     fn tick(cx: tick::Context) {
         let l = cx.local;
         l.tick_timer.clear_update();
         let raw = l.io.read();
+        let copy_counts = l.copy_encoders.read();
         let inputs = Inputs {
             estop: raw.estop || ESTOP_EDGE.swap(false, Relaxed),
             limit_min: raw.limit_min,
@@ -141,7 +152,10 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
-            let out = if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
+            // The copy tick first: it also records the encoder counts for Status.
+            let out = if let Some(out) = link::link_copy::tick(m, &inputs, copy_counts) {
+                out
+            } else if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
                 out
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
@@ -266,6 +280,7 @@ mod app {
             }
             WATCHDOG.control_alive();
             let (responses, feed) = link.lock(|l| l.poll(&mut motion));
+            link.lock(|l| l.drain_teach(&mut motion));
             if feed && WATCHDOG.poll() {
                 cx.local.watchdog.feed();
             }

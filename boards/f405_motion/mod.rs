@@ -6,6 +6,7 @@
 //! | --- | --- |
 //! | HSE 8 MHz -> PLL | SYSCLK 168 MHz, AHB 168, APB1 42 (timers 84), APB2 84 (timers 168) MHz |
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`) |
+//! | TIM5, TIM8 | copy-mode encoders (arm, carriage; encoder mode 3), `link` builds; pins only when free (`pins.rs`) |
 //! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2), index capture on CH3 (`TIM4` interrupt) |
 //! | ADC1 + TIM3 + DMA2 stream 0 | force sensors: TIM3 TRGO scans, DMA double buffer (`DMA2_STREAM0`) |
 //! | ADC2 | resolver sin/cos, injected group, one pair per tick |
@@ -21,6 +22,8 @@
 mod clocks;
 #[cfg(feature = "link")]
 mod config_storage;
+#[cfg(feature = "link")]
+mod copy_encoders;
 mod cycles;
 #[cfg(feature = "link")]
 mod flash;
@@ -46,6 +49,8 @@ pub use cycles::CycleCounter;
 // Wired by the link firmware's capability tasks (no app names these types yet).
 #[cfg(feature = "link")]
 pub use config_storage::ConfigStorage;
+#[cfg(feature = "link")]
+pub use copy_encoders::CopyEncoders;
 #[allow(unused_imports)]
 pub use force_adc::{ForceAdc, ForceFrame, FORCE_CHANNEL_COUNT, FRAMES_PER_HALF};
 pub use host_serial::HostSerial;
@@ -90,6 +95,9 @@ pub struct Board {
     /// The persisted config (flash sectors 2-3).
     #[cfg(feature = "link")]
     pub config: ConfigStorage,
+    /// Copy-mode encoders on TIM5 (arm) and TIM8 (carriage); see `pins.rs` for their pins.
+    #[cfg(feature = "link")]
+    pub copy_encoders: CopyEncoders,
     /// The capability drivers (`None` only if init ran twice).
     // Wired by the link firmware's capability tasks; no app uses them yet.
     #[allow(dead_code)]
@@ -113,6 +121,8 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
     clocks::enable_peripherals(&dp.RCC);
     pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
+    #[cfg(feature = "link")]
+    let copy_encoders = CopyEncoders::new(dp.TIM5, dp.TIM8, &dp.RCC, &dp.GPIOA, &dp.GPIOC);
     force_adc::init_common(&dp.ADC_COMMON);
     // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.
     let force_buf = cortex_m::singleton!(: force_adc::ForceDmaBuffer =
@@ -137,6 +147,8 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         iwdg: dp.IWDG,
         #[cfg(feature = "link")]
         config: ConfigStorage::new(dp.FLASH),
+        #[cfg(feature = "link")]
+        copy_encoders,
         capabilities,
     }
 }

@@ -122,6 +122,38 @@ const _: () = {
     }
 };
 
+/// Copy-mode encoder inputs (template digitizer, issue 6): arm angle on TIM5 CH1/CH2 (PA0/PA1,
+/// AF2; TIM5 is 32-bit), carriage radius on TIM8 CH1/CH2 (PC6/PC7, AF3; 16-bit, extended in
+/// software). On the 64-pin F405RG every encoder-capable timer's CH1/CH2 pins are already taken
+/// (TIM1: PA8 WIRE_STALL, PA9 HOST_TX; TIM5: PA0/PA1 FORCE0/1; TIM8: PC6/PC7 DIR0/1; TIM3:
+/// PA6 RESOLVER_COS or PB4/PB5 LIMIT_MIN1/DRV_EN_N or PC6/PC7; TIM2 and TIM4 are the tick and
+/// the spindle), so these pins are configured only when no pin of [`PINS`] uses them
+/// ([`COPY_ENCODERS_ROUTED`], computed): a board revision that frees them turns copy mode on.
+pub const COPY_ENCODER_PINS: [Pin; 4] = [
+    pin("COPY_ARM_A", Port::A, 0, Mode::Alternate { af: 2, pull_up: true }), // TIM5_CH1
+    pin("COPY_ARM_B", Port::A, 1, Mode::Alternate { af: 2, pull_up: true }), // TIM5_CH2
+    pin("COPY_CARRIAGE_A", Port::C, 6, Mode::Alternate { af: 3, pull_up: true }), // TIM8_CH1
+    pin("COPY_CARRIAGE_B", Port::C, 7, Mode::Alternate { af: 3, pull_up: true }), // TIM8_CH2
+];
+
+/// No pin of [`COPY_ENCODER_PINS`] is in [`PINS`]: the copy encoders can be wired.
+pub const COPY_ENCODERS_ROUTED: bool = {
+    let mut free = true;
+    let mut i = 0;
+    while i < COPY_ENCODER_PINS.len() {
+        let mut j = 0;
+        while j < PINS.len() {
+            let same_port = COPY_ENCODER_PINS[i].port as u8 == PINS[j].port as u8;
+            if same_port && COPY_ENCODER_PINS[i].pin == PINS[j].pin {
+                free = false;
+            }
+            j += 1;
+        }
+        i += 1;
+    }
+    free
+};
+
 /// Force-sensor ADC channels, in FORCE0.. order.
 pub const FORCE_CHANNELS: [u8; 4] = [0, 1, 2, 3];
 
@@ -171,6 +203,21 @@ pub fn init(a: &pac::GPIOA, b: &pac::GPIOB, c: &pac::GPIOC) {
             Port::A => configure!(a, p),
             Port::B => configure!(b, p),
             Port::C => configure!(c, p),
+        }
+    }
+}
+
+/// Configures the copy encoder pins if they are free (see [`COPY_ENCODERS_ROUTED`]).
+pub fn init_copy_encoders(a: &pac::GPIOA, c: &pac::GPIOC) {
+    if !COPY_ENCODERS_ROUTED {
+        defmt::warn!("copy encoders not routed: their pins are in use (see pins.rs)");
+        return;
+    }
+    for p in &COPY_ENCODER_PINS {
+        match p.port {
+            Port::A => configure!(a, p),
+            Port::C => configure!(c, p),
+            Port::B => {}
         }
     }
 }

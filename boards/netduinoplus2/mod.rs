@@ -7,6 +7,7 @@
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
+//! | (none) | copy-mode encoders: simulated counters driven by `SimEncoders` (`CopyEncoders`) |
 //! | USART1 | host link (`link` feature), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
@@ -57,6 +58,9 @@ pub struct Board {
     /// No persisted config under QEMU (its flash is read-only ROM).
     #[cfg(feature = "link")]
     pub config: ConfigStorage,
+    /// Copy-mode encoders: simulated (QEMU's timers have no encoder mode), driven by the host.
+    #[cfg(feature = "link")]
+    pub copy_encoders: CopyEncoders,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -73,6 +77,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         iwdg: dp.IWDG,
         #[cfg(feature = "link")]
         config: ConfigStorage,
+        #[cfg(feature = "link")]
+        copy_encoders: CopyEncoders::new(),
     }
 }
 
@@ -149,6 +155,46 @@ impl ConfigStorage {
         _cfg: &motion::machine::BoardConfig,
     ) -> Result<(), motion::machine::persist::SaveError> {
         Ok(())
+    }
+}
+
+/// The simulated encoders' target counts (`SimEncoders`): written by the USART task, read by
+/// the tick.
+#[cfg(feature = "link")]
+static SIM_ENCODER_TARGET: [core::sync::atomic::AtomicI32; 2] =
+    [core::sync::atomic::AtomicI32::new(0), core::sync::atomic::AtomicI32::new(0)];
+
+/// Copy-mode encoders under QEMU: two counters that slew toward the host's `SimEncoders` target
+/// at one count per `SIM_TICKS_PER_COUNT` ticks each, like a template moved at a bounded speed
+/// (`motion::polar::copy_link::SimEncoderSlew`).
+#[cfg(feature = "link")]
+pub struct CopyEncoders {
+    slew: motion::polar::copy_link::SimEncoderSlew,
+}
+
+#[cfg(feature = "link")]
+impl CopyEncoders {
+    /// Copy jobs are possible (announced as `CAP_COPY_JOB`).
+    pub const ROUTED: bool = true;
+
+    pub const fn new() -> Self {
+        CopyEncoders { slew: motion::polar::copy_link::SimEncoderSlew::new() }
+    }
+
+    /// Sets the simulated encoders' target from the next tick on; true (honoured).
+    pub fn set_sim_target(counts: [i32; 2]) -> bool {
+        for (t, c) in SIM_ENCODER_TARGET.iter().zip(counts) {
+            t.store(c, core::sync::atomic::Ordering::Relaxed);
+        }
+        true
+    }
+
+    /// One tick: (arm, carriage) counts. Two loads, a countdown, two clamped adds.
+    #[inline]
+    pub fn read(&mut self) -> [i32; 2] {
+        use core::sync::atomic::Ordering::Relaxed;
+        let target = [SIM_ENCODER_TARGET[0].load(Relaxed), SIM_ENCODER_TARGET[1].load(Relaxed)];
+        self.slew.tick(target)
     }
 }
 

@@ -138,6 +138,12 @@ pub enum MachineCommand<'a> {
     QueueWire(&'a Segment),
     /// Start the wire job (the table's Start column): like `StartEvents`.
     StartWire,
+    /// Start a copy job (the table's Start column): the caller's step source
+    /// (`motion::polar::copy_link::CopySource`) turns encoder counts into steps through
+    /// [`Machine::tick_with`] as an event job whose source is never idle: it runs until `Abort`
+    /// or a fault, and `Hold`/`Resume` act on it like on an event job. Refused while segments
+    /// or events are queued or another source job runs.
+    StartCopy,
 }
 
 impl MachineCommand<'_> {
@@ -157,6 +163,7 @@ impl MachineCommand<'_> {
             MachineCommand::StartZ => CommandKind::Start,
             MachineCommand::QueueWire(_) => CommandKind::Queue,
             MachineCommand::StartWire => CommandKind::Start,
+            MachineCommand::StartCopy => CommandKind::Start,
         }
     }
 }
@@ -442,6 +449,7 @@ impl Machine {
             // job's segments count against it.
             MachineCommand::QueueWire(_) => !events && self.in_flight(dda) != 0,
             MachineCommand::StartWire => !self.events_queued || self.event_job,
+            MachineCommand::StartCopy => events || self.in_flight(dda) != 0,
             _ => false,
         };
         if mixed {
@@ -467,7 +475,7 @@ impl Machine {
                 self.admit(seg)?;
                 self.events_queued = true;
             }
-            MachineCommand::StartWire | MachineCommand::StartEvents => {
+            MachineCommand::StartWire | MachineCommand::StartEvents | MachineCommand::StartCopy => {
                 self.event_job = true;
                 self.paused = false;
             }

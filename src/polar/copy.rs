@@ -24,6 +24,8 @@ pub struct CopyMode {
     taught: Deque<StepEvent, TEACH_DEPTH>,
     /// Events lost because the teach queue was full (the recording is then incomplete).
     pub teach_overflow: u32,
+    /// Events recorded (queued for the link task), since the start.
+    pub taught_total: u32,
 }
 
 impl CopyMode {
@@ -36,6 +38,7 @@ impl CopyMode {
             since_ticks: 0,
             taught: Deque::new(),
             teach_overflow: 0,
+            taught_total: 0,
         }
     }
 
@@ -57,7 +60,9 @@ impl CopyMode {
                 self.pins.add(ev);
                 if self.teach {
                     if self.taught.push_back(ev).is_err() {
-                        self.teach_overflow += 1;
+                        self.teach_overflow = self.teach_overflow.saturating_add(1);
+                    } else {
+                        self.taught_total = self.taught_total.wrapping_add(1);
                     }
                     self.since_ticks = 0;
                 }
@@ -67,11 +72,37 @@ impl CopyMode {
         self.pins.output()
     }
 
+    /// One tick while the machine holds: no new encoder counts are taken (the template may move
+    /// on; [`CopyMode::tick`] catches up at its bounded rate after the resume), steps already
+    /// taken finish, and the teach clock keeps running (the recording keeps real time).
+    #[inline]
+    pub fn tick_held(&mut self) -> StepOutput {
+        self.since_ticks = self.since_ticks.saturating_add(1);
+        self.pins.output()
+    }
+
+    /// Encoder counts turned into steps so far (theta, r): where the template was, as far as
+    /// the copy has followed it.
+    pub fn taken(&self) -> [i32; 2] {
+        self.taken
+    }
+
+    /// Events recorded so far would be in [`CopyMode::take_taught`]; this is how many wait.
+    pub fn taught_waiting(&self) -> usize {
+        self.taught.len()
+    }
+
     /// The next taught event, for the link task's [`super::stream::BlockEncoder`].
     pub fn take_taught(&mut self) -> Option<StepEvent> {
         self.taught.pop_front()
     }
 
+    /// Every count seen so far (`counts`) is taken and stepped: the tool is where the template is.
+    pub fn caught_up(&self, counts: [i32; 2]) -> bool {
+        self.taken == counts && self.pins.idle()
+    }
+
+    /// Net steps emitted per axis (theta, r), after the size scale.
     pub fn position(&self) -> [i64; 2] {
         self.pins.position
     }

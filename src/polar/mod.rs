@@ -6,6 +6,7 @@
 //! built-in [`limacon_stream`] as a closed-loop scenario.
 
 pub mod copy;
+pub mod copy_link;
 pub mod feed;
 pub mod job;
 pub mod limacon_stream;

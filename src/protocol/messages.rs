@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::bounded::{EventBlock, FixedStr, SegmentBatch};
+use super::bounded::{BlockBytes, EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
 use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTiming, MAX_AXES};
 use crate::dda::MotionState;
@@ -41,6 +41,9 @@ pub const CAP_EVENTS: u32 = 1 << 6;
 pub const CAP_WIRE_JOB: u32 = 1 << 7;
 /// `SimInject` drives simulated inputs (a simulator board only: QEMU has no GPIO).
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
+// -- copy mode (issue 6) --
+/// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
+pub const CAP_COPY_JOB: u32 = 1 << 11;
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -106,6 +109,30 @@ pub enum RequestBody {
     SimInject {
         wire_stall: bool,
     },
+    // -- copy mode (issue 6) --
+    /// Start a copy job (`Ready`, nothing queued; needs `CAP_COPY_JOB`): from the next tick the
+    /// arm and carriage encoders drive theta and r live, r scaled `m`:`k` (each 1..=4, else
+    /// `OutOfRange`); the encoders' counts now are the job's origin. With `teach`, every
+    /// encoder count is recorded with its tick interval for `ReadTeach` (a new recording; the
+    /// last one is dropped). Runs until `Abort` or a fault; `Hold`/`Resume` as for a job.
+    StartCopy {
+        m: u8,
+        k: u8,
+        teach: bool,
+    },
+    /// The recording's stream block `block` (v1, seq from 0), answered with `Reply::Teach`.
+    /// Asking for `block` tells the board the host has every block before it (they are
+    /// dropped); asking again for the same block answers it again. Accepted in every state.
+    ReadTeach {
+        block: u16,
+    },
+    /// Simulated encoders (only with `CAP_SIM_INPUTS`, else `Unsupported`): the counts the
+    /// simulated arm and carriage encoders slew to, one count per
+    /// `polar::copy_link::SIM_TICKS_PER_COUNT` ticks each.
+    SimEncoders {
+        arm_counts: i32,
+        carriage_counts: i32,
+    },
 }
 
 /// A wire job's stall handling (`motion::wire::controller::StallParams`) and length.
@@ -162,6 +189,10 @@ impl RequestBody {
             RequestBody::JogOffLimit => 16,
             RequestBody::ArmWire(_) => 17,
             RequestBody::SimInject { .. } => 18,
+            // -- copy mode (issue 6) --
+            RequestBody::StartCopy { .. } => 28,
+            RequestBody::ReadTeach { .. } => 29,
+            RequestBody::SimEncoders { .. } => 30,
         }
     }
 
@@ -208,6 +239,24 @@ pub enum Reply {
     Status(Status),
     /// The answer to `QueueEvents`: free event-block slots right after it (`T = seq`).
     EventCredits(u16),
+    // -- copy mode (issue 6) --
+    /// The answer to `ReadTeach`.
+    Teach(TeachChunk),
+}
+
+/// One `ReadTeach` answer. `bytes` empty and `ended` false: the block is not recorded yet (ask
+/// again later); `ended`: the recording is over and nothing follows `bytes`. A recording with
+/// `lost_events > 0` is incomplete (the host did not read fast enough).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TeachChunk {
+    /// The block seq asked for.
+    pub block: u16,
+    /// The block, v1 stream format with its CRC (empty when there is none).
+    pub bytes: BlockBytes,
+    pub ended: bool,
+    /// Events recorded and events lost (teach queue full) since `StartCopy`.
+    pub taught_events: u32,
+    pub lost_events: u32,
 }
 
 /// More about a NAK.
@@ -326,6 +375,14 @@ pub struct Status {
     pub wire_returns: u32,
     pub wire_max_retrace_steps: u64,
     pub wire_power: bool,
+    // -- copy mode (issue 6) --
+    /// A copy job runs (or holds).
+    pub copy_running: bool,
+    /// The copy encoders' counts now (arm, carriage), read every tick.
+    pub encoder_counts: [i32; 2],
+    /// The current (or last) copy job: events recorded and events lost (teach).
+    pub taught_events: u32,
+    pub lost_events: u32,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

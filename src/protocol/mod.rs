@@ -23,6 +23,8 @@ pub mod host;
 pub mod messages;
 pub mod session;
 pub mod sim;
+// -- copy mode (issue 6) --
+pub mod sim_copy;
 
 pub use bounded::{
     BlockBytes, EventBlock, FixedStr, SegmentBatch, MAX_EVENT_BLOCK, MAX_SEGMENTS_PER_FRAME,
@@ -36,6 +38,9 @@ pub use host::{HostConfig, HostEvent, HostLink, Rejection, SendError};
 pub use messages::*;
 pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_MEMORY};
 pub use sim::SimTarget;
+pub use sim_copy::CopySim;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_copy;

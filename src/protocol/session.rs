@@ -35,6 +35,8 @@
 //! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
 //! | QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
 //! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
+//! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
+//! | ReadTeach, SimEncoders (not commands) | SimEncoders: `CAP_SIM_INPUTS` (`Unsupported`) |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
@@ -115,6 +117,25 @@ pub trait LinkTarget {
     fn sim_inject(&mut self, _wire_stall: bool) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+    // -- copy mode (issue 6) --
+    /// Starts a copy job with a checked size scale (`Ready`, nothing queued, no job; else
+    /// `OutOfState`). Targets without copy jobs: `Unsupported`.
+    fn start_copy(&mut self, _scale: SizeScale, _teach: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// `ReadTeach { block }` (see `polar::copy_link::TeachRecorder::read`).
+    fn read_teach(&mut self, _block: u16) -> Result<TeachChunk, ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// The answer a retransmitted `ReadTeach` gets again: the oldest block still held (the one
+    /// the last `ReadTeach` asked for), read without dropping anything.
+    fn teach_resend(&self) -> Option<TeachChunk> {
+        None
+    }
+    /// Sets the simulated encoders' target counts (only called with `CAP_SIM_INPUTS`).
+    fn sim_encoders(&mut self, _counts: [i32; 2]) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
 }
 
 /// `ArmWire`'s parameters are usable: counts and limits at least 1, overrides in (0, 2.0].
@@ -133,9 +154,10 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::SetConfig(_) | RequestBody::SetHoming(_) => CommandKind::SetConfig,
         RequestBody::Home => CommandKind::Home,
         RequestBody::QueueSegments(_) | RequestBody::QueueEvents(_) => CommandKind::Queue,
-        RequestBody::Start | RequestBody::StartPlayback { .. } | RequestBody::ArmWire(_) => {
-            CommandKind::Start
-        }
+        RequestBody::Start
+        | RequestBody::StartPlayback { .. }
+        | RequestBody::ArmWire(_)
+        | RequestBody::StartCopy { .. } => CommandKind::Start,
         RequestBody::Hold => CommandKind::Hold,
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
@@ -146,7 +168,9 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::GetStatus
         | RequestBody::SetOverride { .. }
         | RequestBody::SetStatusPeriod { .. }
-        | RequestBody::SimInject { .. } => return None,
+        | RequestBody::SimInject { .. }
+        | RequestBody::ReadTeach { .. }
+        | RequestBody::SimEncoders { .. } => return None,
     })
 }
 
@@ -158,6 +182,7 @@ const KIND_HELLO: u8 = RequestBody::Hello { version: 0, nonce: 0 }.kind();
 const KIND_GET_CONFIG: u8 = RequestBody::GetConfig.kind();
 const KIND_GET_STATUS: u8 = RequestBody::GetStatus.kind();
 pub(crate) const KIND_QUEUE_EVENTS: u8 = 14;
+const KIND_READ_TEACH: u8 = RequestBody::ReadTeach { block: 0 }.kind();
 
 #[derive(Clone, Debug)]
 struct Memo {
@@ -382,6 +407,7 @@ impl BoardLink {
                         KIND_GET_CONFIG => Reply::Config(t.config()),
                         KIND_GET_STATUS => Reply::Status(self.status(t)),
                         KIND_QUEUE_EVENTS => Reply::EventCredits(m.event_credits),
+                        KIND_READ_TEACH => t.teach_resend().map_or(Reply::None, Reply::Teach),
                         _ => Reply::None,
                     };
                     Response::Ack { seq, credits: m.credits, reply }
@@ -551,6 +577,26 @@ impl BoardLink {
                     return Err(plain(ErrorCode::Unsupported));
                 }
                 t.sim_inject(*wire_stall).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            // -- copy mode (issue 6) --
+            RequestBody::StartCopy { m, k, teach } => {
+                let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
+                t.config().validate().map_err(config_nak)?;
+                t.start_copy(scale, *teach).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
+                Ok(Reply::None)
+            }
+            RequestBody::ReadTeach { block } => {
+                Ok(Reply::Teach(t.read_teach(*block).map_err(plain)?))
+            }
+            RequestBody::SimEncoders { arm_counts, carriage_counts } => {
+                if self.capabilities & CAP_SIM_INPUTS == 0 {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                t.sim_encoders([*arm_counts, *carriage_counts]).map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {

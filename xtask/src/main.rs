@@ -6,6 +6,7 @@
 //! | `demo` | runs the demo firmware in QEMU, decodes its log, summarises the report, compares with the host model |
 //! | `test` | everything CI checks, in order, failing fast |
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
+//! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
@@ -14,6 +15,7 @@
 //! `qemu-system-arm` are installed.
 
 mod bench;
+mod copy_e2e;
 mod divcheck;
 mod e2e;
 mod firmware;
@@ -38,6 +40,7 @@ commands:
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
   polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
+  copy-e2e                                              copy a template in QEMU with teach, check it, replay the taught stream
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
@@ -96,6 +99,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             polar_e2e::test(&root)
+        }
+        "copy-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            copy_e2e::test(&root)
         }
         "wire-e2e" => {
             no_args(cmd, rest)?;
@@ -291,6 +299,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl runs a wire job on QEMU with an injected stall",
             Box::new(|| wire_e2e::test(root)),
+        ),
+        (
+            "end to end: motionctl copies a template on QEMU with teach (3:2), replays it at speed 2",
+            Box::new(|| copy_e2e::test(root)),
         ),
     ];
     let total = steps.len();

@@ -151,6 +151,26 @@ pub enum PolarCmd {
         #[arg(long, default_value = "1:1", value_parser = parse_size)]
         size: SizeScale,
     },
+    /// Copy mode: the arm and carriage encoders drive theta and r live (radial size M:K);
+    /// with --teach, record the encoder events and save them as a stream file for `polar run`.
+    /// On a simulator board (--qemu) the host moves the simulated encoders along --template.
+    Copy {
+        #[command(flatten)]
+        link: crate::cli::LinkArgs,
+        /// Radial size scale M:K (M radial steps per K encoder counts), each 1..=4.
+        #[arg(long, default_value = "1:1", value_parser = parse_size)]
+        size: SizeScale,
+        /// Record and save the taught stream here.
+        #[arg(long, value_name = "OUT.bin")]
+        teach: Option<std::path::PathBuf>,
+        /// Template for a simulator board: `limacon[:THETA_END_RAD]` (built in: r = 3 + 2 cos
+        /// theta in, from theta 0) or a file of `arm_counts,carriage_counts` waypoints.
+        #[arg(long, value_name = "TRACE")]
+        template: Option<String>,
+        /// On a real board: how long to copy (the operator moves the arm meanwhile).
+        #[arg(long, default_value_t = 30.0)]
+        seconds: f64,
+    },
 }
 
 /// `M:K` with M, K in 1..=4.
@@ -227,6 +247,89 @@ fn run_stream(
     Ok(())
 }
 
+/// `--template`: the built-in limacon piece or a waypoint file.
+fn template(spec: &str) -> anyhow::Result<super::copy::Trace> {
+    if let Some(rest) = spec.strip_prefix("limacon") {
+        let end = match rest.strip_prefix(':') {
+            Some(t) => {
+                t.parse::<f64>().map_err(|_| anyhow::anyhow!("bad THETA_END in {spec:?}"))?
+            }
+            None if rest.is_empty() => 0.5,
+            None => bail!("expected limacon[:THETA_END_RAD], found {spec:?}"),
+        };
+        if !(0.0..=super::THETA_MAX_RAD).contains(&end) {
+            bail!("THETA_END must be within 0..={} rad", super::THETA_MAX_RAD);
+        }
+        return Ok(super::copy::limacon_trace(end, 40));
+    }
+    let text = std::fs::read_to_string(spec).with_context(|| format!("reading {spec}"))?;
+    super::copy::parse_trace(&text)
+}
+
+/// `polar copy`: opens the link, copies, saves the taught stream, prints the summary.
+fn run_copy(
+    link: &crate::cli::LinkArgs,
+    size: SizeScale,
+    teach: Option<&std::path::Path>,
+    template_spec: Option<&str>,
+    seconds: f64,
+) -> anyhow::Result<()> {
+    use crate::transport::Transport;
+    let target = link.target()?;
+    let host = link.host_config(&target);
+    let simulated = link.sim || link.qemu;
+    let trace = match (template_spec, simulated) {
+        (Some(t), _) => Some(template(t)?),
+        (None, true) => Some(template("limacon")?),
+        (None, false) => None,
+    };
+    let (mut t, qemu_guard): (Box<dyn Transport>, _) = if link.sim {
+        (Box::new(super::copy_sim::CopySimBoard::new(super::sim::SIM_SPEED)), None)
+    } else {
+        link.open()?
+    };
+    let opts = super::copy::CopyOptions {
+        scale: size,
+        teach: teach.is_some(),
+        host,
+        home: link.home || simulated,
+        progress: true,
+        trace,
+        seconds,
+    };
+    let result = super::copy::copy(&mut t, &opts);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    println!(
+        "copy       {} waypoints; encoders moved arm {} carriage {} counts",
+        r.waypoints, r.encoder_moves[0], r.encoder_moves[1]
+    );
+    println!(
+        "positions  theta {} r {} steps (size {}:{}); host model theta {} r {}",
+        r.positions[0], r.positions[1], size.m, size.k, r.model.positions[0], r.model.positions[1]
+    );
+    if let Some(path) = teach {
+        std::fs::write(path, &r.stream).with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "teach      {} events in {} blocks -> {} ({} lost)",
+            r.stream_events,
+            r.blocks,
+            path.display(),
+            r.lost_events
+        );
+    }
+    println!("{}", r.machine_line());
+    if !r.ok() {
+        bail!("verification failed: {}", r.problems.join("; "));
+    }
+    println!("result     OK");
+    Ok(())
+}
+
 /// Runs one `polar` subcommand, printing to stdout.
 pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
     match cmd {
@@ -296,6 +399,9 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
         }
         PolarCmd::Run { file, link, speed, size } => run_stream(&file, &link, speed, size),
+        PolarCmd::Copy { link, size, teach, template, seconds } => {
+            run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds)
+        }
         PolarCmd::Pole { contour, res, box_only } => {
             let c = parse_contour(&contour)?;
             let res = res.res()?;

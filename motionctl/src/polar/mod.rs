@@ -5,6 +5,8 @@
 pub mod bench;
 pub mod cli;
 pub mod contour;
+pub mod copy;
+pub mod copy_sim;
 pub mod digitize;
 pub mod drive;
 pub mod dump;
