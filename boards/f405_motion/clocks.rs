@@ -7,6 +7,8 @@ pub struct Clocks {
     pub pclk2_hz: u32,
     /// TIM2..TIM7, TIM12..14: twice PCLK1 because the APB1 prescaler is not 1.
     pub apb1_timer_hz: u32,
+    /// TIM1, TIM8..TIM11: twice PCLK2 because the APB2 prescaler is not 1.
+    pub apb2_timer_hz: u32,
 }
 
 pub fn init(rcc: &pac::RCC, pwr: &pac::PWR, flash: &pac::FLASH) -> Clocks {
@@ -34,7 +36,7 @@ pub fn init(rcc: &pac::RCC, pwr: &pac::PWR, flash: &pac::FLASH) -> Clocks {
     rcc.cfgr().modify(|_, w| w.sw().pll());
     while !rcc.cfgr().read().sws().is_pll() {}
 
-    Clocks { pclk2_hz: 84_000_000, apb1_timer_hz: 84_000_000 }
+    Clocks { pclk2_hz: 84_000_000, apb1_timer_hz: 84_000_000, apb2_timer_hz: 168_000_000 }
 }
 
 /// Clock gates of every peripheral the board uses.
@@ -46,11 +48,13 @@ pub fn enable_peripherals(rcc: &pac::RCC) {
     });
     rcc.apb1enr().modify(|_, w| {
         w.tim2en().set_bit().tim4en().set_bit();
-        // TIM3: force ADC trigger; DAC: Z slide.
-        w.tim3en().set_bit().dacen().set_bit()
+        // DAC: Z slide.
+        w.dacen().set_bit()
     });
     rcc.apb2enr().modify(|_, w| {
         w.usart1en().set_bit().adc1en().set_bit().syscfgen().set_bit();
+        // TIM8: force ADC trigger.
+        w.tim8en().set_bit();
         // ADC2: resolver sin/cos.
         w.adc2en().set_bit()
     });

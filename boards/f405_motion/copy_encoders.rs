@@ -1,7 +1,7 @@
 //! Copy-mode encoders (template digitizer, issue 6): the arm angle on TIM5 (32-bit) and the
-//! carriage radius on TIM8 (16-bit, extended to i32 by `motion::polar::copy_link::Extend16`),
-//! both in encoder mode 3 (every edge of both quadrature channels counts). Pins and why they are
-//! not routed on this board revision: `pins.rs` (`COPY_ENCODER_PINS`, `COPY_ENCODERS_ROUTED`).
+//! carriage radius on TIM3 (16-bit, extended to i32 by `motion::polar::copy_link::Extend16`),
+//! both in encoder mode 3 (every edge of both quadrature channels counts). Pins: `pins.rs`
+//! (`COPY_ENCODER_PINS`).
 //! Registers only here; the extension logic is host-tested in `motion`.
 
 use motion::polar::copy_link::Extend16;
@@ -9,17 +9,17 @@ use stm32f4::stm32f405 as pac;
 
 use super::pins;
 
-/// TIM5 and TIM8 in encoder mode, and the carriage counter's extension.
+/// TIM5 and TIM3 in encoder mode, and the carriage counter's extension.
 pub struct CopyEncoders {
     arm: pac::TIM5,
-    carriage: pac::TIM8,
+    carriage: pac::TIM3,
     carriage_ext: Extend16,
     /// The arm count when the driver started (TIM5 counts from there, as an i32).
     arm_base: u32,
 }
 
 /// Encoder mode 3 on CH1/CH2 with an 8-sample input filter (RM0090 17.3.12 / 18.3.16): the
-/// same register values for the general-purpose TIM5 and the advanced TIM8.
+/// same register values for both general-purpose timers.
 macro_rules! encoder_mode {
     ($tim:expr, $arr:expr) => {{
         let tim = $tim;
@@ -47,17 +47,15 @@ impl CopyEncoders {
     /// Clocks both timers, configures their pins (if routed) and starts counting.
     pub fn new(
         arm: pac::TIM5,
-        carriage: pac::TIM8,
+        carriage: pac::TIM3,
         rcc: &pac::RCC,
         a: &pac::GPIOA,
-        c: &pac::GPIOC,
+        b: &pac::GPIOB,
     ) -> Self {
-        rcc.apb1enr().modify(|_, w| w.tim5en().set_bit());
-        rcc.apb2enr().modify(|_, w| w.tim8en().set_bit());
+        rcc.apb1enr().modify(|_, w| w.tim5en().set_bit().tim3en().set_bit());
         // Read back so the enables have taken effect before the first register access.
         let _ = rcc.apb1enr().read();
-        let _ = rcc.apb2enr().read();
-        pins::init_copy_encoders(a, c);
+        pins::init_copy_encoders(a, b);
         encoder_mode!(&arm, 0xffff_ffff);
         encoder_mode!(&carriage, 0xffff);
         let arm_base = arm.cnt().read().bits();

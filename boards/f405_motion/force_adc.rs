@@ -1,4 +1,4 @@
-//! Force sensors: ADC1 scans the force channels (pins.rs `FORCE_CHANNELS`) once per TIM3 update
+//! Force sensors: ADC1 scans the force channels (pins.rs `FORCE_CHANNELS`) once per TIM8 update
 //! (TRGO), DMA2 stream 0 channel 0 moves each conversion into a circular double buffer, and the
 //! `DMA2_STREAM0` interrupt (half transfer, transfer complete) hands out the half just filled.
 //! The flag logic (which half, what was lost) is `motion::force::dma_frames`; the timer math is
@@ -30,11 +30,11 @@ const ADC_HZ: u32 = 21_000_000;
 /// Sampling time of every force channel, ADC cycles (SMPR value below must match).
 const SAMPLING_CYCLES: u32 = 84;
 
-/// ADC1 + DMA2 stream 0 + TIM3, and the buffer the DMA fills.
+/// ADC1 + DMA2 stream 0 + TIM8, and the buffer the DMA fills.
 pub struct ForceAdc {
     adc: pac::ADC1,
     dma: pac::DMA2,
-    tim: pac::TIM3,
+    tim: pac::TIM8,
     /// The `'static` buffer as a raw pointer: the DMA writes one half while the CPU reads the
     /// other, so no `&mut` to the whole buffer may exist once the stream runs.
     buf: *mut ForceFrame,
@@ -54,12 +54,14 @@ pub fn init_common(common: &pac::ADC_COMMON) {
 }
 
 impl ForceAdc {
-    /// Configures ADC1's scan sequence, the DMA stream and TIM3 as a trigger; nothing runs until
-    /// [`ForceAdc::start`]. `timer_hz` is TIM3's clock (APB1 timers, 84 MHz).
+    /// Configures ADC1's scan sequence, the DMA stream and TIM8 as a trigger; nothing runs until
+    /// [`ForceAdc::start`]. `timer_hz` is TIM8's clock (APB2 timers, 168 MHz). TIM8 rather than
+    /// TIM3: TIM3's pins carry the copy-mode carriage encoder (`pins.rs`), and a trigger needs
+    /// no pins.
     pub fn new(
         adc: pac::ADC1,
         dma: pac::DMA2,
-        tim: pac::TIM3,
+        tim: pac::TIM8,
         buf: &'static mut ForceDmaBuffer,
         timer_hz: u32,
     ) -> Self {
@@ -75,7 +77,7 @@ impl ForceAdc {
         // DMA interrupt polls OVR).
         adc.cr1().write(|w| w.scan().enabled().res().twelve_bit());
         adc.cr2().write(|w| w.adon().enabled());
-        // TIM3 only counts and emits TRGO on update; no interrupt, no outputs.
+        // TIM8 only counts and emits TRGO on update; no interrupt, no outputs (MOE stays 0).
         tim.cr1().write(|w| w.arpe().enabled());
         tim.cr2().write(|w| w.mms().update());
         ForceAdc {
@@ -127,11 +129,11 @@ impl ForceAdc {
         self.tim.sr().write(|w| unsafe { w.bits(0) });
 
         // OVR from an earlier run would stop the DMA requests; clear it, then DMA with DDS
-        // (requests continue after the last item: circular), triggered by TIM3_TRGO rising.
+        // (requests continue after the last item: circular), triggered by TIM8_TRGO rising.
         self.adc.sr().modify(|_, w| w.ovr().clear_bit());
         self.adc.cr2().write(|w| {
             w.adon().enabled().dma().enabled().dds().continuous();
-            w.extsel().tim3trgo().exten().rising_edge()
+            w.extsel().tim8trgo().exten().rising_edge()
         });
         self.tracker.restart();
         self.timing = Some(timing);

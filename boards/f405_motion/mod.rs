@@ -6,9 +6,9 @@
 //! | --- | --- |
 //! | HSE 8 MHz -> PLL | SYSCLK 168 MHz, AHB 168, APB1 42 (timers 84), APB2 84 (timers 168) MHz |
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`) |
-//! | TIM5, TIM8 | copy-mode encoders (arm, carriage; encoder mode 3), `link` builds; pins only when free (`pins.rs`) |
+//! | TIM5, TIM3 | copy-mode encoders (arm, carriage; encoder mode 3), `link` builds (`pins.rs`) |
 //! | TIM4 | spindle encoder (encoder mode 3 on CH1/CH2), index capture on CH3 (`TIM4` interrupt) |
-//! | ADC1 + TIM3 + DMA2 stream 0 | force sensors: TIM3 TRGO scans, DMA double buffer (`DMA2_STREAM0`) |
+//! | ADC1 + TIM8 + DMA2 stream 0 | force sensors: TIM8 TRGO scans, DMA double buffer (`DMA2_STREAM0`) |
 //! | ADC2 | resolver sin/cos, injected group, one pair per tick |
 //! | DAC channel 1 | Z-slide command (PA4), mid-scale when safe |
 //! | USART1 | host link (`link` feature), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
@@ -95,7 +95,7 @@ pub struct Board {
     /// The persisted config (flash sectors 2-3).
     #[cfg(feature = "link")]
     pub config: ConfigStorage,
-    /// Copy-mode encoders on TIM5 (arm) and TIM8 (carriage); see `pins.rs` for their pins.
+    /// Copy-mode encoders on TIM5 (arm) and TIM3 (carriage); see `pins.rs` for their pins.
     #[cfg(feature = "link")]
     pub copy_encoders: CopyEncoders,
     /// The capability drivers (`None` only if init ran twice).
@@ -109,7 +109,7 @@ pub struct Board {
 // Wired by the link firmware's capability tasks; no app uses them yet.
 #[allow(dead_code)]
 pub struct Capabilities {
-    /// ADC1 scans of the force channels, TIM3-triggered, DMA2 stream 0 (not started).
+    /// ADC1 scans of the force channels, TIM8-triggered, DMA2 stream 0 (not started).
     pub force_adc: ForceAdc,
     /// TIM4 encoder count and index capture (counting; encoder logic not configured).
     pub spindle: SpindleTimer,
@@ -122,13 +122,13 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     clocks::enable_peripherals(&dp.RCC);
     pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
     #[cfg(feature = "link")]
-    let copy_encoders = CopyEncoders::new(dp.TIM5, dp.TIM8, &dp.RCC, &dp.GPIOA, &dp.GPIOC);
+    let copy_encoders = CopyEncoders::new(dp.TIM5, dp.TIM3, &dp.RCC, &dp.GPIOA, &dp.GPIOB);
     force_adc::init_common(&dp.ADC_COMMON);
     // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.
     let force_buf = cortex_m::singleton!(: force_adc::ForceDmaBuffer =
         [[0; FORCE_CHANNEL_COUNT]; 2 * FRAMES_PER_HALF]);
     let capabilities = force_buf.map(|buf| Capabilities {
-        force_adc: ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM3, buf, clocks.apb1_timer_hz),
+        force_adc: ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM8, buf, clocks.apb2_timer_hz),
         spindle: SpindleTimer::new(dp.TIM4),
         resolver: ResolverAdc::new(dp.ADC2),
     });

@@ -38,13 +38,13 @@ pub const STEP_SHIFT: u32 = 0;
 /// DIR0..5 = PC6..PC11 (high = negative direction).
 pub const DIR_SHIFT: u32 = 6;
 /// Shared driver enable, active low (high = drivers disabled), on GPIOB.
-pub const DRV_EN_N: u32 = 5;
+pub const DRV_EN_N: u32 = 2;
 /// E-stop loop on GPIOB (EXTI line 12): closed to ground = run, open (high) = stop.
 pub const ESTOP: u32 = 12;
 
 /// Limit switches per axis (min, max), normally closed to ground: open (high) = tripped.
 pub const LIMIT_MIN: [(Port, u8); 6] =
-    [(Port::B, 3), (Port::B, 4), (Port::B, 9), (Port::B, 10), (Port::B, 11), (Port::B, 13)];
+    [(Port::B, 3), (Port::C, 13), (Port::B, 9), (Port::B, 10), (Port::B, 11), (Port::B, 13)];
 pub const LIMIT_MAX: [(Port, u8); 6] =
     [(Port::B, 14), (Port::B, 15), (Port::A, 11), (Port::A, 12), (Port::A, 15), (Port::C, 12)];
 /// Spindle enable and wire power on GPIOB, active high.
@@ -61,7 +61,7 @@ const LOW: Mode = Mode::Output { high: false };
 
 const IN: Mode = Mode::InputPullUp;
 
-pub const PINS: [Pin; 41] = [
+pub const PINS: [Pin; 40] = [
     pin("STEP0", Port::C, 0, LOW),
     pin("STEP1", Port::C, 1, LOW),
     pin("STEP2", Port::C, 2, LOW),
@@ -78,10 +78,9 @@ pub const PINS: [Pin; 41] = [
     pin("ESTOP", Port::B, ESTOP as u8, Mode::InputPullUp),
     pin("SPINDLE_A", Port::B, 6, Mode::Alternate { af: 2, pull_up: true }), // TIM4_CH1
     pin("SPINDLE_B", Port::B, 7, Mode::Alternate { af: 2, pull_up: true }), // TIM4_CH2
-    pin("FORCE0", Port::A, 0, Mode::Analog),                                // ADC1_IN0
-    pin("FORCE1", Port::A, 1, Mode::Analog),                                // ADC1_IN1
-    pin("FORCE2", Port::A, 2, Mode::Analog),                                // ADC1_IN2
-    pin("FORCE3", Port::A, 3, Mode::Analog),                                // ADC1_IN3
+    pin("FORCE0", Port::A, 2, Mode::Analog),                                // ADC1_IN2
+    pin("FORCE1", Port::A, 3, Mode::Analog),                                // ADC1_IN3
+    pin("FORCE2", Port::A, 7, Mode::Analog),                                // ADC1_IN7
     pin("HOST_TX", Port::A, 9, Mode::Alternate { af: 7, pull_up: false }),  // USART1_TX
     pin("HOST_RX", Port::A, 10, Mode::Alternate { af: 7, pull_up: true }),  // USART1_RX
     // Spindle encoder index: TIM4_CH3 input capture latches the count at the index edge.
@@ -123,17 +122,17 @@ const _: () = {
 };
 
 /// Copy-mode encoder inputs (template digitizer, issue 6): arm angle on TIM5 CH1/CH2 (PA0/PA1,
-/// AF2; TIM5 is 32-bit), carriage radius on TIM8 CH1/CH2 (PC6/PC7, AF3; 16-bit, extended in
-/// software). On the 64-pin F405RG every encoder-capable timer's CH1/CH2 pins are already taken
-/// (TIM1: PA8 WIRE_STALL, PA9 HOST_TX; TIM5: PA0/PA1 FORCE0/1; TIM8: PC6/PC7 DIR0/1; TIM3:
-/// PA6 RESOLVER_COS or PB4/PB5 LIMIT_MIN1/DRV_EN_N or PC6/PC7; TIM2 and TIM4 are the tick and
-/// the spindle), so these pins are configured only when no pin of [`PINS`] uses them
-/// ([`COPY_ENCODERS_ROUTED`], computed): a board revision that frees them turns copy mode on.
+/// AF2; TIM5 is 32-bit), carriage radius on TIM3 CH1/CH2 (PB4/PB5, AF2; 16-bit, extended in
+/// software). The 64-pin F405RG has no spare pair of encoder pins, so the pin plan makes room:
+/// the force sensors sit on PA2/PA3/PA7 (ADC1 IN2/IN3/IN7; the chain takes three channels),
+/// LIMIT_MIN1 on PC13 and DRV_EN_N on PB2, and the force ADC is triggered by TIM8 (no pins)
+/// instead of TIM3. [`COPY_ENCODERS_ROUTED`] still checks, at compile time, that no pin of
+/// [`PINS`] uses them.
 pub const COPY_ENCODER_PINS: [Pin; 4] = [
     pin("COPY_ARM_A", Port::A, 0, Mode::Alternate { af: 2, pull_up: true }), // TIM5_CH1
     pin("COPY_ARM_B", Port::A, 1, Mode::Alternate { af: 2, pull_up: true }), // TIM5_CH2
-    pin("COPY_CARRIAGE_A", Port::C, 6, Mode::Alternate { af: 3, pull_up: true }), // TIM8_CH1
-    pin("COPY_CARRIAGE_B", Port::C, 7, Mode::Alternate { af: 3, pull_up: true }), // TIM8_CH2
+    pin("COPY_CARRIAGE_A", Port::B, 4, Mode::Alternate { af: 2, pull_up: true }), // TIM3_CH1
+    pin("COPY_CARRIAGE_B", Port::B, 5, Mode::Alternate { af: 2, pull_up: true }), // TIM3_CH2
 ];
 
 /// No pin of [`COPY_ENCODER_PINS`] is in [`PINS`]: the copy encoders can be wired.
@@ -154,8 +153,12 @@ pub const COPY_ENCODERS_ROUTED: bool = {
     free
 };
 
+// This board routes them: a pin change that takes one fails the build instead of quietly
+// turning copy mode off.
+const _: () = assert!(COPY_ENCODERS_ROUTED, "a copy encoder pin is assigned to something else");
+
 /// Force-sensor ADC channels, in FORCE0.. order.
-pub const FORCE_CHANNELS: [u8; 4] = [0, 1, 2, 3];
+pub const FORCE_CHANNELS: [u8; 3] = [2, 3, 7];
 
 /// Writes one pin's configuration. All GPIO ports share one register layout but are distinct
 /// PAC types, hence a macro.
@@ -208,7 +211,8 @@ pub fn init(a: &pac::GPIOA, b: &pac::GPIOB, c: &pac::GPIOC) {
 }
 
 /// Configures the copy encoder pins if they are free (see [`COPY_ENCODERS_ROUTED`]).
-pub fn init_copy_encoders(a: &pac::GPIOA, c: &pac::GPIOC) {
+#[cfg(feature = "link")]
+pub fn init_copy_encoders(a: &pac::GPIOA, b: &pac::GPIOB) {
     if !COPY_ENCODERS_ROUTED {
         defmt::warn!("copy encoders not routed: their pins are in use (see pins.rs)");
         return;
@@ -216,8 +220,8 @@ pub fn init_copy_encoders(a: &pac::GPIOA, c: &pac::GPIOC) {
     for p in &COPY_ENCODER_PINS {
         match p.port {
             Port::A => configure!(a, p),
-            Port::C => configure!(c, p),
-            Port::B => {}
+            Port::B => configure!(b, p),
+            Port::C => {}
         }
     }
 }
