@@ -39,3 +39,6 @@ pub use sim::SimTarget;
 
 #[cfg(test)]
 mod tests;
+// -- force job (issue 4) --
+#[cfg(test)]
+mod force_tests;
