@@ -37,10 +37,10 @@ use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
-    Status, WireConfig, WireJobParams, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
-    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB, MAX_FRAME_WIRE,
-    SENSOR_CHANNELS,
+    encode_frame, BoardLink, ErrorCode, FaultCode, ForceJobParams, FrameError, HomingConfig,
+    LinkTarget, Response, SimMillingParams, Status, WireConfig, WireJobParams, WireState, CAP_DDA,
+    CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS,
+    CAP_STATUS_STREAM, CAP_WIRE_JOB, MAX_FRAME_WIRE, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::wire::link_job::WireJob;
@@ -49,6 +49,9 @@ use rtic::Mutex;
 
 use crate::board;
 
+/// Constant-force milling jobs (`ArmForce`, issue 4).
+#[path = "link_force.rs"]
+pub mod link_force;
 /// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
 #[path = "link_wire.rs"]
 pub mod link_wire;
@@ -97,6 +100,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
+    | if link_force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
     | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes
@@ -108,6 +112,8 @@ pub struct Motion {
     pub playback: Playback,
     /// The wire job (the last one, for its counts, until the next `ArmWire`).
     pub wire: Option<WireJob>,
+    /// The force job and the simulated plant (issue 4).
+    pub force: link_force::ForceSlot,
 }
 
 impl Motion {
@@ -121,7 +127,13 @@ impl Motion {
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
         Some((
-            Motion { dda, machine, playback: Playback::new(SizeScale::ONE), wire: None },
+            Motion {
+                dda,
+                machine,
+                playback: Playback::new(SizeScale::ONE),
+                wire: None,
+                force: link_force::ForceSlot::default(),
+            },
             preparer,
         ))
     }
@@ -366,6 +378,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
         self.motion.get_mut().lock(link_wire::drop_job);
+        self.motion.get_mut().lock(link_force::drop_job);
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -456,6 +469,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             link_wire::status(m, &mut s);
+            link_force::status(m, &mut s);
             s
         })
     }
@@ -489,6 +503,17 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn start(&mut self) -> Result<(), ErrorCode> {
         if self.with(|m| link_wire::live(m)) {
             self.motion.get_mut().lock(link_wire::start)?;
+            self.wake_feeder = true;
+            return Ok(());
+        }
+        if self.with(|m| link_force::armed(m)) {
+            // The machine's start and the force loop's in one critical section.
+            let r = self.motion.get_mut().lock(|m| {
+                m.machine.command(MachineCommand::Start, &mut m.dda)?;
+                link_force::start(m);
+                Ok(())
+            });
+            r.map_err(|e: Refusal| e.error_code())?;
             self.wake_feeder = true;
             return Ok(());
         }
@@ -616,6 +641,18 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
+    }
+
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        self.motion.get_mut().lock(|m| {
+            let wire_live = link_wire::live(m);
+            link_force::arm(m, empty, wire_live, params)
+        })
+    }
+
+    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
+        self.motion.get_mut().lock(|m| link_force::set_sim(m, params))
     }
 
     fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {

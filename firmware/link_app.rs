@@ -141,7 +141,9 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
-            let out = if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
+            let out = if let Some(out) = link::link_force::tick(m, &inputs) {
+                out
+            } else if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
                 out
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
