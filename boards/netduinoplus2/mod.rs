@@ -57,6 +57,9 @@ pub struct Board {
     /// No persisted config under QEMU (its flash is read-only ROM).
     #[cfg(feature = "link")]
     pub config: ConfigStorage,
+    /// No force ADC under QEMU: force jobs sample the simulated plant in the tick.
+    #[cfg(feature = "link")]
+    pub force_adc: Option<ForceAdc>,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -73,6 +76,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         iwdg: dp.IWDG,
         #[cfg(feature = "link")]
         config: ConfigStorage,
+        #[cfg(feature = "link")]
+        force_adc: None,
     }
 }
 
@@ -167,6 +172,27 @@ impl ConfigStorage {
         _cfg: &motion::machine::BoardConfig,
     ) -> Result<(), motion::machine::persist::SaveError> {
         Ok(())
+    }
+}
+
+/// QEMU's ADC values are fake: force jobs sample the simulated milling plant (`SimMilling`) in
+/// the tick instead. This stub keeps the link app's force-DMA task board-independent; it is
+/// never made, so the task never runs.
+#[cfg(feature = "link")]
+pub struct ForceAdc;
+
+#[cfg(feature = "link")]
+impl ForceAdc {
+    pub fn start(&mut self, _sample_hz: u32) -> Result<u32, ()> {
+        Err(())
+    }
+
+    pub fn on_dma_irq(&mut self) -> Option<&[[u16; 4]]> {
+        None
+    }
+
+    pub fn overrun(&self) -> Option<()> {
+        None
     }
 }
 

@@ -475,6 +475,15 @@ impl ForceJob {
         }
     }
 
+    /// A sample-source fault (the real board's DMA or ADC overrun): latched like a chain fault,
+    /// the machine holds on the next tick.
+    pub fn source_fault(&mut self, code: FaultCode) {
+        if self.stage == Stage::Running {
+            self.fault_bits |= code.bit();
+            self.t.phase = ForcePhase::Faulted;
+        }
+    }
+
     pub fn telemetry(&self) -> ForceTelemetry {
         self.t
     }

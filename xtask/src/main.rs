@@ -7,6 +7,7 @@
 //! | `test` | everything CI checks, in order, failing fast |
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
+//! | `milling-e2e` | `motionctl milling run --qemu` runs Case A as a force job on the link firmware in QEMU (simulated plant), then with a stuck force channel, and checks settling, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
@@ -18,6 +19,7 @@ mod divcheck;
 mod e2e;
 mod firmware;
 mod golden;
+mod milling_e2e;
 mod polar_e2e;
 mod scenarios;
 mod setup;
@@ -39,6 +41,7 @@ commands:
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
   polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
+  milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
@@ -101,6 +104,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             wire_e2e::test(&root)
+        }
+        "milling-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            milling_e2e::test(&root)
         }
         "scenarios" => {
             no_args(cmd, rest)?;
@@ -291,6 +299,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl runs a wire job on QEMU with an injected stall",
             Box::new(|| wire_e2e::test(root)),
+        ),
+        (
+            "end to end: motionctl runs Case A as a force job on QEMU (+ a stuck channel)",
+            Box::new(|| milling_e2e::test(root)),
         ),
     ];
     let total = steps.len();
