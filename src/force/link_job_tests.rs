@@ -256,3 +256,41 @@ fn force_above_trip_holds_the_feed() {
     let job = ForceJobParams { trip_mn: 12_000_000, ..case_a_job() };
     assert_fault_hold(SimForceFault::None, job, FaultCode::ForceTrip);
 }
+
+proptest::proptest! {
+    /// Whatever the host sends, the checks never panic, a job they accept is built (no later
+    /// refusal on an interrupt-paced board), and a few thousand samples of it run without a
+    /// panic or an override above 2.0.
+    #[test]
+    fn any_params_are_checked_without_panic(
+        fnom in 0u32..20_000_000, contact_pct in 0u32..110, trip_extra in 0u32..20_000_000,
+        kp in 0u32..(110 << 16), sample_hz in proptest::sample::select(vec![7u32, 5_000, 10_000, 50_000, 600_000]),
+        flutes in 0u8..9, spindle in 0u32..20_000, channels in 1u8..4, gain in proptest::num::i32::ANY,
+        tare_shift in 0u8..18, steps in 0u32..40_000, counts in 0u16..4096,
+    ) {
+        let mut p = case_a_job();
+        p.fnom_mn = fnom;
+        // Mostly ordered thresholds (so most cases get past the checks), sometimes not.
+        p.contact_mn = ((fnom as u64 * contact_pct as u64) / 100) as u32;
+        p.trip_mn = fnom.saturating_add(trip_extra);
+        p.kp_dec_q16 = kp;
+        p.sample_hz = sample_hz;
+        p.flutes = flutes;
+        p.spindle_mrev_s = spindle;
+        p.channels = channels;
+        p.cal[0].mn_per_count_q16 = gain;
+        p.tare_shift = tare_shift;
+        p.steps_per_s_at_one = steps;
+        if check_job(&p).is_ok() {
+            let mut j = ForceJob::new(&p, sc::TICK_HZ, false, None).unwrap();
+            j.start(0);
+            for i in 0..3_000u32 {
+                let c = counts.wrapping_add((i % 7) as u16) & 0x0fff;
+                let t = j.sample(&[c, 2048, 2048], i as i64);
+                if let Some(r) = t.set_override {
+                    proptest::prop_assert!(r.to_bits() <= MAX_OVERRIDE_BITS);
+                }
+            }
+        }
+    }
+}
