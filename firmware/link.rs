@@ -640,6 +640,8 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
 
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        // An armed force job owns the next segment job (issue 4).
+        let empty = empty && !self.with(|m| link_force::live(m));
         self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
     }
 
