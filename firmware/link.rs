@@ -38,10 +38,11 @@ use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
-    Status, TeachChunk, WireConfig, WireJobParams, WireState, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS,
-    CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
-    CAP_WIRE_JOB, MAX_FRAME_WIRE, SENSOR_CHANNELS,
+    encode_frame, BoardLink, ErrorCode, FaultCode, ForceJobParams, FrameError, HomingConfig,
+    LinkTarget, Response, SimMillingParams, Status, TeachChunk, WireConfig, WireJobParams,
+    WireState, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE,
+    CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB, MAX_FRAME_WIRE,
+    SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::wire::link_job::WireJob;
@@ -53,6 +54,9 @@ use crate::board;
 /// Copy-mode jobs (`StartCopy`, `ReadTeach`): kept apart from the rest of the link.
 #[path = "link_copy.rs"]
 pub mod link_copy;
+/// Constant-force milling jobs (`ArmForce`, issue 4).
+#[path = "link_force.rs"]
+pub mod link_force;
 /// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
 #[path = "link_wire.rs"]
 pub mod link_wire;
@@ -101,6 +105,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
+    | if link_force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
     | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
     | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
 
@@ -115,6 +120,8 @@ pub struct Motion {
     pub wire: Option<WireJob>,
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: link_copy::CopyState,
+    /// The force job and the simulated plant (issue 4).
+    pub force: link_force::ForceSlot,
 }
 
 impl Motion {
@@ -134,6 +141,7 @@ impl Motion {
                 playback: Playback::new(SizeScale::ONE),
                 wire: None,
                 copy: link_copy::CopyState::new(),
+                force: link_force::ForceSlot::default(),
             },
             preparer,
         ))
@@ -388,6 +396,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     fn drop_job(&mut self) {
         self.motion.get_mut().lock(link_wire::drop_job);
         self.motion.get_mut().lock(link_copy::drop_job);
+        self.motion.get_mut().lock(link_force::drop_job);
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -479,6 +488,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             };
             link_wire::status(m, &mut s);
             link_copy::status(m, &self.link.teach, &mut s);
+            link_force::status(m, &mut s);
             s
         })
     }
@@ -512,6 +522,17 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn start(&mut self) -> Result<(), ErrorCode> {
         if self.with(|m| link_wire::live(m)) {
             self.motion.get_mut().lock(link_wire::start)?;
+            self.wake_feeder = true;
+            return Ok(());
+        }
+        if self.with(|m| link_force::armed(m)) {
+            // The machine's start and the force loop's in one critical section.
+            let r = self.motion.get_mut().lock(|m| {
+                m.machine.command(MachineCommand::Start, &mut m.dda)?;
+                link_force::start(m);
+                Ok(())
+            });
+            r.map_err(|e: Refusal| e.error_code())?;
             self.wake_feeder = true;
             return Ok(());
         }
@@ -638,7 +659,21 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
 
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        // An armed force job owns the next segment job (issue 4).
+        let empty = empty && !self.with(|m| link_force::live(m));
         self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
+    }
+
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        self.motion.get_mut().lock(|m| {
+            let wire_live = link_wire::live(m);
+            link_force::arm(m, empty, wire_live, params)
+        })
+    }
+
+    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
+        self.motion.get_mut().lock(|m| link_force::set_sim(m, params))
     }
 
     fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {

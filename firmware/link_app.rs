@@ -54,6 +54,7 @@ mod app {
         status_waits: Waiter,
         watchdog: board::Watchdog,
         config: board::ConfigStorage,
+        force_adc: Option<board::ForceAdc>,
     }
 
     #[init]
@@ -70,8 +71,15 @@ mod app {
             iwdg,
             mut config,
             copy_encoders,
+            mut force_adc,
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
+        // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
+        if let Some(hz) =
+            force_adc.as_mut().and_then(|a| a.start(link::link_force::ADC_START_HZ).ok())
+        {
+            link::link_force::ADC_SAMPLE_HZ.store(hz, Relaxed);
+        }
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
         let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load()));
@@ -120,6 +128,7 @@ mod app {
                 status_waits,
                 watchdog,
                 config,
+                force_adc,
             },
         )
     }
@@ -154,6 +163,8 @@ mod app {
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::link_copy::tick(m, &inputs, copy_counts) {
+                out
+            } else if let Some(out) = link::link_force::tick(m, &inputs) {
                 out
             } else if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
                 out
@@ -194,6 +205,23 @@ mod app {
         // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
         let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
         *l.overran = l.overrun.after_tick(late);
+    }
+
+    /// Force ADC half buffer (real board; never raised under QEMU): the force job's chain per
+    /// frame, its control law once per half, the override into the DDA (`link_force`). The
+    /// tick's priority: they never preempt each other.
+    #[task(binds = DMA2_STREAM0, priority = 3, shared = [motion], local = [force_adc])]
+    fn force_dma(mut cx: force_dma::Context) {
+        let Some(adc) = cx.local.force_adc.as_mut() else { return };
+        match adc.on_dma_irq() {
+            Some(frames) => {
+                cx.shared.motion.lock(|m| link::link_force::on_adc_frames(m, Some(frames), false))
+            }
+            None => {
+                let overrun = adc.overrun().is_some();
+                cx.shared.motion.lock(|m| link::link_force::on_adc_frames::<4>(m, None, overrun))
+            }
+        }
     }
 
     /// E-stop edge: drivers off at once; the tick latches the fault (even if the loop closed

@@ -98,19 +98,22 @@ pub struct Board {
     /// Copy-mode encoders on TIM5 (arm) and TIM3 (carriage); see `pins.rs` for their pins.
     #[cfg(feature = "link")]
     pub copy_encoders: CopyEncoders,
+    /// ADC1 scans of the force channels, TIM8-triggered, DMA2 stream 0 (not started; `None`
+    /// only if init ran twice): the link firmware's force jobs.
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub force_adc: Option<ForceAdc>,
     /// The capability drivers (`None` only if init ran twice).
     // Wired by the link firmware's capability tasks; no app uses them yet.
     #[allow(dead_code)]
     pub capabilities: Option<Capabilities>,
 }
 
-/// The capability drivers (force ADC, spindle encoder, resolver ADC). The Z DAC is in
-/// [`MachineIo`]: the machine's outputs drive it every tick.
+/// The capability drivers (spindle encoder, resolver ADC; the force ADC is the link's, in
+/// [`Board::force_adc`]). The Z DAC is in [`MachineIo`]: the machine's outputs drive it every
+/// tick.
 // Wired by the link firmware's capability tasks; no app uses them yet.
 #[allow(dead_code)]
 pub struct Capabilities {
-    /// ADC1 scans of the force channels, TIM8-triggered, DMA2 stream 0 (not started).
-    pub force_adc: ForceAdc,
     /// TIM4 encoder count and index capture (counting; encoder logic not configured).
     pub spindle: SpindleTimer,
     /// ADC2 resolver sin/cos (idle until the first `sample`).
@@ -127,8 +130,9 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.
     let force_buf = cortex_m::singleton!(: force_adc::ForceDmaBuffer =
         [[0; FORCE_CHANNEL_COUNT]; 2 * FRAMES_PER_HALF]);
-    let capabilities = force_buf.map(|buf| Capabilities {
-        force_adc: ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM8, buf, clocks.apb2_timer_hz),
+    let force_adc =
+        force_buf.map(|buf| ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM8, buf, clocks.apb2_timer_hz));
+    let capabilities = Some(Capabilities {
         spindle: SpindleTimer::new(dp.TIM4),
         resolver: ResolverAdc::new(dp.ADC2),
     });
@@ -149,6 +153,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         config: ConfigStorage::new(dp.FLASH),
         #[cfg(feature = "link")]
         copy_encoders,
+        force_adc,
         capabilities,
     }
 }

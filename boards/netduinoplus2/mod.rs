@@ -61,6 +61,9 @@ pub struct Board {
     /// Copy-mode encoders: simulated (QEMU's timers have no encoder mode), driven by the host.
     #[cfg(feature = "link")]
     pub copy_encoders: CopyEncoders,
+    /// No force ADC under QEMU: force jobs sample the simulated plant in the tick.
+    #[cfg(feature = "link")]
+    pub force_adc: Option<ForceAdc>,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -79,6 +82,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         config: ConfigStorage,
         #[cfg(feature = "link")]
         copy_encoders: CopyEncoders::new(),
+        #[cfg(feature = "link")]
+        force_adc: None,
     }
 }
 
@@ -195,6 +200,27 @@ impl CopyEncoders {
         use core::sync::atomic::Ordering::Relaxed;
         let target = [SIM_ENCODER_TARGET[0].load(Relaxed), SIM_ENCODER_TARGET[1].load(Relaxed)];
         self.slew.tick(target)
+    }
+}
+
+/// QEMU's ADC values are fake: force jobs sample the simulated milling plant (`SimMilling`) in
+/// the tick instead. This stub keeps the link app's force-DMA task board-independent; it is
+/// never made, so the task never runs.
+#[cfg(feature = "link")]
+pub struct ForceAdc;
+
+#[cfg(feature = "link")]
+impl ForceAdc {
+    pub fn start(&mut self, _sample_hz: u32) -> Result<u32, ()> {
+        Err(())
+    }
+
+    pub fn on_dma_irq(&mut self) -> Option<&[[u16; 3]]> {
+        None
+    }
+
+    pub fn overrun(&self) -> Option<()> {
+        None
     }
 }
 

@@ -134,11 +134,113 @@ pub enum MillingCmd {
         #[arg(long, value_name = "FILE")]
         csv: Option<PathBuf>,
     },
+    /// Run a milling job on the board as a force job (needs CAP_FORCE_JOB): the board's force
+    /// chain and control law hold the force; on a simulator board (QEMU) its milling plant
+    /// cuts. Logs force, override and feed vs board time, prints `milling-summary k=v ...`
+    /// and checks against the host model.
+    Run {
+        job: PathBuf,
+        #[command(flatten)]
+        link: crate::cli::LinkArgs,
+        /// Write every board status of the job to this CSV.
+        #[arg(long, value_name = "FILE")]
+        log_csv: Option<PathBuf>,
+        /// Plot the board's force, feed and override against time to this PNG.
+        #[arg(long, value_name = "FILE")]
+        png: Option<PathBuf>,
+        /// Simulator board only: inject a fault 5 mm into the cut: stuck0..2, saturated0..2,
+        /// spindle-stop. The run then expects the hold with that fault's code.
+        #[arg(long, value_name = "FAULT", value_parser = parse_sim_fault)]
+        fault: Option<motion::protocol::SimForceFault>,
+    },
+}
+
+fn parse_sim_fault(s: &str) -> Result<motion::protocol::SimForceFault, String> {
+    use motion::protocol::SimForceFault as F;
+    let channel = |rest: &str| match rest.parse::<u8>() {
+        Ok(c) if c < 3 => Ok(c),
+        _ => Err(format!("{s:?}: the channel must be 0, 1 or 2")),
+    };
+    if s == "spindle-stop" {
+        Ok(F::SpindleStop)
+    } else if let Some(rest) = s.strip_prefix("stuck") {
+        Ok(F::Stuck { channel: channel(rest)? })
+    } else if let Some(rest) = s.strip_prefix("saturated") {
+        Ok(F::Saturated { channel: channel(rest)? })
+    } else {
+        Err(format!("{s:?}: expected stuckN, saturatedN or spindle-stop"))
+    }
+}
+
+fn run_milling_board(
+    path: &std::path::Path,
+    link: &crate::cli::LinkArgs,
+    log_csv: Option<PathBuf>,
+    png: Option<PathBuf>,
+    fault: Option<motion::protocol::SimForceFault>,
+) -> Result<()> {
+    use crate::milling::{job, run, simulate};
+    let src =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let job = job::parse(&src).with_context(|| path.display().to_string())?;
+    let (mut t, qemu_guard) = link.open()?;
+    let opts = run::MillingRunOptions {
+        host: motion::protocol::HostConfig { rto_ms: 100, window: 8 },
+        // QEMU's machine has no switches: homing there takes it where it stands.
+        home: link.home || link.qemu,
+        progress: true,
+        fault: fault.unwrap_or(motion::protocol::SimForceFault::None),
+    };
+    let result = run::run(&mut *t, &job, &opts);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} ms", v * 1e3));
+    println!(
+        "force job  {} statuses, {:.2} s wall, {} board ticks, {} control updates",
+        r.trace.len(),
+        r.seconds,
+        r.board_ticks,
+        r.updates
+    );
+    println!("X          {} steps; host model {}", r.x_steps, r.expected_x_steps);
+    println!(
+        "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step \
+         (host model {})",
+        r.peak_n,
+        ms(r.settle_s),
+        ms(r.model_settle_s)
+    );
+    if let Some(p) = log_csv {
+        run::write_csv(&p, &r.trace)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = png {
+        let points = run::plot_points(&r.trace);
+        simulate::write_png(&p, &points, job.control.fnom_mn as f64 / 1e3)?;
+        println!("wrote {}", p.display());
+    }
+    println!("{}", r.summary_line());
+    if !r.ok() {
+        for p in &r.problems {
+            eprintln!("motionctl: {p}");
+        }
+        anyhow::bail!("the milling run failed {} check(s)", r.problems.len());
+    }
+    Ok(())
 }
 
 pub fn run_milling(cmd: MillingCmd) -> Result<()> {
     use crate::milling::{job, simulate};
-    let MillingCmd::Simulate { job: path, png, csv } = cmd;
+    let (path, png, csv) = match cmd {
+        MillingCmd::Simulate { job, png, csv } => (job, png, csv),
+        MillingCmd::Run { job, link, log_csv, png, fault } => {
+            return run_milling_board(&job, &link, log_csv, png, fault)
+        }
+    };
     let src =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
     let job = job::parse(&src).with_context(|| path.display().to_string())?;

@@ -157,21 +157,7 @@ fn ms_to_updates(ms: u32, hz: u32) -> u32 {
 impl ForceController {
     /// Checks and converts the setup (this is where the divisions are).
     pub fn new(p: ControlParams) -> Result<Self, ControlConfigError> {
-        if p.contact_mn == 0 || p.contact_mn >= p.fnom_mn || p.fnom_mn >= p.trip_mn {
-            return Err(ControlConfigError::Thresholds);
-        }
-        if !(1000..=100_000).contains(&p.control_hz) {
-            return Err(ControlConfigError::Rate);
-        }
-        let two = Rate::from_bits(2 << 30);
-        if p.feed_min > p.feed_max || p.feed_max > two || p.feed_air > two {
-            return Err(ControlConfigError::Feeds);
-        }
-        let spu_q16 = ((p.steps_per_s_at_one as u64) << 16) / p.control_hz as u64;
-        // dx over a tooth (<= 255 updates at override 2) must stay below 2^14 steps.
-        if spu_q16 == 0 || spu_q16 * 2 * 255 >= (1 << 30) {
-            return Err(ControlConfigError::Speed);
-        }
+        let spu_q16 = Self::check(&p)?;
         let hz = p.control_hz;
         let (slow, stop, reduced) = match p.contact {
             ContactStrategy::Direct => (0, 0, 0),
@@ -198,6 +184,27 @@ impl ForceController {
             pos: [0; POS_RING],
             at: 0,
         })
+    }
+
+    /// The checks of [`Self::new`] without building the controller (it is large); returns the
+    /// steps per update at override 1.0, Q16.
+    pub fn check(p: &ControlParams) -> Result<u64, ControlConfigError> {
+        if p.contact_mn == 0 || p.contact_mn >= p.fnom_mn || p.fnom_mn >= p.trip_mn {
+            return Err(ControlConfigError::Thresholds);
+        }
+        if !(1000..=100_000).contains(&p.control_hz) {
+            return Err(ControlConfigError::Rate);
+        }
+        let two = Rate::from_bits(2 << 30);
+        if p.feed_min > p.feed_max || p.feed_max > two || p.feed_air > two {
+            return Err(ControlConfigError::Feeds);
+        }
+        let spu_q16 = ((p.steps_per_s_at_one as u64) << 16) / p.control_hz as u64;
+        // dx over a tooth (<= 255 updates at override 2) must stay below 2^14 steps.
+        if spu_q16 == 0 || spu_q16 * 2 * 255 >= (1 << 30) {
+            return Err(ControlConfigError::Speed);
+        }
+        Ok(spu_q16)
     }
 
     pub fn mode(&self) -> Mode {

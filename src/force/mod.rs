@@ -10,6 +10,7 @@ pub mod biquad;
 pub mod chain;
 pub mod control;
 pub mod dma_frames;
+pub mod link_job;
 pub mod peak;
 pub mod plant;
 pub mod sample_timer;

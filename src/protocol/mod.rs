@@ -42,5 +42,8 @@ pub use sim_copy::CopySim;
 
 #[cfg(test)]
 mod tests;
+// -- force job (issue 4) --
+#[cfg(test)]
+mod force_tests;
 #[cfg(test)]
 mod tests_copy;

@@ -37,6 +37,8 @@
 //! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
 //! | ReadTeach, SimEncoders (not commands) | SimEncoders: `CAP_SIM_INPUTS` (`Unsupported`) |
+//! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
+//! | SimMilling (no column) | `CAP_SIM_INPUTS` and `CAP_FORCE_JOB` (`Unsupported`), parameters in range (`OutOfRange` naming the field) |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
@@ -136,6 +138,18 @@ pub trait LinkTarget {
     fn sim_encoders(&mut self, _counts: [i32; 2]) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+    // -- force job (issue 4) --
+    /// Arms a force job with checked parameters (`Ready`, empty queue, no events, no other job
+    /// armed; else `OutOfState`). `OutOfRange` from the target means the sample rate does not
+    /// fit the board (the NAK names `sample_hz`). Targets without force jobs: `Unsupported`.
+    fn arm_force(&mut self, _params: &ForceJobParams) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// Sets the simulated milling plant (checked; only called when the board announces
+    /// `CAP_SIM_INPUTS` and `CAP_FORCE_JOB`); used by the next force job's start.
+    fn sim_milling(&mut self, _params: &SimMillingParams) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
 }
 
 /// `ArmWire`'s parameters are usable: counts and limits at least 1, overrides in (0, 2.0].
@@ -157,7 +171,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::Start
         | RequestBody::StartPlayback { .. }
         | RequestBody::ArmWire(_)
-        | RequestBody::StartCopy { .. } => CommandKind::Start,
+        | RequestBody::StartCopy { .. }
+        | RequestBody::ArmForce(_) => CommandKind::Start,
         RequestBody::Hold => CommandKind::Hold,
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
@@ -170,7 +185,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::SetStatusPeriod { .. }
         | RequestBody::SimInject { .. }
         | RequestBody::ReadTeach { .. }
-        | RequestBody::SimEncoders { .. } => return None,
+        | RequestBody::SimEncoders { .. }
+        | RequestBody::SimMilling(_) => return None,
     })
 }
 
@@ -589,6 +605,20 @@ impl BoardLink {
                 })?;
                 Ok(Reply::None)
             }
+            // -- force job (issue 4) --
+            RequestBody::ArmForce(p) => {
+                if self.capabilities & CAP_FORCE_JOB == 0 {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                crate::force::link_job::check_job(p).map_err(range_nak)?;
+                t.config().validate().map_err(config_nak)?;
+                t.arm_force(p).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    ErrorCode::OutOfRange => range_nak("sample_hz"),
+                    _ => plain(code),
+                })?;
+                Ok(Reply::None)
+            }
             RequestBody::ReadTeach { block } => {
                 Ok(Reply::Teach(t.read_teach(*block).map_err(plain)?))
             }
@@ -597,6 +627,15 @@ impl BoardLink {
                     return Err(plain(ErrorCode::Unsupported));
                 }
                 t.sim_encoders([*arm_counts, *carriage_counts]).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::SimMilling(p) => {
+                let caps = CAP_SIM_INPUTS | CAP_FORCE_JOB;
+                if self.capabilities & caps != caps {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                crate::force::link_job::check_sim(p).map_err(range_nak)?;
+                t.sim_milling(p).map_err(plain)?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {
@@ -608,6 +647,11 @@ impl BoardLink {
             }
         }
     }
+}
+
+/// `OutOfRange` naming the parameter (a force job's field).
+fn range_nak(field: &'static str) -> (ErrorCode, NakDetail) {
+    (ErrorCode::OutOfRange, NakDetail::Config { field: FixedStr::truncated(field), axis: None })
 }
 
 fn config_nak(e: ConfigError) -> (ErrorCode, NakDetail) {

@@ -12,7 +12,9 @@
 use heapless::Deque;
 
 use super::errors::{ErrorCode, FaultCode};
-use super::messages::{HomingConfig, Status, WireConfig, WireJobParams, WireState};
+use super::messages::{
+    ForceJobParams, HomingConfig, SimMillingParams, Status, WireConfig, WireJobParams, WireState,
+};
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
@@ -62,6 +64,11 @@ pub struct SimTarget {
     pub wire_armed: Option<WireJobParams>,
     /// The simulated wire-stall switch (`SimInject`).
     pub sim_wire_stall: bool,
+    // -- force job (issue 4) --
+    /// An armed force job's parameters (`ArmForce`); the sim runs its segments as plain ones.
+    pub force_armed: Option<ForceJobParams>,
+    /// The simulated milling plant (`SimMilling`).
+    pub sim_milling: Option<SimMillingParams>,
 }
 
 impl PartialEq for SimTarget {
@@ -79,6 +86,7 @@ impl PartialEq for SimTarget {
                 == (o.events.events_admitted, o.events.blocks(), o.event_job)
             && self.playback.fired() == o.playback.fired()
             && (self.wire_armed, self.sim_wire_stall) == (o.wire_armed, o.sim_wire_stall)
+            && (self.force_armed, self.sim_milling) == (o.force_armed, o.sim_milling)
     }
 }
 
@@ -112,6 +120,8 @@ impl SimTarget {
             event_base: [0; MAX_AXES],
             wire_armed: None,
             sim_wire_stall: false,
+            force_armed: None,
+            sim_milling: None,
         }
     }
 
@@ -399,6 +409,24 @@ impl LinkTarget for SimTarget {
 
     fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
         self.sim_wire_stall = wire_stall;
+        self.mutations += 1;
+        Ok(())
+    }
+
+    // -- force job (issue 4) --
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
+        let armed = self.wire_armed.is_some() || self.force_armed.is_some();
+        if self.machine != MachineState::Ready || busy || armed {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.force_armed = Some(*params);
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
+        self.sim_milling = Some(*params);
         self.mutations += 1;
         Ok(())
     }

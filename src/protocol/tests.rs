@@ -84,6 +84,12 @@ fn extreme_status() -> Status {
         wire_returns: u32::MAX,
         wire_max_retrace_steps: u64::MAX,
         wire_power: true,
+        // -- force job (issue 4) --
+        force_mn: u32::MAX,
+        force_peak_mn: u32::MAX,
+        force_override_bits: u32::MAX,
+        force_phase: u8::MAX,
+        force_updates: u32::MAX,
         // -- copy mode (issue 6) --
         copy_running: true,
         encoder_counts: [i32::MIN; 2],
@@ -144,6 +150,9 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             segments: u32::MAX,
         }),
         RequestBody::SimInject { wire_stall: true },
+        // -- force job (issue 4) --
+        RequestBody::ArmForce(crate::protocol::force_tests::extreme_force_params()),
+        RequestBody::SimMilling(crate::protocol::force_tests::extreme_sim_params()),
         // -- copy mode (issue 6) --
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
@@ -241,12 +250,8 @@ fn request_kinds_are_postcard_indices() {
     for r in extreme_requests() {
         let mut buf = [0u8; 1024];
         let b = postcard::to_slice(&r.body, &mut buf).unwrap();
-        // Copy mode's kinds (28..=31) are fixed by the merge plan while its postcard indices
-        // depend on the blocks merged before it.
-        if (28..=31).contains(&r.body.kind()) {
-            continue;
-        }
-        assert_eq!(b[0], r.body.kind());
+        // Every kind is its postcard variant index (the job blocks were renumbered at merge).
+        assert_eq!(b[0], r.body.kind(), "{:?}", r.body);
     }
     let block = RequestBody::QueueEvents(EventBlock::default());
     assert_eq!(block.kind(), super::session::KIND_QUEUE_EVENTS);

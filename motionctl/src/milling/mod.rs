@@ -7,4 +7,5 @@ pub mod job;
 pub mod pass_growth;
 pub mod rapid_feed;
 pub mod root_locus;
+pub mod run;
 pub mod simulate;

@@ -1,0 +1,457 @@
+//! `motionctl milling run` on a board with force jobs (`CAP_FORCE_JOB`): the milling job's move
+//! (the Case A machine: one X axis, 1 um per step, 12.7 mm/s, 500 mm/s^2) runs as a force job
+//! through the board's force chain and control law.
+//!
+//! Hello -> the board ready (config, ConfigMissing cleared, homed) -> `SimMilling` (a simulator
+//! board: the job's cut, and an injected fault if asked) -> status stream -> `ArmForce` -> the
+//! move -> `Start` -> the status stream logged (force, override, feed vs board time) until the
+//! job ends (Ready) or a fault holds it -> checks against the host model (the same library
+//! code: `motion::force::scenario`): without a fault, the final position exact, the force back
+//! within +-10 % of Fnom within 150 ms of the depth step and never above the trip level; with
+//! an injected fault, the hold with that fault's code and the position the board counted.
+
+use super::job::MillingJob;
+use crate::link::{describe_rejection, LinkFailure, Session};
+use crate::runner;
+use crate::transport::Transport;
+use anyhow::{anyhow, bail};
+use motion::force::link_job::{job_params, sim_params};
+use motion::force::scenario::{self as sc, chain_config};
+use motion::machine::MachineState;
+use motion::protocol::{
+    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
+    SimForceFault, Status, WireConfig, CAP_FORCE_JOB, CAP_SIM_INPUTS,
+};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Status period during the job (board time): the trace's resolution.
+pub const STATUS_PERIOD_MS: u16 = 10;
+/// Status poll interval (wall clock), also the link heartbeat.
+pub const POLL_EVERY: Duration = Duration::from_millis(5);
+/// A job whose board clock and position do not move for this long (wall clock) is stuck.
+pub const NO_PROGRESS: Duration = Duration::from_secs(15);
+/// The settling limit and band the run is judged by (issue 4's acceptance).
+pub const SETTLE_LIMIT_S: f64 = 0.150;
+pub const BAND: f64 = 0.10;
+/// The window after the depth step the settling is judged over (the scenario's).
+pub const WINDOW_S: f64 = 0.400;
+
+/// What [`run`] needs besides the job.
+#[derive(Clone, Debug)]
+pub struct MillingRunOptions {
+    pub host: HostConfig,
+    pub home: bool,
+    pub progress: bool,
+    /// A fault for the simulated plant to inject 5 mm into the cut (a simulator board only).
+    pub fault: SimForceFault,
+}
+
+/// One status of the job.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoardPoint {
+    /// Board time since the start, s.
+    pub t_s: f64,
+    pub force_n: f64,
+    pub peak_n: f64,
+    /// The DDA's feed override (what the controller wrote).
+    pub override_: f64,
+    /// Feed over the last status period, mm/s.
+    pub feed_mm_s: f64,
+    pub x_steps: i64,
+    pub phase: ForcePhase,
+}
+
+/// What the run did; `problems` is empty when every check passed.
+#[derive(Clone, Debug, Default)]
+pub struct MillingRunReport {
+    pub trace: Vec<BoardPoint>,
+    pub x_steps: i64,
+    pub expected_x_steps: i64,
+    pub faults: u32,
+    pub peak_n: f64,
+    /// Board time from the depth step to the last status outside Fnom +- 10 % (400 ms window).
+    pub settle_s: Option<f64>,
+    /// The host model's settling (the scenario's figure), s.
+    pub model_settle_s: Option<f64>,
+    pub feed_after_mm_s: Option<f64>,
+    pub updates: u32,
+    pub board_ticks: u64,
+    pub seconds: f64,
+    pub problems: Vec<String>,
+}
+
+impl MillingRunReport {
+    pub fn ok(&self) -> bool {
+        self.problems.is_empty()
+    }
+
+    /// One machine-readable line for scripts (`cargo xtask milling-e2e`).
+    pub fn summary_line(&self) -> String {
+        let f = |v: Option<f64>| v.map_or("none".to_string(), |v| format!("{v:.4}"));
+        format!(
+            "milling-summary x={} expected_x={} faults={:#x} fault={} peak_n={:.0} settle_s={} \
+             model_settle_s={} feed_after_mm_s={} updates={} board_ticks={} points={} ok={}",
+            self.x_steps,
+            self.expected_x_steps,
+            self.faults,
+            fault_names(self.faults).replace(", ", "+"),
+            self.peak_n,
+            f(self.settle_s),
+            f(self.model_settle_s),
+            f(self.feed_after_mm_s),
+            self.updates,
+            self.board_ticks,
+            self.trace.len(),
+            self.ok()
+        )
+    }
+}
+
+fn fault_names(bits: u32) -> String {
+    let names: Vec<&str> =
+        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// The Case A machine as the link's config: X only, 1 um per step.
+pub fn wire_config() -> WireConfig {
+    let scale =
+        AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
+    WireConfig { machine: sc::machine(), scale: [scale; motion::MAX_AXES] }
+}
+
+fn seq_at_or_after(a: u32, b: u32) -> bool {
+    (a.wrapping_sub(b) as i32) >= 0
+}
+
+/// Judges a board trace: settling after the depth step at `step_at_steps` of X (from the
+/// start), the feed 300..400 ms after it, the peak force.
+pub fn judge(
+    trace: &[BoardPoint],
+    fnom_n: f64,
+    step_at_steps: i64,
+) -> (Option<f64>, Option<f64>, f64) {
+    let peak = trace.iter().map(|p| p.force_n).fold(0.0, f64::max);
+    let Some(step) = trace.iter().find(|p| p.x_steps >= step_at_steps) else {
+        return (None, None, peak);
+    };
+    let t0 = step.t_s;
+    let window = trace.iter().filter(|p| p.t_s >= t0 && p.t_s - t0 <= WINDOW_S);
+    let last_out = window
+        .filter(|p| (p.force_n - fnom_n).abs() > BAND * fnom_n)
+        .map(|p| p.t_s - t0)
+        .fold(0.0, f64::max);
+    let at = |dt: f64| trace.iter().find(|p| p.t_s - t0 >= dt);
+    let feed = match (at(0.3), at(0.4)) {
+        (Some(a), Some(b)) if b.t_s > a.t_s && b.t_s - t0 <= WINDOW_S + 0.05 => {
+            Some((b.x_steps - a.x_steps) as f64 / 1e3 / (b.t_s - a.t_s))
+        }
+        _ => None,
+    };
+    (Some(last_out), feed, peak)
+}
+
+/// Connects, configures and runs `job` as a force job; see the module doc.
+pub fn run(
+    transport: &mut dyn Transport,
+    job: &MillingJob,
+    opts: &MillingRunOptions,
+) -> anyhow::Result<MillingRunReport> {
+    let t0 = Instant::now();
+    let say = |m: &str| {
+        if opts.progress {
+            eprintln!("motionctl: {m}");
+        }
+    };
+    let params = job_params(&job.control, &chain_config(), 0);
+    motion::force::link_job::check_job(&params)
+        .map_err(|f| anyhow!("the milling job's force setup is out of range: {f}"))?;
+    let sim = sim_params(&job.plant, opts.fault, 5_000);
+    let cfg = wire_config();
+    let tick_hz = cfg.machine.tick_hz as f64;
+    // The host model: the same force code without the link (its settling, for the report).
+    let (model, _) = super::simulate::run(job)?;
+    let mut s = Session::new(transport, opts.host);
+    let link = |e: LinkFailure| anyhow!("{e}");
+    let info = s.connect().map_err(link)?;
+    if info.capabilities & CAP_FORCE_JOB == 0 {
+        bail!("the board ({:?}) runs no force jobs (no CAP_FORCE_JOB)", info.firmware.as_str());
+    }
+    let simulated = info.capabilities & CAP_SIM_INPUTS != 0;
+    if opts.fault != SimForceFault::None && !simulated {
+        bail!(
+            "the board ({:?}) has no simulated plant: no fault to inject",
+            info.firmware.as_str()
+        );
+    }
+    say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
+    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
+        match s.request(body).map_err(link)? {
+            Ok(r) => Ok(r),
+            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
+        }
+    };
+    let status = |s: &mut Session| -> anyhow::Result<Status> {
+        match query(s, RequestBody::GetStatus, "GetStatus")? {
+            Reply::Status(st) => Ok(st),
+            _ => bail!("the board answered GetStatus without a status"),
+        }
+    };
+    runner::ready_board(&mut s, cfg, opts.home, "milling machine (X)", &|m| say(m))
+        .map_err(|e| anyhow!("{e}"))?;
+    if simulated {
+        query(&mut s, RequestBody::SimMilling(sim), "SimMilling")?;
+        say("sent the simulated plant (eq 4.17 cut)");
+    }
+    query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
+    s.streaming = true;
+    query(&mut s, RequestBody::ArmForce(params), "ArmForce")?;
+    let seg = sc::segment();
+    let batch = SegmentBatch::from_slice(&[seg]).ok_or_else(|| anyhow!("segment batch"))?;
+    query(&mut s, RequestBody::QueueSegments(batch), "QueueSegments")?;
+    let base = status(&mut s)?;
+    query(&mut s, RequestBody::Start, "Start")?;
+    let start_seq = base.next_seq;
+    say("armed the force job, queued the move, started");
+
+    let model_ticks = sc::TICK_HZ as u64 * 5;
+    let mut watch = runner::JobWatch::new(model_ticks, 2.0, sc::TICK_HZ as u64 * 10, NO_PROGRESS);
+    let mut latest = base.clone();
+    let mut report =
+        MillingRunReport { expected_x_steps: sc::MOVE_STEPS as i64, ..Default::default() };
+    let mut last_poll = Instant::now();
+    let mut poll_seq: Option<u32> = None;
+    let mut prev: Option<(u64, i64)> = None;
+    let mut ran = false;
+    let x0 = base.positions[0];
+    let mut record = |st: &Status, trace: &mut Vec<BoardPoint>| {
+        let x = st.positions[0] - x0;
+        let feed = match prev {
+            Some((t, px)) if st.tick > t => {
+                (x - px) as f64 / 1e3 / ((st.tick - t) as f64 / tick_hz)
+            }
+            _ => 0.0,
+        };
+        prev = Some((st.tick, x));
+        trace.push(BoardPoint {
+            t_s: st.tick.saturating_sub(base.tick) as f64 / tick_hz,
+            force_n: st.force_mn as f64 / 1e3,
+            peak_n: st.force_peak_mn as f64 / 1e3,
+            override_: st.override_bits as f64 / (1u64 << 30) as f64,
+            feed_mm_s: feed,
+            x_steps: x,
+            phase: ForcePhase::from_u8(st.force_phase),
+        });
+    };
+    loop {
+        s.pump(Duration::from_millis(2)).map_err(link)?;
+        for n in s.notices.drain(..) {
+            say(&n);
+        }
+        let mut fresh = Vec::new();
+        for (seq, result) in s.take_answers() {
+            if Some(seq) == poll_seq {
+                poll_seq = None;
+                if let Ok(Reply::Status(st)) = result {
+                    fresh.push(st);
+                }
+            }
+        }
+        while let Some(ev) = s.events.pop_front() {
+            match ev {
+                HostEvent::Status(st) => fresh.push(st),
+                HostEvent::SessionLost(code) => {
+                    bail!("{}: the job cannot resume safely", LinkFailure::SessionLost(code))
+                }
+                _ => {}
+            }
+        }
+        fresh.sort_by_key(|st| st.tick);
+        for st in fresh {
+            if st.tick > latest.tick || report.trace.is_empty() {
+                if st.tick > base.tick {
+                    record(&st, &mut report.trace);
+                }
+                latest = st;
+            }
+        }
+        if last_poll.elapsed() >= POLL_EVERY && poll_seq.is_none() && s.host.window_free() > 0 {
+            poll_seq = Some(s.send(RequestBody::GetStatus).map_err(link)?);
+            last_poll = Instant::now();
+        }
+        // The job ran (a status after the Start showed it running or holding), then ended.
+        let after_start = seq_at_or_after(latest.next_seq, start_seq.wrapping_add(1));
+        if after_start && matches!(latest.machine, MachineState::Running | MachineState::Holding) {
+            ran = true;
+        }
+        let ended = matches!(latest.machine, MachineState::Ready | MachineState::Fault);
+        if ran && after_start && ended {
+            break;
+        }
+        if let Err(why) = watch.check(latest.tick, latest.positions[0] as u64 ^ latest.tick) {
+            let _ = s.request(RequestBody::Abort);
+            bail!("the job {why}: aborted");
+        }
+    }
+    // A hold decelerates: wait until the axis is at rest (two statuses >= 5 ms of board time
+    // apart at the same position), at most 5 s of wall time.
+    let mut fin = status(&mut s)?;
+    let settle_wall = Instant::now();
+    loop {
+        std::thread::sleep(Duration::from_millis(5));
+        let st = status(&mut s)?;
+        if st.tick >= fin.tick + sc::TICK_HZ as u64 / 200 {
+            let rest = st.positions == fin.positions;
+            fin = st;
+            if rest {
+                break;
+            }
+        }
+        if settle_wall.elapsed() > Duration::from_secs(5) {
+            break;
+        }
+    }
+    let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });
+    report.x_steps = fin.positions[0] - x0;
+    report.faults = fin.faults;
+    report.updates = fin.force_updates;
+    report.board_ticks = fin.tick.saturating_sub(base.tick);
+    report.seconds = t0.elapsed().as_secs_f64();
+    let fnom_n = job.control.fnom_mn as f64 / 1e3;
+    let trip_n = job.control.trip_mn as f64 / 1e3;
+    let step_at = job.plant.wall_steps
+        + (job.plant.step_at_um as i64 * 1000) / job.plant.nm_per_step.max(1) as i64;
+    let (settle, feed_after, peak) = judge(&report.trace, fnom_n, step_at);
+    report.settle_s = settle;
+    report.feed_after_mm_s = feed_after;
+    report.peak_n = peak.max(fin.force_peak_mn as f64 / 1e3);
+    report.model_settle_s = model.figure("settle_us").map(|us| us as f64 / 1e6);
+    let p = &mut report.problems;
+    let fault_code = match opts.fault {
+        SimForceFault::None => None,
+        SimForceFault::Saturated { .. } => Some(FaultCode::ForceSaturated),
+        SimForceFault::Stuck { .. } => Some(FaultCode::ForceStuck),
+        SimForceFault::SpindleStop => Some(FaultCode::SpindleStopped),
+    };
+    match fault_code {
+        None => {
+            if report.x_steps != report.expected_x_steps {
+                p.push(format!(
+                    "final X {} steps != host model {}",
+                    report.x_steps, report.expected_x_steps
+                ));
+            }
+            if fin.faults != 0 {
+                p.push(format!("faults latched: {}", fault_names(fin.faults)));
+            }
+            match settle {
+                Some(t) if t <= SETTLE_LIMIT_S => {}
+                Some(t) => p.push(format!(
+                    "force outside Fnom +-10 % until {:.0} ms after the depth step (limit 150)",
+                    t * 1e3
+                )),
+                None => p.push("the cut never reached the depth step".into()),
+            }
+            if report.peak_n > trip_n {
+                p.push(format!("force {:.0} N above the trip level {trip_n:.0} N", report.peak_n));
+            }
+        }
+        Some(code) => {
+            if fin.faults != code.bit() {
+                p.push(format!(
+                    "expected the fault {} alone, the board latched {}",
+                    code.name(),
+                    fault_names(fin.faults)
+                ));
+            }
+            if fin.machine != MachineState::Fault {
+                p.push(format!("expected the machine in Fault, it is {:?}", fin.machine));
+            }
+            if !(0..report.expected_x_steps).contains(&report.x_steps) {
+                p.push(format!("held at X {} steps: not inside the move", report.x_steps));
+            }
+            // Position intact: the board's count does not move once held.
+            let again = status(&mut s)?;
+            if again.positions[0] != fin.positions[0] {
+                p.push("the position moved after the hold".into());
+            }
+            // Leave the board usable: drop the job, clear the fault.
+            let _ = s.request(RequestBody::Abort);
+            let _ = s.request(RequestBody::ClearFault);
+        }
+    }
+    Ok(report)
+}
+
+/// The board trace as CSV: time, force, tooth peak, override, feed, X, controller phase.
+pub fn write_csv(path: &Path, trace: &[BoardPoint]) -> anyhow::Result<()> {
+    let mut out = String::from("t_s,force_n,peak_n,override,feed_mm_s,x_steps,phase\n");
+    for p in trace {
+        out.push_str(&format!(
+            "{:.5},{:.1},{:.1},{:.4},{:.3},{},{}\n",
+            p.t_s,
+            p.force_n,
+            p.peak_n,
+            p.override_,
+            p.feed_mm_s,
+            p.x_steps,
+            p.phase.name()
+        ));
+    }
+    std::fs::write(path, out)?;
+    Ok(())
+}
+
+/// The board trace in the simulation's plot form.
+pub fn plot_points(trace: &[BoardPoint]) -> Vec<super::simulate::TracePoint> {
+    trace
+        .iter()
+        .map(|p| super::simulate::TracePoint {
+            t_s: p.t_s,
+            force_n: p.force_n,
+            override_: p.override_,
+            feed_mm_s: p.feed_mm_s,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(t_s: f64, force_n: f64, x_steps: i64) -> BoardPoint {
+        BoardPoint {
+            t_s,
+            force_n,
+            peak_n: force_n,
+            override_: 1.0,
+            feed_mm_s: 0.0,
+            x_steps,
+            phase: ForcePhase::Cutting,
+        }
+    }
+
+    /// The judge finds the last status outside the band inside the window, the feed over
+    /// 300..400 ms, and the peak; a trace that never reaches the step has no settling.
+    #[test]
+    fn judge_reads_settling_feed_and_peak() {
+        let mut trace = vec![point(0.0, 3900.0, 9_000)];
+        // Step at 0.1 s (x = 10 000); out of band until 0.16 s; 3.3 mm/s from 0.4 s.
+        for i in 0..60 {
+            let t = 0.1 + i as f64 * 0.01;
+            let f = if t < 0.165 { 12_000.0 } else { 4_100.0 };
+            let x = 10_000 + (i as f64 * 0.01 * 3_300.0) as i64;
+            trace.push(point(t, f, x));
+        }
+        let (settle, feed, peak) = judge(&trace, 4100.0, 10_000);
+        assert!((settle.unwrap() - 0.06).abs() < 1e-9, "{settle:?}");
+        assert!((feed.unwrap() - 3.3).abs() < 0.05, "{feed:?}");
+        assert_eq!(peak, 12_000.0);
+        assert_eq!(judge(&trace[..1], 4100.0, 10_000).0, None);
+    }
+}
