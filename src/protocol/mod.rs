@@ -39,3 +39,5 @@ pub use sim::SimTarget;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_zslide;

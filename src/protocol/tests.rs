@@ -84,6 +84,14 @@ fn extreme_status() -> Status {
         wire_returns: u32::MAX,
         wire_max_retrace_steps: u64::MAX,
         wire_power: true,
+        // -- Z-slide job (issue 5) --
+        z_state: u8::MAX,
+        z_x_in_q24: i32::MIN,
+        z_cmd_in_q32: i32::MIN,
+        z_max_following_nin: i64::MIN,
+        z_steps: i64::MIN,
+        z_dac_code: u16::MAX,
+        z_spindle_rpm_milli: i64::MIN,
     }
 }
 
@@ -139,6 +147,39 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             segments: u32::MAX,
         }),
         RequestBody::SimInject { wire_stall: true },
+        // -- Z-slide job (issue 5) --
+        RequestBody::ZTableBegin(crate::zslide::link_job::ZTableHeader {
+            form: u8::MAX,
+            rows: u16::MAX,
+            x0_in_q24: i32::MIN,
+            dx_in_q24: i32::MIN,
+        }),
+        RequestBody::ZTableChunk {
+            index: u16::MAX,
+            bytes: BlockBytes::from_slice(&[0xFF; MAX_Z_CHUNK]).unwrap(),
+        },
+        RequestBody::ZTableEnd { crc: u32::MAX },
+        RequestBody::StartZ(crate::zslide::link_job::ZJobSpec {
+            output: crate::zslide::link_job::ZOutputSpec::Steps {
+                axis: u8::MAX,
+                steps_per_in: u32::MAX,
+            },
+            x_axis: u8::MAX,
+            x_steps_per_in: u32::MAX,
+            x_negative: true,
+            x_start_in_q24: i32::MIN,
+            x_end_in_q24: i32::MIN,
+            x_feed_in_q24_per_tick: i32::MIN,
+            cubic: true,
+            advance_ticks_q16: u32::MAX,
+            engage_ticks: u32::MAX,
+            blend_start_x_in_q24: i32::MIN,
+            blend_end_x_in_q24: i32::MIN,
+            max_velocity_uin_per_s: u32::MAX,
+            max_accel_uin_per_s2: u32::MAX,
+            min_speed_turn_q32_per_tick: u32::MAX,
+        }),
+        RequestBody::SimSpindle { rpm_milli: u32::MAX, index: true },
     ]
     .into_iter()
     .map(|body| Request { seq, body })

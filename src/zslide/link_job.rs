@@ -62,6 +62,35 @@ impl ZTableHeader {
     }
 }
 
+/// A table's wire form (the host's side of an upload): its header, and its rows written into
+/// `out` as little-endian `i32`s; returns the header and the byte count, `None` if `out` is too
+/// short or the table does not fit a [`ZTableHeader`]. Harmonic tables are sent at their order.
+pub fn table_wire<const ROWS: usize, const WIDTH: usize>(
+    t: &CoefficientTable<ROWS, WIDTH>,
+    out: &mut [u8],
+) -> Option<(ZTableHeader, usize)> {
+    let form = match t.form() {
+        TableForm::Power => 0,
+        TableForm::Harmonic { order } => order,
+    };
+    let h = ZTableHeader {
+        form,
+        rows: u16::try_from(t.len()).ok()?,
+        x0_in_q24: t.x0_in_q24(),
+        dx_in_q24: t.dx_in_q24(),
+    };
+    let width = t.form().width();
+    let mut n = 0;
+    for r in 0..t.len() {
+        let row = t.row(r)?;
+        for c in row.iter().take(width) {
+            out.get_mut(n..n + 4)?.copy_from_slice(&c.to_le_bytes());
+            n += 4;
+        }
+    }
+    (n == h.byte_len()).then_some((h, n))
+}
+
 /// Why an upload step was refused (nothing replaced; a refused chunk or end drops the upload).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ZTableError {
@@ -457,6 +486,19 @@ impl ZJob {
         Ok(())
     }
 
+    /// [`ZJob::start`] after the last run ended (the machine's job is over): that run is
+    /// replaced, or kept (with its figures) if the start is refused.
+    pub fn restart(&mut self, spec: &ZJobSpec, tick_hz: u32) -> Result<(), ZStartError> {
+        let old = self.run.take();
+        let reported = self.reported;
+        let r = self.start(spec, tick_hz);
+        if r.is_err() {
+            self.run = old;
+            self.reported = reported;
+        }
+        r
+    }
+
     /// Forgets the run (after Abort, ClearFault, SetConfig, Home, or a refused machine start).
     pub fn drop_run(&mut self) {
         self.run = None;
@@ -514,6 +556,23 @@ impl ZJob {
     /// Largest |Z command - Z output| while following, nanoinches (Status figure).
     pub fn max_following_nin(&self) -> i64 {
         self.run.as_ref().map_or(0, |r| r.max_following_nin)
+    }
+
+    /// The last sensed spindle speed, 2^-32 turn per tick.
+    pub fn sensed_speed_turn_q32_per_tick(&self) -> i32 {
+        self.speed_turn_q32_per_tick
+    }
+
+    /// [`ZJob::state`] as a number for `Status::z_state`: 0 no run, 1 idle (before the engage),
+    /// 2 running, 3 finished, 4 faulted.
+    pub fn state_code(&self) -> u8 {
+        match self.state() {
+            None => 0,
+            Some(ZState::Idle) => 1,
+            Some(ZState::Running) => 2,
+            Some(ZState::Finished) => 3,
+            Some(ZState::Faulted(_)) => 4,
+        }
     }
 }
 
