@@ -36,6 +36,7 @@ use motion::machine::{
 use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
+use motion::protocol::CAP_ZSLIDE_JOB;
 use motion::protocol::{
     encode_frame, BoardLink, ErrorCode, FaultCode, FrameError, HomingConfig, LinkTarget, Response,
     Status, WireConfig, WireJobParams, WireState, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
@@ -44,6 +45,8 @@ use motion::protocol::{
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::wire::link_job::WireJob;
+use motion::zslide::link_job::{ZJob, ZJobSpec, ZTableHeader};
+use motion::zslide::link_requests::{ZNak, ZRequests};
 use motion::Dda;
 use rtic::Mutex;
 
@@ -52,6 +55,9 @@ use crate::board;
 /// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
 #[path = "link_wire.rs"]
 pub mod link_wire;
+/// Z-slide jobs (`ZTableBegin`..`StartZ`, `SimSpindle`): kept apart from the rest of the link.
+#[path = "link_zslide.rs"]
+pub mod link_zslide;
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
 pub const SEGMENT_QUEUE: usize = 64;
@@ -97,6 +103,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
+    | CAP_ZSLIDE_JOB
     | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes
@@ -108,6 +115,8 @@ pub struct Motion {
     pub playback: Playback,
     /// The wire job (the last one, for its counts, until the next `ArmWire`).
     pub wire: Option<WireJob>,
+    /// The Z-slide job: the active table and the current (or last) run.
+    pub z: ZJob,
 }
 
 impl Motion {
@@ -121,7 +130,13 @@ impl Motion {
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);
         Some((
-            Motion { dda, machine, playback: Playback::new(SizeScale::ONE), wire: None },
+            Motion {
+                dda,
+                machine,
+                playback: Playback::new(SizeScale::ONE),
+                wire: None,
+                z: ZJob::new(),
+            },
             preparer,
         ))
     }
@@ -168,6 +183,8 @@ struct Feed {
     announced: u32,
     /// A config accepted since the last save, to persist once the machine is at rest.
     save_pending: Option<BoardConfig>,
+    /// The Z table upload's staging buffer.
+    z: ZRequests,
 }
 
 impl Link {
@@ -183,6 +200,7 @@ impl Link {
                 clock_base_ms: 0,
                 announced: 0,
                 save_pending: None,
+                z: ZRequests::new(),
             },
             last_frame_ms: 0,
             next_watchdog_ms: 0,
@@ -365,7 +383,10 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
-        self.motion.get_mut().lock(link_wire::drop_job);
+        self.motion.get_mut().lock(|m| {
+            link_wire::drop_job(m);
+            m.z.drop_run();
+        });
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -456,6 +477,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             link_wire::status(m, &mut s);
+            link_zslide::status(m, &mut s);
             s
         })
     }
@@ -616,6 +638,33 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
+    }
+
+    fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.begin(h, active)
+    }
+
+    fn z_table_chunk(&mut self, index: u16, bytes: &[u8]) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.chunk(index, bytes, active)
+    }
+
+    fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
+        // Checked outside the lock; the install (a copy) inside it.
+        let active = self.with(|m| m.machine.z_job());
+        let table = self.link.z.end(crc, active)?;
+        self.motion.get_mut().lock(|m| link_zslide::install(m, table))
+    }
+
+    fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        self.motion.get_mut().lock(|m| link_zslide::start(m, empty, spec))
+    }
+
+    fn sim_spindle(&mut self, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
+        let tick_hz = self.with(|m| m.machine.config().wire.machine.tick_hz);
+        link_zslide::sim_spindle(tick_hz, rpm_milli, index)
     }
 
     fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {

@@ -3,7 +3,8 @@
 //! the one state machine and fault model (`src/machine/MACHINE.md`).
 //!
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
-//! homing, job end) -- `Machine::tick_with` the event playback during an event job -- and
+//! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
+//! job (after reading the spindle) during a Z job -- and
 //! drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
@@ -45,6 +46,7 @@ mod app {
     struct Local {
         tick_timer: board::TickTimer,
         io: board::MachineIo,
+        spindle: board::Spindle,
         tick_wakes_feeder: Wake,
         tick_wakes_status: Wake,
         estop: board::EStop,
@@ -61,8 +63,19 @@ mod app {
         // before it runs.
         let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
         let board::Board {
-            mut tick_timer, mut step_port, estop, host, io, iwdg, mut config, ..
+            mut tick_timer,
+            mut step_port,
+            estop,
+            host,
+            io,
+            iwdg,
+            mut config,
+            mut spindle,
+            ..
         } = board::init(cx.device, &mut cx.core, default_hz);
+        if !link::link_zslide::init(&mut spindle) {
+            defmt::panic!("spindle encoder config refused");
+        }
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
         let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load()));
@@ -102,6 +115,7 @@ mod app {
             Local {
                 tick_timer,
                 io,
+                spindle,
                 tick_wakes_feeder: feeder_wake.clone(),
                 tick_wakes_status: status_wake,
                 estop,
@@ -125,7 +139,7 @@ mod app {
     /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
     /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
-        local = [tick_timer, io, tick_wakes_feeder, tick_wakes_status,
+        local = [tick_timer, io, spindle, tick_wakes_feeder, tick_wakes_status,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true])]
     fn tick(cx: tick::Context) {
@@ -141,7 +155,10 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
+            link::link_zslide::sense(l.spindle, &mut m.z);
             let out = if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
+                out
+            } else if let Some(out) = link::link_zslide::tick(m, &inputs) {
                 out
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)

@@ -55,8 +55,10 @@ pub use machine_io::MachineIo;
 // Wired by the link firmware's capability tasks (no app names these types yet).
 #[allow(unused_imports)]
 pub use resolver_adc::ResolverAdc;
-#[allow(unused_imports)]
 pub use spindle_timer::SpindleTimer;
+/// The spindle angle source of Z-slide jobs: TIM4's encoder through the encoder logic.
+#[cfg(feature = "link")]
+pub type Spindle = SpindleTimer;
 pub use step_port::StepPort;
 #[cfg(feature = "link")]
 pub use watchdog::Watchdog;
@@ -94,17 +96,19 @@ pub struct Board {
     // Wired by the link firmware's capability tasks; no app uses them yet.
     #[allow(dead_code)]
     pub capabilities: Option<Capabilities>,
+    /// TIM4 encoder count and index capture (counting; the link firmware configures the
+    /// encoder logic and reads it every tick for Z-slide jobs).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub spindle: SpindleTimer,
 }
 
-/// The capability drivers (force ADC, spindle encoder, resolver ADC). The Z DAC is in
+/// The capability drivers (force ADC, resolver ADC; the spindle encoder is `Board::spindle`). The Z DAC is in
 /// [`MachineIo`]: the machine's outputs drive it every tick.
 // Wired by the link firmware's capability tasks; no app uses them yet.
 #[allow(dead_code)]
 pub struct Capabilities {
     /// ADC1 scans of the force channels, TIM3-triggered, DMA2 stream 0 (not started).
     pub force_adc: ForceAdc,
-    /// TIM4 encoder count and index capture (counting; encoder logic not configured).
-    pub spindle: SpindleTimer,
     /// ADC2 resolver sin/cos (idle until the first `sample`).
     pub resolver: ResolverAdc,
 }
@@ -119,7 +123,6 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         [[0; FORCE_CHANNEL_COUNT]; 2 * FRAMES_PER_HALF]);
     let capabilities = force_buf.map(|buf| Capabilities {
         force_adc: ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM3, buf, clocks.apb1_timer_hz),
-        spindle: SpindleTimer::new(dp.TIM4),
         resolver: ResolverAdc::new(dp.ADC2),
     });
     // Mid-scale (the Z slide at rest) from here on, whichever firmware runs.
@@ -138,6 +141,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         #[cfg(feature = "link")]
         config: ConfigStorage::new(dp.FLASH),
         capabilities,
+        spindle: SpindleTimer::new(dp.TIM4),
     }
 }
 
@@ -160,5 +164,16 @@ pub fn exit(_ok: bool) -> ! {
     }
     loop {
         cortex_m::asm::wfi();
+    }
+}
+
+/// The real spindle is read, never simulated: `SimSpindle` is refused.
+#[cfg(feature = "link")]
+impl SpindleTimer {
+    pub const SIM: bool = false;
+
+    /// Not honoured on real hardware; false.
+    pub fn set_sim(_speed_turn_q32_per_tick: u32, _index: bool) -> bool {
+        false
     }
 }

@@ -8,6 +8,7 @@
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
 //! | USART1 | host link (`link` feature), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
+//! | (sim) | spindle for Z-slide jobs: `SimSpindle` sets its speed, the encoder logic reads it |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
 mod clocks;
@@ -15,6 +16,8 @@ mod cycles;
 #[path = "../common/host_serial.rs"]
 mod host_serial;
 mod log;
+#[cfg(feature = "link")]
+mod spindle;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
@@ -24,6 +27,8 @@ mod watchdog;
 
 pub use cycles::CycleCounter;
 pub use host_serial::HostSerial;
+#[cfg(feature = "link")]
+pub use spindle::Spindle;
 pub use step_port::StepPort;
 // The demo firmware never changes its tick rate.
 #[allow(unused_imports)]
@@ -57,6 +62,9 @@ pub struct Board {
     /// No persisted config under QEMU (its flash is read-only ROM).
     #[cfg(feature = "link")]
     pub config: ConfigStorage,
+    /// The simulated spindle (`SimSpindle`), read through the encoder logic.
+    #[cfg(feature = "link")]
+    pub spindle: Spindle,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -73,6 +81,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         iwdg: dp.IWDG,
         #[cfg(feature = "link")]
         config: ConfigStorage,
+        #[cfg(feature = "link")]
+        spindle: Spindle::new(),
     }
 }
 
