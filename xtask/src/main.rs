@@ -7,6 +7,7 @@
 //! | `test` | everything CI checks, in order, failing fast |
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
+//! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
@@ -22,6 +23,7 @@ mod polar_e2e;
 mod scenarios;
 mod setup;
 mod wire_e2e;
+mod zslide_e2e;
 
 use anyhow::{bail, Context, Result};
 use firmware::Board;
@@ -39,6 +41,7 @@ commands:
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
   polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
+  zslide-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
@@ -101,6 +104,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             wire_e2e::test(&root)
+        }
+        "zslide-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            zslide_e2e::test(&root)
         }
         "scenarios" => {
             no_args(cmd, rest)?;
@@ -291,6 +299,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl runs a wire job on QEMU with an injected stall",
             Box::new(|| wire_e2e::test(root)),
+        ),
+        (
+            "end to end: motionctl runs Z-slide jobs on QEMU (360 rpm, 20 % speed step)",
+            Box::new(|| zslide_e2e::test(root)),
         ),
     ];
     let total = steps.len();
