@@ -654,12 +654,21 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         // Checked outside the lock; the install (a copy) inside it.
         let active = self.with(|m| m.machine.z_job());
         let table = self.link.z.end(crc, active)?;
-        self.motion.get_mut().lock(|m| link_zslide::install(m, table))
+        let copy = table.clone();
+        self.motion.get_mut().lock(|m| link_zslide::install(m, table))?;
+        self.link.z.installed(copy);
+        Ok(())
     }
 
     fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
-        self.motion.get_mut().lock(|m| link_zslide::start(m, empty, spec))
+        let (tick_hz, speed, active) = self.with(|m| {
+            let tick_hz = m.machine.config().wire.machine.tick_hz;
+            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
+        });
+        // The generator is built here, outside the lock (see link_zslide).
+        let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
+        self.motion.get_mut().lock(|m| link_zslide::start(m, empty, prepared))
     }
 
     fn sim_spindle(&mut self, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {

@@ -7,14 +7,15 @@
 //! the job's latched faults as sensor inputs, and drives the DAC with the job's code.
 //!
 //! Interrupt rate ([`sense`], [`tick`]): integer only, no division, bounded (see
-//! `motion::zslide::link_job`). `StartZ` divides (`ZGen::new`, setup) inside the `Motion` lock:
-//! a few microseconds once per job.
+//! `motion::zslide::link_job`). `StartZ` builds its generator (`ZGen::new`: divides and scans
+//! the table, milliseconds on the F405) in the USART task on the link's copy of the active
+//! table, outside the `Motion` lock; the lock only begins the prepared run.
 
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::protocol::{ErrorCode, NakDetail, Status};
 use motion::spindle::encoder::EncoderConfig;
 use motion::spindle::SpindleSource;
-use motion::zslide::link_job::{ZJob, ZJobSpec};
+use motion::zslide::link_job::{ZJob, ZPrepared};
 use motion::zslide::link_requests::{self as zr, ZNak};
 
 use super::Motion;
@@ -58,14 +59,13 @@ pub fn install(m: &mut Motion, table: motion::zslide::link_job::LinkTable) -> Re
     zr::install(&mut m.z, table, active)
 }
 
-/// `StartZ`: nothing else queued or armed, the job engaged, then the machine's job; a machine
-/// refusal drops the run again (nothing changed).
-pub fn start(m: &mut Motion, plain_queue_empty: bool, spec: &ZJobSpec) -> Result<(), ZNak> {
+/// `StartZ`'s lock half: nothing else queued or armed, the prepared run begun (a few stores),
+/// then the machine's job; a machine refusal drops the run again.
+pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<(), ZNak> {
     if !plain_queue_empty || super::link_wire::live(m) {
         return Err((ErrorCode::OutOfState, NakDetail::None));
     }
-    let tick_hz = m.machine.config().wire.machine.tick_hz;
-    zr::start(&mut m.z, spec, tick_hz, m.machine.z_job())?;
+    zr::begin(&mut m.z, p, m.machine.z_job())?;
     let Motion { dda, machine, z, .. } = m;
     if let Err(e) = machine.command(MachineCommand::StartZ, dda) {
         z.drop_run();

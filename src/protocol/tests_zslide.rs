@@ -111,7 +111,9 @@ impl LinkTarget for ZTarget {
     }
     fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
         let t = self.req.end(crc, self.z_active)?;
-        zr::install(&mut self.job, t, self.z_active)
+        zr::install(&mut self.job, t.clone(), self.z_active)?;
+        self.req.installed(t);
+        Ok(())
     }
     fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
         // The machine's Start column passed in the session; the firmware's machine refuses a
@@ -119,7 +121,10 @@ impl LinkTarget for ZTarget {
         if self.sim.queue_len() != 0 {
             return Err((ErrorCode::OutOfState, NakDetail::None));
         }
-        zr::start(&mut self.job, spec, self.sim.config.machine.tick_hz, self.z_active)?;
+        // As the firmware: prepared on the link's table copy, begun in the job.
+        let speed = self.job.sensed_speed_turn_q32_per_tick();
+        let p = self.req.prepare(spec, self.sim.config.machine.tick_hz, speed, self.z_active)?;
+        zr::begin(&mut self.job, p, self.z_active)?;
         self.z_active = true;
         self.sim.machine = MachineState::Running;
         Ok(())

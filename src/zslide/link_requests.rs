@@ -4,7 +4,7 @@
 //! `Status`. Setup-time code (divides where it reports rpm); nothing here runs in the tick.
 
 use super::link_job::{
-    LinkTable, ZJob, ZJobSpec, ZStartError, ZTableError, ZTableHeader, ZTableUpload,
+    LinkTable, ZJob, ZJobSpec, ZPrepared, ZStartError, ZTableError, ZTableHeader, ZTableUpload,
 };
 use crate::protocol::{ErrorCode, NakDetail, Status};
 
@@ -32,16 +32,39 @@ pub fn start_nak(e: ZStartError) -> ZNak {
     }
 }
 
-/// The upload staging buffer and its request handlers. `job_active`: a Z job runs or holds
-/// (the machine's `z_job()`): every upload step is then refused with `OutOfState`.
+/// The upload staging buffer, a copy of the active table (so `StartZ` builds its generator
+/// outside the tick's lock: [`ZRequests::prepare`]) and the request handlers. `job_active`: a Z
+/// job runs or holds (the machine's `z_job()`): every upload step is then refused with
+/// `OutOfState`.
 #[derive(Clone, Debug, Default)]
 pub struct ZRequests {
     upload: ZTableUpload,
+    active: LinkTable,
 }
 
 impl ZRequests {
     pub const fn new() -> Self {
-        Self { upload: ZTableUpload::new() }
+        Self { upload: ZTableUpload::new(), active: LinkTable::None }
+    }
+
+    /// Records the table just installed in the job (after [`install`] succeeded).
+    pub fn installed(&mut self, table: LinkTable) {
+        self.active = table;
+    }
+
+    /// `StartZ`'s setup half, on the link's copy of the active table (divides, scans the table:
+    /// outside the tick's lock). `speed`: the spindle speed the job last sensed.
+    pub fn prepare(
+        &self,
+        spec: &ZJobSpec,
+        tick_hz: u32,
+        speed_turn_q32_per_tick: i32,
+        job_active: bool,
+    ) -> Result<ZPrepared, ZNak> {
+        if job_active {
+            return Err((ErrorCode::OutOfState, NakDetail::None));
+        }
+        ZJob::prepare(&self.active, spec, tick_hz, speed_turn_q32_per_tick).map_err(start_nak)
     }
 
     pub fn begin(&mut self, h: &ZTableHeader, job_active: bool) -> Result<(), ZNak> {
@@ -89,6 +112,15 @@ pub fn start(job: &mut ZJob, spec: &ZJobSpec, tick_hz: u32, job_active: bool) ->
     }
     // The last run (ended) only kept its figures for Status.
     job.restart(spec, tick_hz).map_err(start_nak)
+}
+
+/// Begins a prepared run (inside the tick's lock: a few stores; the last run, ended, is
+/// replaced). The caller then starts the machine's job, and drops the run if it refuses.
+pub fn begin(job: &mut ZJob, p: ZPrepared, job_active: bool) -> Result<(), ZNak> {
+    if job_active {
+        return Err((ErrorCode::OutOfState, NakDetail::None));
+    }
+    job.rebegin(p).map_err(start_nak)
 }
 
 /// The Z fields of `Status` from the job (`tick_hz` for the rpm).
