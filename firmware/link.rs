@@ -37,6 +37,7 @@ use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
+use motion::protocol::CAP_ZSLIDE_JOB;
 use motion::protocol::{
     encode_frame, BoardLink, ErrorCode, FaultCode, ForceJobParams, FrameError, HomingConfig,
     LinkTarget, Response, SimMillingParams, Status, TeachChunk, WireConfig, WireJobParams,
@@ -46,6 +47,8 @@ use motion::protocol::{
 };
 use motion::segment::{Rate, Segment, SegmentError};
 use motion::wire::link_job::WireJob;
+use motion::zslide::link_job::{ZJob, ZJobSpec, ZTableHeader};
+use motion::zslide::link_requests::{ZNak, ZRequests};
 use motion::Dda;
 use rtic::Mutex;
 
@@ -60,6 +63,9 @@ pub mod link_force;
 /// Wire-manipulator jobs (`ArmWire`): kept apart from the rest of the link.
 #[path = "link_wire.rs"]
 pub mod link_wire;
+/// Z-slide jobs (`ZTableBegin`..`StartZ`, `SimSpindle`): kept apart from the rest of the link.
+#[path = "link_zslide.rs"]
+pub mod link_zslide;
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
 pub const SEGMENT_QUEUE: usize = 64;
@@ -105,6 +111,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
+    | CAP_ZSLIDE_JOB
     | if link_force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
     | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
     | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
@@ -118,6 +125,8 @@ pub struct Motion {
     pub playback: Playback,
     /// The wire job (the last one, for its counts, until the next `ArmWire`).
     pub wire: Option<WireJob>,
+    /// The Z-slide job: the active table and the current (or last) run.
+    pub z: ZJob,
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: link_copy::CopyState,
     /// The force job and the simulated plant (issue 4).
@@ -140,6 +149,7 @@ impl Motion {
                 machine,
                 playback: Playback::new(SizeScale::ONE),
                 wire: None,
+                z: ZJob::new(),
                 copy: link_copy::CopyState::new(),
                 force: link_force::ForceSlot::default(),
             },
@@ -189,6 +199,8 @@ struct Feed {
     announced: u32,
     /// A config accepted since the last save, to persist once the machine is at rest.
     save_pending: Option<BoardConfig>,
+    /// The Z table upload's staging buffer.
+    z: ZRequests,
     /// The copy job's teach recording, in blocks for `ReadTeach`.
     teach: TeachRecorder<TEACH_BLOCKS>,
 }
@@ -206,6 +218,7 @@ impl Link {
                 clock_base_ms: 0,
                 announced: 0,
                 save_pending: None,
+                z: ZRequests::new(),
                 teach: TeachRecorder::new(),
             },
             last_frame_ms: 0,
@@ -394,9 +407,12 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
-        self.motion.get_mut().lock(link_wire::drop_job);
-        self.motion.get_mut().lock(link_copy::drop_job);
-        self.motion.get_mut().lock(link_force::drop_job);
+        self.motion.get_mut().lock(|m| {
+            link_wire::drop_job(m);
+            link_copy::drop_job(m);
+            link_force::drop_job(m);
+            m.z.drop_run();
+        });
         self.link.queue.clear();
         self.link.events.clear();
         EVENTS_WAITING.store(false, Relaxed);
@@ -487,6 +503,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             link_wire::status(m, &mut s);
+            link_zslide::status(m, &mut s);
             link_copy::status(m, &self.link.teach, &mut s);
             link_force::status(m, &mut s);
             s
@@ -662,6 +679,42 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         // An armed force job owns the next segment job (issue 4).
         let empty = empty && !self.with(|m| link_force::live(m));
         self.motion.get_mut().lock(|m| link_wire::arm(m, empty, params))
+    }
+
+    fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.begin(h, active)
+    }
+
+    fn z_table_chunk(&mut self, index: u16, bytes: &[u8]) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.chunk(index, bytes, active)
+    }
+
+    fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
+        // Checked outside the lock; the install (a copy) inside it.
+        let active = self.with(|m| m.machine.z_job());
+        let table = self.link.z.end(crc, active)?;
+        let copy = table.clone();
+        self.motion.get_mut().lock(|m| link_zslide::install(m, table))?;
+        self.link.z.installed(copy);
+        Ok(())
+    }
+
+    fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        let (tick_hz, speed, active) = self.with(|m| {
+            let tick_hz = m.machine.config().wire.machine.tick_hz;
+            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
+        });
+        // The generator is built here, outside the lock (see link_zslide).
+        let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
+        self.motion.get_mut().lock(|m| link_zslide::start(m, empty, prepared))
+    }
+
+    fn sim_spindle(&mut self, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
+        let tick_hz = self.with(|m| m.machine.config().wire.machine.tick_hz);
+        link_zslide::sim_spindle(tick_hz, rpm_milli, index)
     }
 
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {

@@ -3,7 +3,8 @@
 //! the one state machine and fault model (`src/machine/MACHINE.md`).
 //!
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
-//! homing, job end) -- `Machine::tick_with` the event playback during an event job -- and
+//! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
+//! job (after reading the spindle) during a Z job -- and
 //! drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
@@ -46,6 +47,7 @@ mod app {
         tick_timer: board::TickTimer,
         io: board::MachineIo,
         copy_encoders: board::CopyEncoders,
+        spindle: board::Spindle,
         tick_wakes_feeder: Wake,
         tick_wakes_status: Wake,
         estop: board::EStop,
@@ -72,6 +74,7 @@ mod app {
             mut config,
             copy_encoders,
             mut force_adc,
+            mut spindle,
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
         // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
@@ -79,6 +82,9 @@ mod app {
             force_adc.as_mut().and_then(|a| a.start(link::link_force::ADC_START_HZ).ok())
         {
             link::link_force::ADC_SAMPLE_HZ.store(hz, Relaxed);
+        }
+        if !link::link_zslide::init(&mut spindle) {
+            defmt::panic!("spindle encoder config refused");
         }
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
@@ -120,6 +126,7 @@ mod app {
                 tick_timer,
                 io,
                 copy_encoders,
+                spindle,
                 tick_wakes_feeder: feeder_wake.clone(),
                 tick_wakes_status: status_wake,
                 estop,
@@ -144,7 +151,7 @@ mod app {
     /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
     /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
-        local = [tick_timer, io, copy_encoders, tick_wakes_feeder, tick_wakes_status,
+        local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true])]
     fn tick(cx: tick::Context) {
@@ -161,12 +168,15 @@ mod app {
             tick_overrun: *l.overran,
         };
         (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
+            link::link_zslide::sense(l.spindle, &mut m.z);
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::link_copy::tick(m, &inputs, copy_counts) {
                 out
             } else if let Some(out) = link::link_force::tick(m, &inputs) {
                 out
             } else if let Some(out) = link::link_wire::tick(m, &inputs, raw.wire_stall) {
+                out
+            } else if let Some(out) = link::link_zslide::tick(m, &inputs) {
                 out
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)

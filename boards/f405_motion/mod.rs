@@ -60,8 +60,10 @@ pub use machine_io::MachineIo;
 // Wired by the link firmware's capability tasks (no app names these types yet).
 #[allow(unused_imports)]
 pub use resolver_adc::ResolverAdc;
-#[allow(unused_imports)]
 pub use spindle_timer::SpindleTimer;
+/// The spindle angle source of Z-slide jobs: TIM4's encoder through the encoder logic.
+#[cfg(feature = "link")]
+pub type Spindle = SpindleTimer;
 pub use step_port::StepPort;
 #[cfg(feature = "link")]
 pub use watchdog::Watchdog;
@@ -106,16 +108,17 @@ pub struct Board {
     // Wired by the link firmware's capability tasks; no app uses them yet.
     #[allow(dead_code)]
     pub capabilities: Option<Capabilities>,
+    /// TIM4 encoder count and index capture (counting; the link firmware configures the
+    /// encoder logic and reads it every tick for Z-slide jobs).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub spindle: SpindleTimer,
 }
 
-/// The capability drivers (spindle encoder, resolver ADC; the force ADC is the link's, in
-/// [`Board::force_adc`]). The Z DAC is in [`MachineIo`]: the machine's outputs drive it every
-/// tick.
-// Wired by the link firmware's capability tasks; no app uses them yet.
+/// The capability drivers not yet wired into an app (resolver ADC; the spindle encoder is
+/// [`Board::spindle`], the force ADC [`Board::force_adc`]). The Z DAC is in [`MachineIo`]: the
+/// machine's outputs drive it every tick.
 #[allow(dead_code)]
 pub struct Capabilities {
-    /// TIM4 encoder count and index capture (counting; encoder logic not configured).
-    pub spindle: SpindleTimer,
     /// ADC2 resolver sin/cos (idle until the first `sample`).
     pub resolver: ResolverAdc,
 }
@@ -132,10 +135,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         [[0; FORCE_CHANNEL_COUNT]; 2 * FRAMES_PER_HALF]);
     let force_adc =
         force_buf.map(|buf| ForceAdc::new(dp.ADC1, dp.DMA2, dp.TIM8, buf, clocks.apb2_timer_hz));
-    let capabilities = Some(Capabilities {
-        spindle: SpindleTimer::new(dp.TIM4),
-        resolver: ResolverAdc::new(dp.ADC2),
-    });
+    let capabilities = Some(Capabilities { resolver: ResolverAdc::new(dp.ADC2) });
     // Mid-scale (the Z slide at rest) from here on, whichever firmware runs.
     #[cfg_attr(not(feature = "link"), allow(unused_variables))]
     let z_dac = z_dac::ZDac::new(dp.DAC);
@@ -155,6 +155,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
         copy_encoders,
         force_adc,
         capabilities,
+        spindle: SpindleTimer::new(dp.TIM4),
     }
 }
 
@@ -171,5 +172,16 @@ pub fn exit(_ok: bool) -> ! {
     }
     loop {
         cortex_m::asm::wfi();
+    }
+}
+
+/// The real spindle is read, never simulated: `SimSpindle` is refused.
+#[cfg(feature = "link")]
+impl SpindleTimer {
+    pub const SIM: bool = false;
+
+    /// Not honoured on real hardware; false.
+    pub fn set_sim(_speed_turn_q32_per_tick: u32, _index: bool) -> bool {
+        false
     }
 }

@@ -9,6 +9,7 @@
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
 //! | (none) | copy-mode encoders: simulated counters driven by `SimEncoders` (`CopyEncoders`) |
 //! | USART1 | host link (`link` feature), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
+//! | (sim) | spindle for Z-slide jobs: `SimSpindle` sets its speed, the encoder logic reads it |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
 mod clocks;
@@ -16,6 +17,8 @@ mod cycles;
 #[path = "../common/host_serial.rs"]
 mod host_serial;
 mod log;
+#[cfg(feature = "link")]
+mod spindle;
 mod step_port;
 #[path = "../common/tick_timer.rs"]
 mod tick_timer;
@@ -25,6 +28,8 @@ mod watchdog;
 
 pub use cycles::CycleCounter;
 pub use host_serial::HostSerial;
+#[cfg(feature = "link")]
+pub use spindle::Spindle;
 pub use step_port::StepPort;
 // The demo firmware never changes its tick rate.
 #[allow(unused_imports)]
@@ -64,6 +69,9 @@ pub struct Board {
     /// No force ADC under QEMU: force jobs sample the simulated plant in the tick.
     #[cfg(feature = "link")]
     pub force_adc: Option<ForceAdc>,
+    /// The simulated spindle (`SimSpindle`), read through the encoder logic.
+    #[cfg(feature = "link")]
+    pub spindle: Spindle,
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
@@ -84,6 +92,8 @@ pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u3
         copy_encoders: CopyEncoders::new(),
         #[cfg(feature = "link")]
         force_adc: None,
+        #[cfg(feature = "link")]
+        spindle: Spindle::new(),
     }
 }
 

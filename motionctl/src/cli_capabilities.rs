@@ -21,6 +21,48 @@ pub enum FourierCmd {
         #[arg(long, value_name = "FILE")]
         firmware_rust: Option<PathBuf>,
     },
+    /// Run a Z-slide turning job on a board (CAP_ZSLIDE_JOB): upload the table, feed X while
+    /// the board computes Z from the spindle angle, and check the result against the host model.
+    Run(FourierRunArgs),
+}
+
+/// `motionctl fourier run`.
+#[derive(clap::Args, Debug)]
+pub struct FourierRunArgs {
+    #[command(flatten)]
+    pub link: crate::cli::LinkArgs,
+    /// Spindle speed, rpm (QEMU: the simulated spindle's; a real spindle must turn at it).
+    #[arg(long, default_value_t = 360.0)]
+    pub rpm: f64,
+    /// Table file: rows of `X C00 C01 C02 C03` in inches (as `fourier table` prints them)
+    /// [default: the built-in Douglass table, accurate mode].
+    #[arg(long, value_name = "FILE")]
+    pub table: Option<PathBuf>,
+    /// X feed: from --x-start to --x-end inches at --feed in/s; the disengage blends over the
+    /// last --blend inches.
+    #[arg(long, default_value_t = 0.0)]
+    pub x_start: f64,
+    #[arg(long, default_value_t = 0.5)]
+    pub x_end: f64,
+    #[arg(long, default_value_t = 1.0)]
+    pub feed: f64,
+    #[arg(long, default_value_t = 0.1)]
+    pub blend: f64,
+    /// A spindle speed step at this many seconds of board time after the start (QEMU only).
+    #[arg(long, value_name = "S")]
+    pub speed_step_at: Option<f64>,
+    /// The step's size, percent.
+    #[arg(long, value_name = "PCT", default_value_t = 20.0, requires = "speed_step_at")]
+    pub speed_step_pct: f64,
+    /// Z output: the Z axis's step/dir or the DAC.
+    #[arg(long, value_enum, default_value_t = ZOutputArg::Steps)]
+    pub output: ZOutputArg,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ZOutputArg {
+    Steps,
+    Dac,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -31,6 +73,7 @@ pub enum FourierMode {
 
 pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
     match cmd {
+        FourierCmd::Run(args) => fourier_run(&args),
         FourierCmd::Table { mode: FourierMode::Thesis, firmware_rust } => {
             let t = forex4::forex4_table(&Forex4Params::listing())?;
             println!("FOREX4 (Appendix B-1), Table 2-2 format: X, C00, C01, C02, C03 (in)");
@@ -520,6 +563,89 @@ fn run_wire_job(
             eprintln!("motionctl: {p}");
         }
         anyhow::bail!("the wire job failed {} check(s)", r.problems.len());
+    }
+    println!("result     OK");
+    Ok(())
+}
+
+/// `fourier run`: the job on the board, the figures and the `zslide-summary` line.
+fn fourier_run(a: &FourierRunArgs) -> Result<()> {
+    use crate::fourier::run::{self as zrun, ZOutput, ZRunOptions};
+    if !(a.rpm > 0.0 && a.rpm < 100_000.0) {
+        anyhow::bail!("--rpm must be within (0, 100000)");
+    }
+    let table = match &a.table {
+        Some(p) => zrun::read_table(p)?,
+        None => zrun::WireTable::douglass()?,
+    };
+    let opts = ZRunOptions {
+        rpm_milli: (a.rpm * 1000.0).round() as u32,
+        x_start_in: a.x_start,
+        x_end_in: a.x_end,
+        feed_in_per_s: a.feed,
+        blend_in: a.blend,
+        output: match a.output {
+            ZOutputArg::Steps => ZOutput::Steps,
+            ZOutputArg::Dac => ZOutput::Dac,
+        },
+        speed_step: a.speed_step_at.map(|at| (at, a.speed_step_pct / 100.0)),
+        // QEMU's machine has no switches: homing there takes it where it stands.
+        home: a.link.home || a.link.qemu || a.link.sim,
+        ..ZRunOptions::default()
+    };
+    let (mut t, qemu_guard) = a.link.open()?;
+    let say = |m: &str| eprintln!("motionctl: {m}");
+    let result = zrun::run(&mut *t, &table, &opts, &say);
+    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu_guard);
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
+    };
+    println!(
+        "z job      X {} -> {} in at {} in/s, {} rpm, {:?} output; {} board ticks, {:.2} s wall",
+        a.x_start, a.x_end, a.feed, a.rpm, a.output, r.board_ticks, r.seconds
+    );
+    println!(
+        "steps      X {} Z {}; host model X {} Z {}",
+        r.x_steps, r.z_steps, r.model.x_steps, r.model.z_steps
+    );
+    println!(
+        "following  max {:.3} uin; host model {:.3} uin",
+        r.max_following_nin as f64 / 1e3,
+        r.model.max_following_nin as f64 / 1e3
+    );
+    if let Some(at) = r.step_at_tick {
+        println!(
+            "speed step +{} % at board tick {at}; final {:.3} rpm",
+            a.speed_step_pct,
+            r.final_rpm_milli as f64 / 1e3
+        );
+    }
+    println!("faults     {:#x}", r.faults);
+    // One machine-readable line for scripts (xtask zslide-e2e).
+    println!(
+        "zslide-summary x_steps={} z_steps={} model_x_steps={} model_z_steps={} \
+         max_following_nin={} model_max_following_nin={} faults={} z_state={} board_ticks={} \
+         model_ticks={} step_at_tick={} final_rpm_milli={}",
+        r.x_steps,
+        r.z_steps,
+        r.model.x_steps,
+        r.model.z_steps,
+        r.max_following_nin,
+        r.model.max_following_nin,
+        r.faults,
+        r.z_state,
+        r.board_ticks,
+        r.model.ticks,
+        r.step_at_tick.map_or(-1, |t| t as i64),
+        r.final_rpm_milli
+    );
+    if !r.ok() {
+        for p in &r.problems {
+            eprintln!("motionctl: {p}");
+        }
+        anyhow::bail!("the Z-slide job failed {} check(s)", r.problems.len());
     }
     println!("result     OK");
     Ok(())

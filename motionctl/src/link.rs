@@ -52,6 +52,12 @@ pub fn describe_rejection(r: &Rejection) -> String {
         NakDetail::Block { reason, expected } => {
             format!(" [event block check {reason} failed; board expects block {expected:?}]")
         }
+        // -- Z-slide job (issue 5) --
+        NakDetail::ZSlide { reason, expected, fault } => {
+            let fault =
+                fault.map(|f| format!(", pre-start check: {}", f.name())).unwrap_or_default();
+            format!(" [Z request check {reason}; board expects chunk {expected:?}{fault}]")
+        }
     };
     format!("{} ({}){detail}", r.code.name(), r.code.description())
 }

@@ -10,6 +10,7 @@ use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTimi
 use crate::dda::MotionState;
 use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
+use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
 pub const PROTOCOL_VERSION: u16 = 2;
 /// Sensor channels reported in [`Status`].
@@ -41,6 +42,11 @@ pub const CAP_EVENTS: u32 = 1 << 6;
 pub const CAP_WIRE_JOB: u32 = 1 << 7;
 /// `SimInject` drives simulated inputs (a simulator board only: QEMU has no GPIO).
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
+// -- Z-slide job (issue 5) --
+/// Z-slide jobs (`ZTableBegin`/`ZTableChunk`/`ZTableEnd`, `StartZ`) are honoured.
+pub const CAP_ZSLIDE_JOB: u32 = 1 << 9;
+/// Most table bytes in one `ZTableChunk`.
+pub const MAX_Z_CHUNK: usize = 192;
 // -- force job (issue 4) --
 /// `ArmForce` (constant-force milling jobs) is honoured; `SimMilling` too with `CAP_SIM_INPUTS`.
 pub const CAP_FORCE_JOB: u32 = 1 << 10;
@@ -111,6 +117,32 @@ pub enum RequestBody {
     /// switch level the board reads from its next tick on, until the next `SimInject`.
     SimInject {
         wire_stall: bool,
+    },
+    // -- Z-slide job (issue 5) --
+    /// Opens a Z coefficient-table upload (drops an unfinished one). Queue column; refused
+    /// (`OutOfState`) while a Z job runs; a bad header -> `InvalidTable`.
+    ZTableBegin(ZTableHeader),
+    /// Table bytes `index` (0, 1, ... in order; at most [`MAX_Z_CHUNK`] bytes): little-endian
+    /// `i32` coefficients, row after row. Out of order or too long -> `InvalidTable` (the
+    /// upload is dropped, the active table stays).
+    ZTableChunk {
+        index: u16,
+        bytes: BlockBytes,
+    },
+    /// Ends the upload: every byte, the CRC-32 over them and the table checks, then the table
+    /// replaces the active one. Any refusal replaces nothing.
+    ZTableEnd {
+        crc: u32,
+    },
+    /// Starts a Z job with the active table (Start column; `Ready`, nothing queued). No table
+    /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
+    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::ZSlide { fault }`.
+    StartZ(ZJobSpec),
+    /// Simulated spindle (only with `CAP_SIM_INPUTS`, else `Unsupported`): its speed from the
+    /// next tick on (thousandths of rpm, >= 0) and whether its encoder gives index pulses.
+    SimSpindle {
+        rpm_milli: u32,
+        index: bool,
     },
     // -- force job (issue 4) --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
@@ -372,6 +404,12 @@ impl RequestBody {
             RequestBody::JogOffLimit => 16,
             RequestBody::ArmWire(_) => 17,
             RequestBody::SimInject { .. } => 18,
+            // -- Z-slide job (issue 5) --
+            RequestBody::ZTableBegin(_) => 19,
+            RequestBody::ZTableChunk { .. } => 20,
+            RequestBody::ZTableEnd { .. } => 21,
+            RequestBody::StartZ(_) => 22,
+            RequestBody::SimSpindle { .. } => 23,
             // -- force job (issue 4) --
             RequestBody::ArmForce(_) => 24,
             RequestBody::SimMilling(_) => 25,
@@ -476,6 +514,15 @@ pub enum NakDetail {
         reason: u8,
         expected: Option<u16>,
     },
+    // -- Z-slide job (issue 5) --
+    /// A refused Z request: `reason` = `ZTableError::code` for an upload step (1 header, 2 no
+    /// upload, 3 sequence, 4 too long, 5 short, 6 CRC, 7 table), 0 for a start; `expected` =
+    /// the chunk index the board wanted (sequence); `fault` = what the pre-start check found.
+    ZSlide {
+        reason: u8,
+        expected: Option<u16>,
+        fault: Option<FaultCode>,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -561,6 +608,18 @@ pub struct Status {
     pub wire_returns: u32,
     pub wire_max_retrace_steps: u64,
     pub wire_power: bool,
+    // -- Z-slide job (issue 5) --
+    /// The current (or last) Z job: `ZJob::state_code` (`ZState`) (0 none, 1 idle/engaging,
+    /// 2 running, 3 finished, 4 faulted), commanded X (inches Q24), Z command (inches Q32),
+    /// the largest following error (nanoinches), Z steps emitted, the DAC code, and the spindle
+    /// speed the board senses (thousandths of rpm).
+    pub z_state: u8,
+    pub z_x_in_q24: i32,
+    pub z_cmd_in_q32: i32,
+    pub z_max_following_nin: i64,
+    pub z_steps: i64,
+    pub z_dac_code: u16,
+    pub z_spindle_rpm_milli: i64,
     // -- force job (issue 4) --
     /// The current (or last) force job: the chain's latest force (resultant) and its tooth
     /// peak, mN; the controller's override (`Rate` bits); its phase (`ForcePhase` as u8: 0 no

@@ -42,6 +42,8 @@ pub use sim_copy::CopySim;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_zslide;
 // -- force job (issue 4) --
 #[cfg(test)]
 mod force_tests;

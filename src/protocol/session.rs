@@ -35,6 +35,8 @@
 //! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
 //! | QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
 //! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
+//! | ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::ZSlide`) |
+//! | StartZ (Start column) | a table (`OutOfState`), nothing queued, a spec in range and the pre-start check (`OutOfRange`) |
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
 //! | ReadTeach, SimEncoders (not commands) | SimEncoders: `CAP_SIM_INPUTS` (`Unsupported`) |
 //! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
@@ -49,6 +51,8 @@ use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::feed::check_block;
 use crate::polar::playback::SizeScale;
 use crate::segment::{Rate, Segment};
+use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
+use crate::zslide::link_requests::ZNak;
 
 /// Outcomes remembered for retransmissions; the host's window must not exceed it.
 pub const RESULT_MEMORY: usize = 32;
@@ -119,6 +123,28 @@ pub trait LinkTarget {
     fn sim_inject(&mut self, _wire_stall: bool) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+    // -- Z-slide job (issue 5) --
+    /// `ZTableBegin` (see `motion::zslide::link_requests::ZRequests`). A refusal changes
+    /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
+    fn z_table_begin(&mut self, _h: &ZTableHeader) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `ZTableChunk` with at most `MAX_Z_CHUNK` bytes.
+    fn z_table_chunk(&mut self, _index: u16, _bytes: &[u8]) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `ZTableEnd`: the checked table replaces the active one, or nothing changes.
+    fn z_table_end(&mut self, _crc: u32) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `StartZ` (Start column passed, config valid).
+    fn start_z(&mut self, _spec: &ZJobSpec) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `SimSpindle` (only called when the board announces `CAP_SIM_INPUTS`).
+    fn sim_spindle(&mut self, _rpm_milli: u32, _index: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
     // -- copy mode (issue 6) --
     /// Starts a copy job with a checked size scale (`Ready`, nothing queued, no job; else
     /// `OutOfState`). Targets without copy jobs: `Unsupported`.
@@ -178,12 +204,18 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::Abort => CommandKind::Abort,
         RequestBody::ClearFault => CommandKind::ClearFault,
         RequestBody::JogOffLimit => CommandKind::JogOff,
+        // -- Z-slide job (issue 5) --
+        RequestBody::ZTableBegin(_)
+        | RequestBody::ZTableChunk { .. }
+        | RequestBody::ZTableEnd { .. } => CommandKind::Queue,
+        RequestBody::StartZ(_) => CommandKind::Start,
         RequestBody::Hello { .. }
         | RequestBody::GetConfig
         | RequestBody::GetStatus
         | RequestBody::SetOverride { .. }
         | RequestBody::SetStatusPeriod { .. }
         | RequestBody::SimInject { .. }
+        | RequestBody::SimSpindle { .. }
         | RequestBody::ReadTeach { .. }
         | RequestBody::SimEncoders { .. }
         | RequestBody::SimMilling(_) => return None,
@@ -595,6 +627,34 @@ impl BoardLink {
                 t.sim_inject(*wire_stall).map_err(plain)?;
                 Ok(Reply::None)
             }
+            // -- Z-slide job (issue 5) --
+            RequestBody::ZTableBegin(h) => {
+                t.z_table_begin(h).map_err(|e| state_detail(e, machine))?;
+                Ok(Reply::None)
+            }
+            RequestBody::ZTableChunk { index, bytes } => {
+                if bytes.len() > MAX_Z_CHUNK {
+                    return Err(plain(ErrorCode::OutOfRange));
+                }
+                t.z_table_chunk(*index, bytes).map_err(|e| state_detail(e, machine))?;
+                Ok(Reply::None)
+            }
+            RequestBody::ZTableEnd { crc } => {
+                t.z_table_end(*crc).map_err(|e| state_detail(e, machine))?;
+                Ok(Reply::None)
+            }
+            RequestBody::StartZ(spec) => {
+                t.config().validate().map_err(config_nak)?;
+                t.start_z(spec).map_err(|e| state_detail(e, machine))?;
+                Ok(Reply::None)
+            }
+            RequestBody::SimSpindle { rpm_milli, index } => {
+                if self.capabilities & CAP_SIM_INPUTS == 0 {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                t.sim_spindle(*rpm_milli, *index).map_err(plain)?;
+                Ok(Reply::None)
+            }
             // -- copy mode (issue 6) --
             RequestBody::StartCopy { m, k, teach } => {
                 let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
@@ -646,6 +706,16 @@ impl BoardLink {
                 Ok(Reply::None)
             }
         }
+    }
+}
+
+/// A target's refusal with the machine state filled into a bare `OutOfState`.
+fn state_detail(e: ZNak, machine: MachineState) -> (ErrorCode, NakDetail) {
+    match e {
+        (ErrorCode::OutOfState, NakDetail::None) => {
+            (ErrorCode::OutOfState, NakDetail::State(machine))
+        }
+        other => other,
     }
 }
 

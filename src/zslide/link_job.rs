@@ -62,6 +62,35 @@ impl ZTableHeader {
     }
 }
 
+/// A table's wire form (the host's side of an upload): its header, and its rows written into
+/// `out` as little-endian `i32`s; returns the header and the byte count, `None` if `out` is too
+/// short or the table does not fit a [`ZTableHeader`]. Harmonic tables are sent at their order.
+pub fn table_wire<const ROWS: usize, const WIDTH: usize>(
+    t: &CoefficientTable<ROWS, WIDTH>,
+    out: &mut [u8],
+) -> Option<(ZTableHeader, usize)> {
+    let form = match t.form() {
+        TableForm::Power => 0,
+        TableForm::Harmonic { order } => order,
+    };
+    let h = ZTableHeader {
+        form,
+        rows: u16::try_from(t.len()).ok()?,
+        x0_in_q24: t.x0_in_q24(),
+        dx_in_q24: t.dx_in_q24(),
+    };
+    let width = t.form().width();
+    let mut n = 0;
+    for r in 0..t.len() {
+        let row = t.row(r)?;
+        for c in row.iter().take(width) {
+            out.get_mut(n..n + 4)?.copy_from_slice(&c.to_le_bytes());
+            n += 4;
+        }
+    }
+    (n == h.byte_len()).then_some((h, n))
+}
+
 /// Why an upload step was refused (nothing replaced; a refused chunk or end drops the upload).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ZTableError {
@@ -381,6 +410,20 @@ impl ZJob {
         if self.run.is_some() {
             return Err(ZStartError::Running);
         }
+        let p = Self::prepare(&self.table, spec, tick_hz, self.speed_turn_q32_per_tick)?;
+        self.begin(p)
+    }
+
+    /// The setup half of [`ZJob::start`], outside the job: checks `spec` against `table` (the
+    /// table the job holds, or an identical copy) and the spindle speed, builds the generator
+    /// (setup time: divides, scans the table: milliseconds on the F405, so the link firmware runs
+    /// it outside the tick's lock) and engages it.
+    pub fn prepare(
+        table: &LinkTable,
+        spec: &ZJobSpec,
+        tick_hz: u32,
+        speed_turn_q32_per_tick: i32,
+    ) -> Result<ZPrepared, ZStartError> {
         let axes = crate::config::MAX_AXES as u8;
         let (steps, dac, z_axis) = match spec.output {
             ZOutputSpec::Steps { axis, steps_per_in } => {
@@ -410,51 +453,94 @@ impl ZJob {
             max_accel_uin_per_s2: spec.max_accel_uin_per_s2,
             min_speed_turn_q32_per_tick: spec.min_speed_turn_q32_per_tick,
         };
-        self.start_with(spec, cfg, steps, dac, z_axis)
+        prepare_run(table, speed_turn_q32_per_tick, spec, cfg, steps, dac, z_axis).map(ZPrepared)
     }
 
-    fn start_with(
-        &mut self,
-        spec: &ZJobSpec,
-        cfg: ZCommandConfig,
-        steps: Option<StepScale>,
-        dac: Option<DacScale>,
-        z_axis: Option<u8>,
-    ) -> Result<(), ZStartError> {
-        let (x, speed) = (spec.x_start_in_q24, self.speed_turn_q32_per_tick);
-        // The slide is at rest at the job's start: Z = 0 relative to where it stands.
-        let gen = match &self.table {
-            LinkTable::None => return Err(ZStartError::NoTable),
-            LinkTable::Power(t) => {
-                let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
-                g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
-                Gen::Power(g)
-            }
-            LinkTable::Harmonic(t) => {
-                let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
-                g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
-                Gen::Harmonic(g)
-            }
-        };
-        let dac_code = dac.and_then(|d| d.code(0).ok()).unwrap_or(crate::machine::Z_DAC_MID_SCALE);
+    /// Starts a prepared run (a few stores: inside the tick's lock). Refused while a run exists.
+    pub fn begin(&mut self, p: ZPrepared) -> Result<(), ZStartError> {
+        if self.run.is_some() {
+            return Err(ZStartError::Running);
+        }
+        if matches!(self.table, LinkTable::None) {
+            return Err(ZStartError::NoTable);
+        }
         self.reported = 0;
-        self.run = Some(ZRun {
-            spec: *spec,
-            gen,
-            x_in_q24: x,
-            x_steps: 0,
-            z_steps: 0,
-            x_bit: 1 << spec.x_axis,
-            z_bit: z_axis.map(|a| 1u8 << a).unwrap_or(0),
-            steps,
-            dac,
-            dac_code,
-            dac_fault: false,
-            pins: Pins::default(),
-            last: ZUpdate::default(),
-            max_following_nin: 0,
-        });
+        self.run = Some(p.0);
         Ok(())
+    }
+
+    /// [`ZJob::begin`] after the last run ended: that run is replaced, or kept if refused.
+    pub fn rebegin(&mut self, p: ZPrepared) -> Result<(), ZStartError> {
+        let old = self.run.take();
+        let reported = self.reported;
+        let r = self.begin(p);
+        if r.is_err() {
+            self.run = old;
+            self.reported = reported;
+        }
+        r
+    }
+}
+
+/// A run prepared by [`ZJob::prepare`], for [`ZJob::begin`].
+#[derive(Clone, Debug)]
+pub struct ZPrepared(ZRun);
+
+fn prepare_run(
+    table: &LinkTable,
+    speed: i32,
+    spec: &ZJobSpec,
+    cfg: ZCommandConfig,
+    steps: Option<StepScale>,
+    dac: Option<DacScale>,
+    z_axis: Option<u8>,
+) -> Result<ZRun, ZStartError> {
+    let x = spec.x_start_in_q24;
+    // The slide is at rest at the job's start: Z = 0 relative to where it stands.
+    let gen = match table {
+        LinkTable::None => return Err(ZStartError::NoTable),
+        LinkTable::Power(t) => {
+            let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
+            g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
+            Gen::Power(g)
+        }
+        LinkTable::Harmonic(t) => {
+            let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
+            g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
+            Gen::Harmonic(g)
+        }
+    };
+    let dac_code = dac.and_then(|d| d.code(0).ok()).unwrap_or(crate::machine::Z_DAC_MID_SCALE);
+    Ok(ZRun {
+        spec: *spec,
+        gen,
+        x_in_q24: x,
+        x_steps: 0,
+        z_steps: 0,
+        x_bit: 1 << spec.x_axis,
+        z_bit: z_axis.map(|a| 1u8 << a).unwrap_or(0),
+        steps,
+        dac,
+        dac_code,
+        dac_fault: false,
+        pins: Pins::default(),
+        last: ZUpdate::default(),
+        max_following_nin: 0,
+    })
+}
+
+impl ZJob {
+    /// [`ZJob::start`] after the last run ended (the machine's job is over): that run is
+    /// replaced, or kept (with its figures) if the start is refused.
+    pub fn restart(&mut self, spec: &ZJobSpec, tick_hz: u32) -> Result<(), ZStartError> {
+        let old = self.run.take();
+        let reported = self.reported;
+        let r = self.start(spec, tick_hz);
+        if r.is_err() {
+            self.run = old;
+            self.reported = reported;
+        }
+        r
     }
 
     /// Forgets the run (after Abort, ClearFault, SetConfig, Home, or a refused machine start).
@@ -514,6 +600,23 @@ impl ZJob {
     /// Largest |Z command - Z output| while following, nanoinches (Status figure).
     pub fn max_following_nin(&self) -> i64 {
         self.run.as_ref().map_or(0, |r| r.max_following_nin)
+    }
+
+    /// The last sensed spindle speed, 2^-32 turn per tick.
+    pub fn sensed_speed_turn_q32_per_tick(&self) -> i32 {
+        self.speed_turn_q32_per_tick
+    }
+
+    /// [`ZJob::state`] as a number for `Status::z_state`: 0 no run, 1 idle (before the engage),
+    /// 2 running, 3 finished, 4 faulted.
+    pub fn state_code(&self) -> u8 {
+        match self.state() {
+            None => 0,
+            Some(ZState::Idle) => 1,
+            Some(ZState::Running) => 2,
+            Some(ZState::Finished) => 3,
+            Some(ZState::Faulted(_)) => 4,
+        }
     }
 }
 

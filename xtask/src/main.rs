@@ -8,6 +8,7 @@
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
+//! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A as a force job on the link firmware in QEMU (simulated plant), then with a stuck force channel, and checks settling, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
@@ -26,6 +27,7 @@ mod polar_e2e;
 mod scenarios;
 mod setup;
 mod wire_e2e;
+mod zslide_e2e;
 
 use anyhow::{bail, Context, Result};
 use firmware::Board;
@@ -44,6 +46,7 @@ commands:
   polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
   copy-e2e                                              copy a template in QEMU with teach, check it, replay the taught stream
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
+  zslide-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
@@ -112,6 +115,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             wire_e2e::test(&root)
+        }
+        "zslide-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            zslide_e2e::test(&root)
         }
         "milling-e2e" => {
             no_args(cmd, rest)?;
@@ -307,6 +315,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl runs a wire job on QEMU with an injected stall",
             Box::new(|| wire_e2e::test(root)),
+        ),
+        (
+            "end to end: motionctl runs Z-slide jobs on QEMU (360 rpm, 20 % speed step)",
+            Box::new(|| zslide_e2e::test(root)),
         ),
         (
             "end to end: motionctl runs Case A as a force job on QEMU (+ a stuck channel)",

@@ -25,6 +25,7 @@ pub mod firmware_table;
 pub mod fit;
 pub mod forex4;
 pub mod paraboloid;
+pub mod run;
 pub mod table;
 
 pub use accurate::{AccurateOptions, ToolNoseModel};
