@@ -848,6 +848,11 @@ pub fn run(
     let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });
     progress.finish();
     if let Some(csv) = opts.csv.as_mut() {
+        // The log ends with the board's final state even when noise took the last periodic
+        // status: this one was asked for, and answered reliably.
+        let wall_ms = t0.elapsed().as_millis() as u64;
+        csv.row(wall_ms, &fin, job_done(&fin))
+            .map_err(|e| err(format!("writing the CSV log: {e}")))?;
         csv.flush().map_err(|e| err(format!("writing the CSV log: {e}")))?;
     }
     report.done = job_done(&fin);
