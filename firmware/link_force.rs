@@ -14,7 +14,7 @@
 
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use motion::dda::Command;
-use motion::force::link_job::{self, ForceJob};
+use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 
@@ -138,12 +138,19 @@ pub fn status(m: &Motion, s: &mut Status) {
 /// and one control update; division-free, bounded (the frames slice is one half buffer).
 #[inline]
 pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>, overrun: bool) {
-    let Motion { dda, machine, force, .. } = m;
+    let Motion { dda, machine, force, z, .. } = m;
     let Some(job) = force.job.as_mut().filter(|j| j.is_running()) else { return };
     if overrun {
         job.source_fault(FaultCode::SensorFault);
         return;
     }
+    // The spindle encoder, read every tick (`link_zslide::sense`), gives the speed: a stopped
+    // spindle holds the feed with `SpindleStopped`.
+    let tick_hz = machine.config().wire.machine.tick_hz;
+    job.set_spindle_mrev_s(mrev_s_from_turn_q32_per_tick(
+        z.sensed_speed_turn_q32_per_tick(),
+        tick_hz,
+    ));
     let pos = machine.positions().get(job.axis()).copied().unwrap_or(0);
     for f in frames.unwrap_or(&[]) {
         // Fx, Fy, Fz: the first three force channels.

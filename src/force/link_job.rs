@@ -29,6 +29,19 @@ use super::plant::{AdcFault, MillingPlant, PlantParams, SimAdc};
 /// the calibration's mid-scale guess, force along (0.48, 0.64, 0.60)), so the board's chain has
 /// a real tare to do.
 pub const SIM_ZERO_COUNTS: [u16; 3] = [2085, 2036, 2053];
+
+/// Milli-revolutions per second (the force job's spindle unit) from a spindle speed in turns
+/// (Q32) per tick at `tick_hz` (the spindle sources' unit), rounded; the direction is dropped.
+/// Multiply and shift only (u64, saturating): it runs at sample rate.
+#[inline]
+pub fn mrev_s_from_turn_q32_per_tick(speed_turn_q32_per_tick: i32, tick_hz: u32) -> u32 {
+    let per_s_q32 = (speed_turn_q32_per_tick.unsigned_abs() as u64)
+        .saturating_mul(tick_hz as u64 * MILLI_PER_UNIT);
+    (per_s_q32.saturating_add(HALF_Q32) >> 32).min(u32::MAX as u64) as u32
+}
+
+const MILLI_PER_UNIT: u64 = 1000;
+const HALF_Q32: u64 = 1 << 31;
 pub const SIM_DIRECTION_Q16: [i32; 3] = [31_457, 41_943, 39_322];
 
 /// The control law's setup from a job's parameters; `Err` names the offending field.
@@ -522,6 +535,14 @@ impl ForceJob {
             None => [0; 3],
         };
         self.sample(&counts, position_steps)
+    }
+
+    /// The spindle speed the board measures (the real board's spindle encoder), for the chain's
+    /// tooth period and the controller's spindle-stopped hold; a simulated plant sets its own in
+    /// [`Self::tick_sim`].
+    #[inline]
+    pub fn set_spindle_mrev_s(&mut self, mrev_s: u32) {
+        self.spindle_mrev_s = mrev_s;
     }
 
     /// One ADC sample of every channel (the real board's DMA interrupt, or [`Self::tick_sim`]):

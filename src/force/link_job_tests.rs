@@ -294,3 +294,38 @@ proptest::proptest! {
         }
     }
 }
+
+#[test]
+fn the_encoder_speed_becomes_mrev_per_s_rounded_either_way_round() {
+    // 360 rpm at a 50 kHz tick and 500 rpm at 100 kHz, as the spindle sources give them.
+    for (rpm, tick_hz) in [(360.0f64, 50_000u32), (500.0, 100_000)] {
+        let q32 = (rpm / 60.0 / tick_hz as f64 * 2f64.powi(32)).round() as i32;
+        let want = (rpm / 60.0 * 1000.0).round() as u32;
+        assert_eq!(mrev_s_from_turn_q32_per_tick(q32, tick_hz), want);
+        assert_eq!(mrev_s_from_turn_q32_per_tick(-q32, tick_hz), want);
+    }
+    assert_eq!(mrev_s_from_turn_q32_per_tick(0, 50_000), 0);
+    // Out-of-range inputs saturate instead of wrapping.
+    assert_eq!(mrev_s_from_turn_q32_per_tick(i32::MIN, u32::MAX), u32::MAX);
+}
+
+#[test]
+fn a_measured_spindle_stop_holds_the_feed_on_a_real_board_job() {
+    // The real board's path: no simulated plant, samples from the ADC, the speed from the
+    // spindle encoder. Air readings at the zero counts; the spindle stops after a while.
+    let job = case_a_job();
+    let mut fj = ForceJob::new(&job, sc::TICK_HZ, false, None).unwrap();
+    fj.start(0);
+    let zero = SIM_ZERO_COUNTS;
+    let mut faults = 0;
+    for n in 0..20_000u32 {
+        let mrev_s = if n < 10_000 { job.spindle_mrev_s } else { 0 };
+        fj.set_spindle_mrev_s(mrev_s);
+        faults = fj.sample(&zero, 0).fault_bits;
+        if faults != 0 {
+            assert!(n >= 10_000, "a fault before the spindle stopped: {faults:#x} at {n}");
+            break;
+        }
+    }
+    assert_eq!(faults, FaultCode::SpindleStopped.bit());
+}
