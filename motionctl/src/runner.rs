@@ -272,6 +272,23 @@ fn link_err(e: LinkFailure) -> RunError {
     err(e.to_string())
 }
 
+/// One request answered: the board's reply, or an error naming `what` with the refusal (a
+/// link failure as it is). The job runners' one way to ask.
+pub fn ask(s: &mut Session, body: RequestBody, what: &str) -> anyhow::Result<Reply> {
+    match s.request(body).map_err(|e| anyhow::anyhow!("{e}"))? {
+        Ok(r) => Ok(r),
+        Err(r) => anyhow::bail!("{what} refused: {}", describe_rejection(&r)),
+    }
+}
+
+/// The board's status now ([`ask`] with `GetStatus`).
+pub fn ask_status(s: &mut Session) -> anyhow::Result<Status> {
+    match ask(s, RequestBody::GetStatus, "GetStatus")? {
+        Reply::Status(st) => Ok(st),
+        _ => anyhow::bail!("the board answered GetStatus without a status"),
+    }
+}
+
 /// Brings a connected board to `Ready` with `cfg`, as every job runner starts: refuses a board
 /// with a latched fault other than `ConfigMissing` or one that is busy, sends `cfg` when the
 /// board's differs (or a fault is latched), clears `ConfigMissing` (the one fault sending the

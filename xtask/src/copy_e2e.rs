@@ -7,34 +7,16 @@
 //! steps equal the host model (`CopyMode` on the host fed the counts the stream records, at
 //! 3:2); the replay fires every event and ends on the copied positions at 1:1.
 
-use crate::e2e::{build_motionctl, run_motionctl};
+use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
 use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
 use motion::polar::playback::SizeScale;
-use std::collections::BTreeMap;
 use std::path::Path;
 
 const TEMPLATE: &str = "limacon:0.6";
 const THETA_END_RAD: f64 = 0.6;
 const SIZE: (u8, u8) = (3, 2);
 const REPLAY_SPEED: &str = "2";
-
-/// `<prefix> k=v ...` -> map.
-fn summary(stdout: &str, prefix: &str) -> Result<BTreeMap<String, i64>> {
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with(prefix))
-        .with_context(|| format!("motionctl printed no {prefix}line"))?;
-    let mut m = BTreeMap::new();
-    for kv in line.split_whitespace().skip(1) {
-        if let Some((k, v)) = kv.split_once('=') {
-            if let Ok(x) = v.parse::<f64>() {
-                m.insert(k.to_string(), x as i64);
-            }
-        }
-    }
-    Ok(m)
-}
 
 /// The `cargo xtask test` step (also `cargo xtask copy-e2e`).
 pub fn test(root: &Path) -> Result<()> {
@@ -64,7 +46,7 @@ pub fn test(root: &Path) -> Result<()> {
     if !ok {
         bail!("motionctl polar copy failed (see its output above)");
     }
-    let c = summary(&stdout, "copy-summary ")?;
+    let c = summary_ints(&stdout, "copy-summary ")?;
     let get = |k: &str| c.get(k).copied().unwrap_or(i64::MIN);
     let bytes = std::fs::read(&taught).with_context(|| format!("reading {}", taught.display()))?;
     let model = motionctl::polar::copy::model(&bytes, scale)?;
@@ -111,7 +93,7 @@ pub fn test(root: &Path) -> Result<()> {
     if !ok {
         bail!("motionctl polar run of the taught stream failed (see its output above)");
     }
-    let r = summary(&stdout, "polar-summary ")?;
+    let r = summary_ints(&stdout, "polar-summary ")?;
     let rget = |k: &str| r.get(k).copied().unwrap_or(i64::MIN);
     if rget("events_fired") != model.events as i64 {
         problems.push(format!("replay fired {} of {}", rget("events_fired"), model.events));

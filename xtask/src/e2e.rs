@@ -94,6 +94,28 @@ pub fn model(moves: &[([i64; 3], f64)]) -> Result<(usize, [i64; 3])> {
     Ok((n, [report.positions[0], report.positions[1], report.positions[2]]))
 }
 
+/// A `<prefix>k=v ...` line of motionctl's output -> map of the whole-number values (a
+/// decimal one truncated; other values left out).
+pub(crate) fn summary_ints(
+    stdout: &str,
+    prefix: &str,
+) -> Result<std::collections::BTreeMap<String, i64>> {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with(prefix))
+        .with_context(|| format!("motionctl printed no {}line", prefix))?;
+    let mut m = std::collections::BTreeMap::new();
+    for kv in line.split_whitespace().skip(1) {
+        if let Some((k, v)) = kv.split_once('=') {
+            let x = v.parse::<i64>().ok().or_else(|| v.parse::<f64>().ok().map(|x| x as i64));
+            if let Some(x) = x {
+                m.insert(k.to_string(), x);
+            }
+        }
+    }
+    Ok(m)
+}
+
 /// `motionctl-summary k=v ...` -> map.
 fn summary(stdout: &str) -> Result<std::collections::BTreeMap<String, f64>> {
     let line = stdout

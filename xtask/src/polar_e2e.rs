@@ -9,37 +9,19 @@
 //! real time here (the 80-block arc, 9.2 s of board time, took 129 s; CI's machine is slower
 //! still): 24 blocks keep the step under a minute.
 
-use crate::e2e::{build_motionctl, run_motionctl};
+use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
 use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
 use motion::polar::limacon_stream::BYTES;
 use motion::polar::playback::SizeScale;
 use motion::polar::stream::decode_all;
 use motion::Rate;
-use std::collections::BTreeMap;
 use std::path::Path;
 
 const SPEED: &str = "2";
 /// Blocks of the limacon stream played (an open arc; see the module doc).
 const BLOCKS: usize = 24;
 const SIZE: (u8, u8) = (3, 2);
-
-/// `polar-summary k=v ...` -> map.
-fn summary(stdout: &str) -> Result<BTreeMap<String, i64>> {
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with("polar-summary "))
-        .context("motionctl printed no polar-summary line")?;
-    let mut m = BTreeMap::new();
-    for kv in line.split_whitespace().skip(1) {
-        if let Some((k, v)) = kv.split_once('=') {
-            if let Ok(x) = v.parse::<f64>() {
-                m.insert(k.to_string(), x as i64);
-            }
-        }
-    }
-    Ok(m)
-}
 
 /// The `cargo xtask test` step (also `cargo xtask polar-e2e`).
 pub fn test(root: &Path) -> Result<()> {
@@ -75,7 +57,7 @@ pub fn test(root: &Path) -> Result<()> {
     if !ok {
         bail!("motionctl polar run failed (see its output above)");
     }
-    let m = summary(&stdout)?;
+    let m = summary_ints(&stdout, "polar-summary ")?;
     let get = |k: &str| m.get(k).copied().unwrap_or(i64::MIN);
     let mut problems = Vec::new();
     if get("events_fired") != events as i64 {

@@ -6,33 +6,15 @@
 //! of the segments' steps (a lost or extra step anywhere in the stop, retrace or return shows).
 //! QEMU runs the idle 10 kHz tick well ahead of the wall clock: ~20 s of wall time.
 
-use crate::e2e::{build_motionctl, run_motionctl};
+use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
 use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
-use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Segments of the planned job run (the first is the circle's start-up move).
 const SEGMENTS: std::ops::Range<usize> = 1..5;
 const STALL_AT_S: &str = "8";
 const STALL_FOR_S: &str = "3";
-
-/// `wire-summary k=v ...` -> map.
-fn summary(stdout: &str) -> Result<BTreeMap<String, i64>> {
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with("wire-summary "))
-        .context("motionctl printed no wire-summary line")?;
-    let mut m = BTreeMap::new();
-    for kv in line.split_whitespace().skip(1) {
-        if let Some((k, v)) = kv.split_once('=') {
-            if let Ok(x) = v.parse::<i64>() {
-                m.insert(k.to_string(), x);
-            }
-        }
-    }
-    Ok(m)
-}
 
 /// The `cargo xtask test` step (also `cargo xtask wire-e2e`).
 pub fn test(root: &Path) -> Result<()> {
@@ -66,7 +48,7 @@ pub fn test(root: &Path) -> Result<()> {
     if !ok {
         bail!("motionctl wire run failed (see its output above)");
     }
-    let m = summary(&stdout)?;
+    let m = summary_ints(&stdout, "wire-summary ")?;
     let get = |k: &str| m.get(k).copied().unwrap_or(i64::MIN);
     let pos = [get("x"), get("y"), get("beta"), get("alpha")];
     let mut problems = Vec::new();

@@ -8,29 +8,11 @@
 //! error near the model's (the spindle's phase at the start is the board's), and after the step
 //! the board senses the stepped speed (the command tracks it: no fault, the same end).
 
-use crate::e2e::{build_motionctl, run_motionctl};
+use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
 use crate::firmware::{self, Board};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use motionctl::fourier::run::{self as zrun, WireTable, ZOutput, ZRunOptions};
-use std::collections::BTreeMap;
 use std::path::Path;
-
-/// `zslide-summary k=v ...` -> map.
-fn summary(stdout: &str) -> Result<BTreeMap<String, i64>> {
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with("zslide-summary "))
-        .context("motionctl printed no zslide-summary line")?;
-    let mut m = BTreeMap::new();
-    for kv in line.split_whitespace().skip(1) {
-        if let Some((k, v)) = kv.split_once('=') {
-            if let Ok(x) = v.parse::<i64>() {
-                m.insert(k.to_string(), x);
-            }
-        }
-    }
-    Ok(m)
-}
 
 /// The `cargo xtask test` step (also `cargo xtask zslide-e2e`).
 pub fn test(root: &Path) -> Result<()> {
@@ -70,7 +52,7 @@ pub fn test(root: &Path) -> Result<()> {
         if !ok {
             bail!("motionctl fourier run ({output:?}) failed (see its output above)");
         }
-        let m = summary(&stdout)?;
+        let m = summary_ints(&stdout, "zslide-summary ")?;
         let get = |k: &str| m.get(k).copied().unwrap_or(i64::MIN);
         let cfg = zrun::machine_config(o.tick_hz);
         let spec = zrun::job_spec(&o)?;

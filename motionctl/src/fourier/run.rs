@@ -21,7 +21,7 @@ use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
     AxisScale, BlockBytes, FaultCode, HomingConfig, HostConfig, HostEvent, Reply, RequestBody,
-    Status, WireConfig, CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
+    WireConfig, CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle, SpindleSource};
 use motion::zslide::link_job::{
@@ -381,18 +381,7 @@ pub fn run(
         bail!("the board ({:?}) has no simulated spindle: no speed step", info.firmware.as_str());
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
-    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
-        match s.request(body).map_err(link)? {
-            Ok(r) => Ok(r),
-            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
-        }
-    };
-    let status = |s: &mut Session| -> anyhow::Result<Status> {
-        match query(s, RequestBody::GetStatus, "GetStatus")? {
-            Reply::Status(st) => Ok(st),
-            _ => bail!("the board answered GetStatus without a status"),
-        }
-    };
+    let (query, status) = (runner::ask, runner::ask_status);
     runner::ready_board(&mut s, cfg, o.home, "Z-slide machine (Z, X)", say)
         .map_err(|e| anyhow!("{e}"))?;
     if sim {

@@ -11,7 +11,7 @@
 //! an injected fault, the hold with that fault's code and the position the board counted.
 
 use super::job::MillingJob;
-use crate::link::{describe_rejection, LinkFailure, Session};
+use crate::link::{LinkFailure, Session};
 use crate::runner;
 use crate::transport::Transport;
 use anyhow::{anyhow, bail};
@@ -190,18 +190,7 @@ pub fn run(
         );
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
-    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
-        match s.request(body).map_err(link)? {
-            Ok(r) => Ok(r),
-            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
-        }
-    };
-    let status = |s: &mut Session| -> anyhow::Result<Status> {
-        match query(s, RequestBody::GetStatus, "GetStatus")? {
-            Reply::Status(st) => Ok(st),
-            _ => bail!("the board answered GetStatus without a status"),
-        }
-    };
+    let (query, status) = (runner::ask, runner::ask_status);
     runner::ready_board(&mut s, cfg, opts.home, "milling machine (X)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     if simulated {

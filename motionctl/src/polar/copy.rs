@@ -11,7 +11,7 @@
 //! * the board's final (theta, r) steps = the host model: the firmware's own `CopyMode` fed the
 //!   counts the taught stream records, tick by tick, with the same size scale.
 
-use crate::link::{describe_rejection, LinkFailure, Session};
+use crate::link::{LinkFailure, Session};
 use crate::runner;
 use crate::transport::Transport;
 use motion::polar::copy::CopyMode;
@@ -202,18 +202,7 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
         bail!("--template needs a simulator board (CAP_SIM_INPUTS); on hardware move the arm");
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
-    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
-        match s.request(body).map_err(link)? {
-            Ok(r) => Ok(r),
-            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
-        }
-    };
-    let status = |s: &mut Session| -> anyhow::Result<Status> {
-        match query(s, RequestBody::GetStatus, "GetStatus")? {
-            Reply::Status(st) => Ok(st),
-            _ => bail!("the board answered GetStatus without a status"),
-        }
-    };
+    let (query, status) = (runner::ask, runner::ask_status);
     runner::ready_board(&mut s, cfg, opts.home, "polar machine (theta, r)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     let base = status(&mut s)?;

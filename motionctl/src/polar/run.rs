@@ -16,7 +16,7 @@ use motion::machine::MachineState;
 use motion::polar::playback::{Playback, SizeScale};
 use motion::polar::stream::{decode_all, parse_block};
 use motion::protocol::{
-    BlockBytes, EventBlock, FaultCode, HostConfig, HostEvent, Reply, RequestBody, Status,
+    BlockBytes, EventBlock, FaultCode, HostConfig, HostEvent, Reply, RequestBody,
 };
 use motion::segment::Rate;
 use std::collections::HashMap;
@@ -215,18 +215,7 @@ pub fn run(
         bail!("the board ({:?}) does not play event jobs (no CAP_EVENTS)", info.firmware.as_str());
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
-    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
-        match s.request(body).map_err(link)? {
-            Ok(r) => Ok(r),
-            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
-        }
-    };
-    let status = |s: &mut Session| -> anyhow::Result<Status> {
-        match query(s, RequestBody::GetStatus, "GetStatus")? {
-            Reply::Status(st) => Ok(st),
-            _ => bail!("the board answered GetStatus without a status"),
-        }
-    };
+    let (query, status) = (runner::ask, runner::ask_status);
     runner::ready_board(&mut s, cfg, opts.home, "polar machine (theta, r)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     query(&mut s, RequestBody::SetOverride { rate_bits: speed.to_bits() }, "SetOverride")?;

@@ -16,8 +16,8 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, Status, WireConfig,
-    WireJobParams, CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
+    FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, WireConfig, WireJobParams,
+    CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
 use std::collections::HashMap;
@@ -128,18 +128,7 @@ pub fn run(
         );
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
-    let query = |s: &mut Session, body: RequestBody, what: &str| -> anyhow::Result<Reply> {
-        match s.request(body).map_err(link)? {
-            Ok(r) => Ok(r),
-            Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
-        }
-    };
-    let status = |s: &mut Session| -> anyhow::Result<Status> {
-        match query(s, RequestBody::GetStatus, "GetStatus")? {
-            Reply::Status(st) => Ok(st),
-            _ => bail!("the board answered GetStatus without a status"),
-        }
-    };
+    let (query, status) = (runner::ask, runner::ask_status);
     runner::ready_board(&mut s, cfg, opts.home, "wire machine (X, Y, beta, alpha)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     if opts.stall.is_some() {
