@@ -42,6 +42,26 @@ pub fn markdown(out: &mut impl core::fmt::Write) -> core::fmt::Result {
     faults::markdown_reactions(out)
 }
 
+/// Test rig: a machine booted with `cfg` (no homing switches), homed to `Ready`, with its DDA
+/// and preparer; the setup every job's host tests start from.
+#[cfg(test)]
+pub(crate) fn homed(cfg: BoardConfig) -> (Machine, crate::dda::Dda, crate::dda::Preparer) {
+    cfg.validate().unwrap();
+    let mut m = Machine::new();
+    m.boot(Ok(cfg));
+    let mut dda = crate::dda::Dda::new(&cfg.wire.machine).unwrap();
+    let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
+    m.command(MachineCommand::Home, &mut dda).unwrap();
+    for _ in 0..10 {
+        m.tick(&mut dda, &Inputs::QUIET);
+        if m.wants_background() {
+            m.background(&mut dda, &mut prep);
+        }
+    }
+    assert_eq!(m.state(), MachineState::Ready);
+    (m, dda, prep)
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

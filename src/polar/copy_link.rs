@@ -455,18 +455,7 @@ mod tests {
         use crate::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
         use crate::protocol::HomingConfig;
         let cfg = BoardConfig::with_homing(crate::polar::job::wire_config(), &HomingConfig::NONE);
-        let mut m = Machine::new();
-        m.boot(Ok(cfg));
-        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
-        let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
-        m.command(MachineCommand::Home, &mut dda).unwrap();
-        for _ in 0..10 {
-            m.tick(&mut dda, &Inputs::QUIET);
-            if m.wants_background() {
-                m.background(&mut dda, &mut prep);
-            }
-        }
-        assert_eq!(m.state(), MachineState::Ready);
+        let (mut m, mut dda, mut prep) = crate::machine::homed(cfg);
         m.command(MachineCommand::StartCopy, &mut dda).unwrap();
         assert_eq!(m.state(), MachineState::Running);
         assert!(m.command(MachineCommand::StartCopy, &mut dda).is_err());

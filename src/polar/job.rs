@@ -74,20 +74,8 @@ mod tests {
 
     /// A homed polar machine in `Ready` and its DDA.
     fn ready() -> (Machine, Dda) {
-        let cfg = BoardConfig::with_homing(wire_config(), &HomingConfig::NONE);
-        cfg.validate().unwrap();
-        let mut m = Machine::new();
-        m.boot(Ok(cfg));
-        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
-        m.command(MachineCommand::Home, &mut dda).unwrap();
-        let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
-        for _ in 0..10 {
-            m.tick(&mut dda, &Inputs::QUIET);
-            if m.wants_background() {
-                m.background(&mut dda, &mut prep);
-            }
-        }
-        assert_eq!(m.state(), MachineState::Ready);
+        let (m, dda, _) =
+            crate::machine::homed(BoardConfig::with_homing(wire_config(), &HomingConfig::NONE));
         (m, dda)
     }
 

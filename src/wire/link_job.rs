@@ -309,21 +309,7 @@ mod tests {
     }
 
     fn ready() -> (Machine, Dda, crate::dda::Preparer) {
-        let cfg = board();
-        cfg.validate().unwrap();
-        let mut m = Machine::new();
-        m.boot(Ok(cfg));
-        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
-        let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
-        m.command(MachineCommand::Home, &mut dda).unwrap();
-        for _ in 0..10 {
-            m.tick(&mut dda, &Inputs::QUIET);
-            if m.wants_background() {
-                m.background(&mut dda, &mut prep);
-            }
-        }
-        assert_eq!(m.state(), MachineState::Ready);
-        (m, dda, prep)
+        crate::machine::homed(board())
     }
 
     fn job() -> &'static [JobSegment] {

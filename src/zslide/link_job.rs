@@ -800,19 +800,10 @@ mod tests {
     }
 
     fn ready() -> (Machine, Dda) {
-        let cfg = BoardConfig::with_homing(crate::polar::job::wire_config(), &HomingConfig::NONE);
-        let mut m = Machine::new();
-        m.boot(Ok(cfg));
-        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
-        m.command(MachineCommand::Home, &mut dda).unwrap();
-        let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
-        for _ in 0..10 {
-            m.tick(&mut dda, &Inputs::QUIET);
-            if m.wants_background() {
-                m.background(&mut dda, &mut prep);
-            }
-        }
-        assert_eq!(m.state(), MachineState::Ready);
+        let (m, dda, _) = crate::machine::homed(BoardConfig::with_homing(
+            crate::polar::job::wire_config(),
+            &HomingConfig::NONE,
+        ));
         (m, dda)
     }
 
