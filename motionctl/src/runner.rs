@@ -233,14 +233,15 @@ pub fn axes_of(job: &Job) -> Vec<(String, f64)> {
     job.machine.axes.iter().map(|a| (a.name.clone(), a.steps_per_mm)).collect()
 }
 
-fn fault_names(bits: u32) -> String {
+/// The names of the fault codes set in `bits`, comma-separated.
+pub fn fault_names(bits: u32) -> String {
     let names: Vec<&str> =
         FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
     names.join(", ")
 }
 
 /// `a` at or after `b` in seq order.
-fn seq_at_or_after(a: u32, b: u32) -> bool {
+pub fn seq_at_or_after(a: u32, b: u32) -> bool {
     (a.wrapping_sub(b) as i32) >= 0
 }
 

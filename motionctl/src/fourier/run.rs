@@ -14,14 +14,15 @@
 
 use crate::link::{describe_rejection, LinkFailure, Session};
 use crate::runner;
+use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use anyhow::{anyhow, bail, Context};
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
-    AxisScale, BlockBytes, FaultCode, HomingConfig, HostConfig, HostEvent, Reply, RequestBody,
-    WireConfig, CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
+    AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, WireConfig,
+    CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle, SpindleSource};
 use motion::zslide::link_job::{
@@ -346,16 +347,6 @@ impl ZRunReport {
     pub fn ok(&self) -> bool {
         self.problems.is_empty()
     }
-}
-
-fn fault_names(bits: u32) -> String {
-    let names: Vec<&str> =
-        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
-    names.join(", ")
-}
-
-fn seq_at_or_after(a: u32, b: u32) -> bool {
-    (a.wrapping_sub(b) as i32) >= 0
 }
 
 /// Connects, readies the board, uploads `table`, runs the job and checks it; see the module doc.

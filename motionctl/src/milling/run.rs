@@ -13,6 +13,7 @@
 use super::job::MillingJob;
 use crate::link::{LinkFailure, Session};
 use crate::runner;
+use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::force::link_job::{job_params, sim_params};
@@ -108,25 +109,11 @@ impl MillingRunReport {
     }
 }
 
-fn fault_names(bits: u32) -> String {
-    let names: Vec<&str> =
-        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
-    if names.is_empty() {
-        "none".into()
-    } else {
-        names.join(", ")
-    }
-}
-
 /// The Case A machine as the link's config: X only, 1 um per step.
 pub fn wire_config() -> WireConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
     WireConfig { machine: sc::machine(), scale: [scale; motion::MAX_AXES] }
-}
-
-fn seq_at_or_after(a: u32, b: u32) -> bool {
-    (a.wrapping_sub(b) as i32) >= 0
 }
 
 /// Judges a board trace: settling after the depth step at `step_at_steps` of X (from the

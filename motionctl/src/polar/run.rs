@@ -11,13 +11,12 @@
 
 use crate::link::{describe_rejection, LinkFailure, Session};
 use crate::runner;
+use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use motion::machine::MachineState;
 use motion::polar::playback::{Playback, SizeScale};
 use motion::polar::stream::{decode_all, parse_block};
-use motion::protocol::{
-    BlockBytes, EventBlock, FaultCode, HostConfig, HostEvent, Reply, RequestBody,
-};
+use motion::protocol::{BlockBytes, EventBlock, HostConfig, HostEvent, Reply, RequestBody};
 use motion::segment::Rate;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -153,20 +152,6 @@ impl PolarReport {
             self.bad_frames_in,
         )
     }
-}
-
-fn fault_names(bits: u32) -> String {
-    let v: Vec<&str> =
-        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
-    if v.is_empty() {
-        "none".into()
-    } else {
-        v.join(", ")
-    }
-}
-
-fn seq_at_or_after(a: u32, b: u32) -> bool {
-    (a.wrapping_sub(b) as i32) >= 0
 }
 
 enum Pending {

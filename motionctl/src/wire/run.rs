@@ -12,11 +12,12 @@
 
 use crate::link::{describe_rejection, LinkFailure, Session};
 use crate::runner;
+use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, WireConfig, WireJobParams,
+    HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, WireConfig, WireJobParams,
     CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
@@ -82,16 +83,6 @@ enum Pending {
     Start,
     Poll,
     Inject,
-}
-
-fn fault_names(bits: u32) -> String {
-    let names: Vec<&str> =
-        FaultCode::ALL.iter().filter(|f| bits & f.bit() != 0).map(|f| f.name()).collect();
-    names.join(", ")
-}
-
-fn seq_at_or_after(a: u32, b: u32) -> bool {
-    (a.wrapping_sub(b) as i32) >= 0
 }
 
 /// Connects, configures and runs `segments` as a wire job; see the module doc. `expected` is
