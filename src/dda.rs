@@ -17,6 +17,10 @@ use crate::fixed_math::isqrt_u64;
 use crate::segment::{order_hash, Rate, Segment, SegmentError, ORDER_HASH_START};
 use heapless::{Deque, Vec};
 
+pub mod lane_kernel_check;
+pub mod lanes;
+use lanes::{Lane, Lanes};
+
 const ONE: u32 = 1 << Rate::FRAC_NBITS;
 const RATE_FRAC_BITS: u32 = Rate::FRAC_NBITS;
 /// Fastest virtual clock: override 2.0 at nominal feed.
@@ -24,6 +28,8 @@ const MAX_RATE: u32 = 2 * ONE;
 const RING_MASK: u64 = TIMING_RING_TICKS as u64 - 1;
 /// Prepared segments the DDA holds beyond the active one.
 pub const READY_DEPTH: usize = 4;
+/// Ticks of rising edges the cruise path keeps in `Dda::hist` (a byte each in a u32).
+const HIST_TICKS: u32 = 4;
 /// Tick-stamped commands waiting to take effect.
 pub const MAX_SCHEDULED: usize = 8;
 
@@ -37,6 +43,26 @@ impl StepOutput {
     #[inline(always)]
     pub const fn new(fall: u8, dir_write: u8, dir: u8, rise: u8) -> Self {
         StepOutput(fall as u32 | (dir_write as u32) << 8 | (dir as u32) << 16 | (rise as u32) << 24)
+    }
+
+    /// Only falling edges (`fall`: a mask in the low byte, nothing above) at DIR levels `dir`
+    /// (from [`StepOutput::dir_bits`]).
+    #[inline(always)]
+    const fn falling(fall: u32, dir: u32) -> Self {
+        StepOutput(fall | dir)
+    }
+
+    /// DIR levels in their place in the word.
+    #[inline(always)]
+    const fn dir_bits(dir: u8) -> u32 {
+        (dir as u32) << 16
+    }
+
+    /// Adds rising edges (`rise`: a mask in the low byte, nothing above) to an output that has
+    /// none.
+    #[inline(always)]
+    const fn with_rise(self, rise: u32) -> Self {
+        StepOutput(self.0 | rise << 24)
     }
 
     /// STEP pins to bring low.
@@ -128,19 +154,14 @@ pub enum MotionState {
     Held,
 }
 
-/// Slot masks: bit k set when compacted lane k steps.
-const SLOT_MASKS: usize = 1 << MAX_AXES;
-
 /// A segment converted for the tick path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Prepared {
     steps: [i32; MAX_AXES],
-    n_active: u8,
-    /// Axis index of each compacted lane.
-    idx: [u8; MAX_AXES],
+    /// Steps per axis (0: the axis does not move).
     d: [u32; MAX_AXES],
-    /// Axis mask for each mask of stepping lanes.
-    slot_axes: [u8; SLOT_MASKS],
+    /// The six-lane kernel is needed (an axis above 3 moves).
+    wide: bool,
     /// floor(2^32 / (2 * dr)): lets the tick count cruise ticks without dividing.
     inv_two_dr: u32,
     /// DIR levels of the moving axes.
@@ -181,10 +202,8 @@ impl Preparer {
         let t = seg.duration_ticks;
         let mut p = Prepared {
             steps: seg.steps,
-            n_active: 0,
-            idx: [0; MAX_AXES],
             d: [0; MAX_AXES],
-            slot_axes: [0; SLOT_MASKS],
+            wide: false,
             inv_two_dr: 0,
             dir: 0,
             active: 0,
@@ -204,10 +223,7 @@ impl Preparer {
             if d == 0 {
                 continue;
             }
-            let k = p.n_active as usize;
-            p.idx[k] = i as u8;
-            p.d[k] = d;
-            p.n_active += 1;
+            p.d[i] = d;
             p.active |= 1 << i;
             if s < 0 {
                 p.dir |= 1 << i;
@@ -225,15 +241,7 @@ impl Preparer {
         p.cap = p.cap.min(cap.min(MAX_RATE as u64) as u32);
         p.dr = seg.accel_per_tick.to_bits().clamp(1, ONE);
         p.inv_two_dr = ((1u64 << 32) / (2 * p.dr as u64)).min(u32::MAX as u64) as u32;
-        // Lane k is bit n - 1 - k of the Bresenham mask (see `Dda::bresenham`).
-        let n = p.n_active as usize;
-        for (mask, axes) in p.slot_axes.iter_mut().enumerate() {
-            for k in 0..n {
-                if mask & (1 << (n - 1 - k)) != 0 {
-                    *axes |= 1 << p.idx[k];
-                }
-            }
-        }
+        p.wide = lanes::needs_wide(p.active);
         // Rate reached after one virtual tick of acceleration from rest: moves start there
         // instead of creeping, and decelerations never stall short of the segment end.
         p.floor = isqrt_u64(2 * p.dr as u64 * ONE as u64).max(p.dr).min(p.cap);
@@ -250,15 +258,6 @@ impl Preparer {
     }
 }
 
-/// One moving axis of the active segment: Bresenham error and step count, side by side so the
-/// tick loads both at once.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct Lane {
-    /// Bresenham error `e` in `[-t, 0)`, stored as the u32 `2^32 + e`.
-    err: u32,
-    d: u32,
-}
-
 /// Per-axis state while a DIR change or deferred steps hold the axis back.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Gate {
@@ -267,18 +266,20 @@ struct Gate {
     open_at: u64,
 }
 
+/// `repr(C)` with the lanes first: the cruise tick's `ldm` takes the DDA's own address.
+#[repr(C)]
 pub struct Dda {
+    lanes: Lanes,
     timing: TickTiming,
     now: u64,
 
     // Active segment (`remaining == 0`: none).
     remaining: u32,
     t: u32,
+    /// `2^32 - t`: the lanes' correction when they step.
+    minus_t: u32,
     h: u32,
-    n_active: u8,
-    idx: [u8; MAX_AXES],
-    lanes: [Lane; MAX_AXES],
-    slot_axes: [u8; SLOT_MASKS],
+    wide: bool,
     seg_dir: u8,
     seg_steps: [i32; MAX_AXES],
     seg_exit: u32,
@@ -297,12 +298,19 @@ pub struct Dda {
     cruise_ticks: u32,
     cruise_len: u32,
     cruise_phase: u32,
+    /// Rising edges of the last [`HIST_TICKS`] ticks while cruising, newest in the low byte.
+    hist: u32,
+    /// DIR levels in [`StepOutput`]'s place; DIR cannot change during a cruise.
+    cruise_dir: u32,
+    /// The cruise runs the six-lane kernel (a copy of `wide`, next to the countdown).
+    cruise_wide: bool,
     idle_ticks: u32,
     cruise_enabled: bool,
 
+    // `rate` and `phase` side by side: the cruise tick loads both at once.
     rate: u32,
-    rate_sq: u64,
     phase: u32,
+    rate_sq: u64,
     ovr: u32,
     holding: bool,
 
@@ -334,11 +342,10 @@ impl Dda {
             now: 0,
             remaining: 0,
             t: 0,
+            minus_t: 0,
             h: 0,
-            n_active: 0,
-            idx: [0; MAX_AXES],
             lanes: [Lane::default(); MAX_AXES],
-            slot_axes: [0; SLOT_MASKS],
+            wide: false,
             seg_dir: 0,
             seg_steps: [0; MAX_AXES],
             seg_exit: 0,
@@ -352,6 +359,9 @@ impl Dda {
             cruise_ticks: 0,
             cruise_len: 0,
             cruise_phase: 0,
+            hist: 0,
+            cruise_dir: 0,
+            cruise_wide: false,
             idle_ticks: 0,
             cruise_enabled: true,
             rate: 0,
@@ -379,12 +389,17 @@ impl Dda {
     /// One DDA tick: call at exactly `tick_hz`, apply the result to the pins.
     #[inline]
     pub fn tick(&mut self) -> StepOutput {
-        self.now += 1;
         if self.cruise_ticks != 0 {
             self.cruise_ticks -= 1;
-            return self.cruise_tick();
+            // Direct calls (no function pointer): the divide check follows every one.
+            return if self.cruise_wide {
+                self.cruise_tick::<true>()
+            } else {
+                self.cruise_tick::<false>()
+            };
         }
         if self.idle_ticks != 0 {
+            self.now += 1;
             self.idle_ticks -= 1;
             return StepOutput::new(0, 0, self.dir, 0);
         }
@@ -393,32 +408,36 @@ impl Dda {
 
     /// A tick at a settled rate (<= 1.0) with one-tick pulses, no gate and no command due, at
     /// least a virtual tick before the segment ends or deceleration could begin: exactly what
-    /// [`Dda::full_tick`] would do there, without re-deriving the rate. `remaining` is not
-    /// counted here (see [`Dda::cruise_vticks`]). Out of line: the idle path stays free of
-    /// the register saves the lane kernel needs.
+    /// [`Dda::full_tick`] would do there, without re-deriving the rate. Only the phase (held
+    /// as `phase - ONE`, wrapping, while cruising), the lanes and `hist` change: `now`, `remaining`, the budget and the edge ring are brought
+    /// up to date on leaving (see [`Dda::leave_fast`]). One instance per lane count
+    /// (`WIDE`: six lanes), picked on entering the cruise. Out of line: the idle path stays
+    /// free of the register saves the lane kernel needs.
     #[inline(never)]
-    fn cruise_tick(&mut self) -> StepOutput {
-        let now = self.now;
-        let slot = (now & RING_MASK) as usize;
-        let fall = self.ring[(now.wrapping_sub(1) & RING_MASK) as usize];
-        let p = self.phase + self.rate;
-        if p < ONE {
+    fn cruise_tick<const WIDE: bool>(&mut self) -> StepOutput {
+        let hist = self.hist;
+        // One-tick pulses: what rose last tick (the low byte) falls now.
+        let fall = hist & 0xff;
+        // The phase is kept less ONE here: the add carries exactly when a virtual tick is due.
+        let (p, vtick) = self.phase.overflowing_add(self.rate);
+        if !vtick {
             self.phase = p;
-            self.ring[slot] = 0;
-            return StepOutput::new(fall, 0, self.dir, 0);
+            self.hist = hist << 8;
+            return StepOutput::falling(fall, self.cruise_dir);
         }
-        self.phase = p - ONE;
-        let rise = self.slot_axes[self.bresenham() as usize & (SLOT_MASKS - 1)];
-        self.ring[slot] = rise;
-        if rise & fall != 0 {
-            return self.cruise_too_soon(slot, fall, rise);
+        self.phase = p.wrapping_sub(ONE);
+        let rise = lanes::step(&mut self.lanes, WIDE, self.minus_t);
+        // `rise` has no bits past the low byte, so this is `rise & fall`.
+        if rise & hist != 0 {
+            return self.cruise_too_soon(fall as u8, rise as u8);
         }
-        StepOutput::new(fall, 0, self.dir, rise)
+        self.hist = (hist << 8) | rise;
+        StepOutput::falling(fall, self.cruise_dir).with_rise(rise)
     }
 
     /// Virtual ticks the cruise path has run: its phase advanced by `rate` every tick.
     fn cruise_vticks(&self) -> u32 {
-        let ticks = (self.cruise_len - self.cruise_ticks) as u64;
+        let ticks = self.cruise_elapsed() as u64;
         ((self.cruise_phase as u64 + ticks * self.rate as u64) >> RATE_FRAC_BITS) as u32
     }
 
@@ -426,8 +445,11 @@ impl Dda {
     /// would (held back, released when allowed).
     #[cold]
     #[inline(never)]
-    fn cruise_too_soon(&mut self, slot: usize, fall: u8, rise: u8) -> StepOutput {
+    fn cruise_too_soon(&mut self, fall: u8, rise: u8) -> StepOutput {
+        // This tick's edges are settled below, in the rebuilt ring.
+        self.hist <<= 8;
         self.leave_fast();
+        let slot = (self.now & RING_MASK) as usize;
         self.settle_edges(slot, fall, rise, rise & fall)
     }
 
@@ -447,13 +469,28 @@ impl Dda {
         StepOutput::new(fall, dir_write, self.dir, rise)
     }
 
-    /// Leaves a fast path; after cruising, brings `remaining` and the budget up to date.
+    /// Ticks the cruise path has run (the current one included while it runs).
+    fn cruise_elapsed(&self) -> u32 {
+        self.cruise_len - self.cruise_ticks
+    }
+
+    /// Leaves a fast path; after cruising, brings `now`, `remaining`, the budget and the edge
+    /// ring up to date. The ring gets the last [`HIST_TICKS`] ticks from `hist` and zeros
+    /// before them: with one-tick pulses and at most [`HIST_TICKS`] ticks of DIR hold, nothing
+    /// reads further back (see [`Dda::try_cruise`]).
     #[inline]
     fn leave_fast(&mut self) {
         if self.cruise_len != 0 {
             let vticks = self.cruise_vticks();
             self.remaining -= vticks;
             self.budget -= vticks as u64 * self.two_dr;
+            self.now += self.cruise_elapsed() as u64;
+            self.phase = self.phase.wrapping_add(ONE);
+            self.ring = [0; TIMING_RING_TICKS as usize];
+            for back in 0..HIST_TICKS {
+                self.ring[(self.now.wrapping_sub(back as u64) & RING_MASK) as usize] =
+                    (self.hist >> (8 * back)) as u8;
+            }
             self.cruise_len = 0;
             self.cruise_ticks = 0;
         }
@@ -487,7 +524,7 @@ impl Dda {
         if !settled || self.rate > ONE || self.gated != 0 || self.holding {
             return;
         }
-        if self.timing.pulse_ticks != 1 {
+        if self.timing.pulse_ticks != 1 || self.timing.hold_ticks > HIST_TICKS {
             return;
         }
         // Virtual ticks before rate_sq >= budget could hold: floor((budget - rate_sq) / 2dr),
@@ -505,6 +542,14 @@ impl Dda {
         self.cruise_len = ticks;
         self.cruise_ticks = ticks;
         self.cruise_phase = self.phase;
+        self.phase = self.phase.wrapping_sub(ONE);
+        self.cruise_dir = StepOutput::dir_bits(self.dir);
+        self.cruise_wide = self.wide;
+        self.hist = 0;
+        for back in (0..HIST_TICKS).rev() {
+            let rise = self.ring[(self.now.wrapping_sub(back as u64) & RING_MASK) as usize];
+            self.hist = (self.hist << 8) | rise as u32;
+        }
     }
 
     /// The complete tick: commands, segment changes, ramps, gates. Kept out of line so the
@@ -512,6 +557,7 @@ impl Dda {
     #[inline(never)]
     fn full_tick(&mut self) -> StepOutput {
         self.leave_fast();
+        self.now += 1;
         let now = self.now;
         let slot = (now & RING_MASK) as usize;
         let fall =
@@ -556,38 +602,10 @@ impl Dda {
         out
     }
 
-    /// One Bresenham step over the active lanes. Bit `n - 1 - k` of the result (n lanes): lane k
-    /// steps; [`Preparer::prepare`] builds `slot_axes` for that order. One dispatch on the lane
-    /// count, then straight-line code.
-    ///
-    /// The error `e` lives in `[-t, 0)` and the lane steps when `e + d >= 0`. Read as a u32, `e`
-    /// is `2^32 + e`, so the step is exactly the carry out of the u32 add `e + d`, and the
-    /// correction `- t` is an add of `2^32 - t`: an add that sets the carry, a conditional add,
-    /// and the carry shifted into the mask, with no sign tests.
+    /// One virtual tick of the active segment's lanes; bit `i`: axis `i` steps (bits 6..: 0).
     #[inline(always)]
-    fn bresenham(&mut self) -> u8 {
-        let minus_t = self.t.wrapping_neg();
-        let mut slots = 0u32;
-        macro_rules! lanes {
-            ($($k:literal)*) => {{
-                $(
-                    let l = &mut self.lanes[$k];
-                    let (e, step) = l.err.overflowing_add(l.d);
-                    l.err = if step { e.wrapping_add(minus_t) } else { e };
-                    slots = (slots << 1) | step as u32;
-                )*
-            }};
-        }
-        match self.n_active {
-            1 => lanes!(0),
-            2 => lanes!(0 1),
-            3 => lanes!(0 1 2),
-            4 => lanes!(0 1 2 3),
-            5 => lanes!(0 1 2 3 4),
-            6 => lanes!(0 1 2 3 4 5),
-            _ => {}
-        }
-        slots as u8
+    fn bresenham(&mut self) -> u32 {
+        lanes::step(&mut self.lanes, self.wide, self.minus_t)
     }
 
     #[inline(always)]
@@ -623,7 +641,7 @@ impl Dda {
     fn vtick(&mut self, slot: usize) -> u8 {
         self.remaining -= 1;
         self.budget = self.budget.saturating_sub(self.two_dr);
-        let mut rise = self.slot_axes[self.bresenham() as usize & (SLOT_MASKS - 1)];
+        let mut rise = self.bresenham() as u8;
         if rise & self.gated != 0 {
             rise = self.absorb(rise);
         }
@@ -751,11 +769,10 @@ impl Dda {
             };
         }
         self.t = p.t;
+        self.minus_t = p.t.wrapping_neg();
         self.h = p.h;
         self.remaining = p.t;
-        self.n_active = p.n_active;
-        self.idx = p.idx;
-        self.slot_axes = p.slot_axes;
+        self.wide = p.wide;
         for (lane, &d) in self.lanes.iter_mut().zip(&p.d) {
             // err = k*d + h - t*(s + 1) with k = s = 0; d <= t < 2^31.
             *lane = Lane { err: p.h.wrapping_sub(p.t), d };
@@ -792,7 +809,6 @@ impl Dda {
         for i in 0..MAX_AXES {
             self.origin[i] += self.seg_steps[i] as i64;
         }
-        self.n_active = 0;
         self.segments_done += 1;
         self.last_done_id = Some(self.seg_id);
         self.done_hash = order_hash(self.done_hash, self.seg_id);
@@ -878,7 +894,6 @@ impl Dda {
         self.pending = [0; MAX_AXES];
         self.gated = 0;
         self.remaining = 0;
-        self.n_active = 0;
         self.ready.clear();
         self.scheduled.clear();
         self.next_due = u64::MAX;
@@ -899,9 +914,8 @@ impl Dda {
         };
         if remaining != 0 {
             let done = (self.t - remaining) as u64;
-            for k in 0..(self.n_active as usize).min(MAX_AXES) {
-                let i = self.idx[k] as usize;
-                let d = self.lanes[k].d as u64;
+            for (i, lane) in self.lanes.iter().enumerate() {
+                let d = lane.d as u64;
                 let s = ((done * d + self.h as u64) / self.t as u64) as i64;
                 pos[i] += if self.seg_dir & (1 << i) != 0 { -s } else { s };
             }
@@ -912,8 +926,13 @@ impl Dda {
         pos
     }
 
+    /// Ticks run so far.
     pub fn now(&self) -> u64 {
-        self.now
+        if self.cruise_len != 0 {
+            self.now + self.cruise_elapsed() as u64
+        } else {
+            self.now
+        }
     }
 
     pub fn state(&self) -> MotionState {

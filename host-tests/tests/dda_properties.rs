@@ -28,12 +28,21 @@ fn rate(x: f64) -> Rate {
 
 /// A valid segment: each axis at most duration / spacing steps so the nominal rate is legal.
 fn segment_strategy(spacing: u32) -> impl Strategy<Value = Segment> {
-    (20u32..3_000, prop::array::uniform6(-1000i32..=1000), 0.0f64..=1.0, 0.0f64..=1.0, 1u32..400)
-        .prop_map(move |(t, frac, entry, exit, accel)| {
+    // `still`: axes held at 0, so segments use the DDA's four-lane kernel as well as all six.
+    let still = 0u8..(1 << MAX_AXES);
+    (
+        20u32..3_000,
+        prop::array::uniform6(-1000i32..=1000),
+        0.0f64..=1.0,
+        0.0f64..=1.0,
+        1u32..400,
+        still,
+    )
+        .prop_map(move |(t, frac, entry, exit, accel, still)| {
             let max = (t / spacing) as i32;
             let mut steps = [0i32; MAX_AXES];
-            for (s, f) in steps.iter_mut().zip(frac) {
-                *s = f * max / 1000;
+            for (i, (s, f)) in steps.iter_mut().zip(frac).enumerate() {
+                *s = if still >> i & 1 != 0 { 0 } else { f * max / 1000 };
             }
             if steps.iter().all(|&s| s == 0) {
                 steps[0] = max.max(1);
@@ -232,7 +241,13 @@ fn cruise_fast_path_equals_the_full_tick() {
                 }
                 let (a, b) = (fast.tick(), full.tick());
                 prop_assert_eq!(a, b, "tick {}", fast.now());
+                prop_assert_eq!(fast.now(), full.now());
                 prop_assert_eq!(fast.rate(), full.rate());
+                // Mid-cruise reads: `now`, `remaining` and the budget are derived there.
+                if fast.now().is_multiple_of(97) {
+                    prop_assert_eq!(fast.positions(), full.positions(), "tick {}", fast.now());
+                    prop_assert_eq!(fast.stop_due(10), full.stop_due(10));
+                }
                 prop_assert!(!full.in_cruise());
                 cruising += fast.in_cruise() as u64;
             }

@@ -5,6 +5,7 @@
 pub mod faults;
 pub mod override_sweep;
 
+use crate::dda::lane_kernel_check::LaneKernelCheck;
 use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
@@ -31,11 +32,13 @@ pub enum AnyScenario {
     WireJob(WireJobScenario),
     /// A shortened wire job with a stall injected: retrace, return, finish.
     WireStall(WireStallScenario),
+    /// The DDA's lane kernel on pseudo-random lanes (Thumb-2 in the firmware, Rust on the host).
+    LaneKernel(LaneKernelCheck),
 }
 
 /// How many scenarios [`build`] knows.
 pub const COUNT: usize =
-    2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len() + 2;
+    2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len() + 3;
 
 const ZSLIDE_VARIANTS: [ZSlideVariant; 3] =
     [ZSlideVariant::Encoder, ZSlideVariant::Resolver, ZSlideVariant::IndexLoss];
@@ -67,6 +70,7 @@ fn build_group(mut i: usize) -> Option<AnyScenario> {
     match i {
         0 => WireJobScenario::new().ok().map(AnyScenario::WireJob),
         1 => WireStallScenario::new().ok().map(AnyScenario::WireStall),
+        2 => Some(AnyScenario::LaneKernel(LaneKernelCheck::new())),
         _ => None,
     }
 }
@@ -81,6 +85,7 @@ macro_rules! dispatch {
             AnyScenario::ZSlide($s) => $e,
             AnyScenario::WireJob($s) => $e,
             AnyScenario::WireStall($s) => $e,
+            AnyScenario::LaneKernel($s) => $e,
         }
     };
 }
