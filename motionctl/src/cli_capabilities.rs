@@ -458,6 +458,14 @@ pub enum WireCmd {
         #[arg(long, value_name = "S", requires = "stall_at")]
         stall_for: Option<f64>,
     },
+    /// Bhatti Table 11 (circle -> complex, ZT 39, FR 800) side by side: per row the thesis's IK
+    /// values (alpha, beta, trapezoid area, time, totals) and the corrected IK's (ZB1, XB1,
+    /// motor steps rounded, ruled area), then the totals.
+    Table11 {
+        /// CSV (full precision) instead of the aligned table.
+        #[arg(long)]
+        csv: bool,
+    },
 }
 
 fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
@@ -503,7 +511,16 @@ fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) -> crate::job
 }
 
 pub fn run_wire(cmd: WireCmd) -> Result<()> {
-    let (WireCmd::Plan { plan } | WireCmd::Run { plan, .. }) = &cmd;
+    let plan = match &cmd {
+        WireCmd::Plan { plan } | WireCmd::Run { plan, .. } => plan,
+        WireCmd::Table11 { csv } => {
+            use crate::wire::table11;
+            let t = table11::table11(&continuous::circle_complex_path()?, 800.0)?;
+            let text = if *csv { table11::render_csv(&t) } else { table11::render_text(&t) };
+            print!("{text}");
+            return Ok(());
+        }
+    };
     let die = plan.die()?;
     let prm = plan.params(die.fr_mm2_per_min)?;
     let (fr, tolerance) = (prm.fr_mm2_per_min, prm.tol_mm);

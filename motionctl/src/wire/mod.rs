@@ -29,6 +29,7 @@ pub mod limits;
 pub mod path;
 pub mod run;
 pub mod shapes;
+pub mod table11;
 
 use thiserror::Error;
 
