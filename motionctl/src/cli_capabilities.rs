@@ -130,6 +130,80 @@ pub struct WirePlanArgs {
     /// alpha), e.g. 20,20,250,0: taken up by its own segment at every reversal [default: 0].
     #[arg(long, value_name = "X,Y,B,A", value_parser = parse_backlash)]
     backlash: Option<[u32; 4]>,
+    /// Die to cut, one of the thesis's (with its ZT, FR and start point) [default:
+    /// circle-complex, plate 4 / Table 11].
+    #[arg(long, value_enum, value_name = "NAME")]
+    die: Option<DieArg>,
+    /// A user die from an MDI data file: ZT, N, then N x (XB, YB, XT, YT), numbers separated
+    /// by commas or blanks, `#` comment lines; cut from and back to the centre at FR 800.
+    #[arg(long, value_name = "FILE", conflicts_with = "die")]
+    mdi: Option<PathBuf>,
+    /// Workpiece thickness ZT, mm [default: the die's].
+    #[arg(long, value_name = "MM")]
+    zt: Option<f64>,
+    /// Start and end point of the wire on the workpiece, mm [default: the die's: (0, 0), the
+    /// gear (0, -60)]; the board's positions count from there.
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
+    start: Option<crate::wire::Point2>,
+    /// --die gear: module, mm [default: 6].
+    #[arg(long, value_name = "MM")]
+    module: Option<f64>,
+    /// --die gear: number of teeth [default: 12, PD = module x teeth].
+    #[arg(long, conflicts_with = "pitch_diameter")]
+    teeth: Option<u32>,
+    /// --die gear: pitch circle diameter, mm [default: 72].
+    #[arg(long, value_name = "MM")]
+    pitch_diameter: Option<f64>,
+    /// --die gear: pressure angle, deg [default: 20].
+    #[arg(long, value_name = "DEG")]
+    pressure_angle: Option<f64>,
+}
+
+/// `--die NAME`: the thesis's dies ([`crate::wire::dies::ThesisDie`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DieArg {
+    /// Plate 4 / Table 11: circle R 25 over the complex shape RI 20, ZT 39, FR 800.
+    CircleComplex,
+    /// Plate 9: circle R 25 over circle R 20, ZT 49, FR 800.
+    Plate9,
+    /// Plate 10: square 50 over square 30, ZT 49, FR 800.
+    Plate10,
+    /// Plate 16: circle R 20 over crescent R 15, ZT 49, FR 800.
+    Plate16,
+    /// Plate 19 stage 1: circle R 3.5 over R 3.5, ZT 49, FR 400.
+    Plate19Stage1,
+    /// Plate 19 stage 2: circle R 15 over R 2, ZT 49, FR 500.
+    Plate19Stage2,
+    /// Plate 19 stage 3: circle R 18 over R 10, ZT 49, FR 500.
+    Plate19Stage3,
+    /// Table 12: Unwin spur gear m 6, PD 72, PA 20, ZT 30, FR 500, from (0, -60).
+    Gear,
+}
+
+impl From<DieArg> for crate::wire::dies::ThesisDie {
+    fn from(d: DieArg) -> Self {
+        use crate::wire::dies::ThesisDie as T;
+        match d {
+            DieArg::CircleComplex => T::CircleComplex,
+            DieArg::Plate9 => T::Plate9,
+            DieArg::Plate10 => T::Plate10,
+            DieArg::Plate16 => T::Plate16,
+            DieArg::Plate19Stage1 => T::Plate19Stage1,
+            DieArg::Plate19Stage2 => T::Plate19Stage2,
+            DieArg::Plate19Stage3 => T::Plate19Stage3,
+            DieArg::Gear => T::Gear,
+        }
+    }
+}
+
+/// `--start X,Y`: two numbers, mm.
+fn parse_point(s: &str) -> Result<crate::wire::Point2, String> {
+    let (x, y) = s.split_once(',').ok_or("expected X,Y (mm)")?;
+    let num = |t: &str| match t.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("`{t}` is not a finite number")),
+    };
+    Ok(crate::wire::Point2::new(num(x)?, num(y)?))
 }
 
 /// `--backlash X,Y,B,A`: four integers, each checked as a job file's `[backlash]` field is.
@@ -145,16 +219,44 @@ fn parse_backlash(s: &str) -> Result<[u32; 4], String> {
 }
 
 impl WirePlanArgs {
-    /// The planning parameters: the job file's (or the defaults), then the flags.
-    fn params(&self) -> Result<ContinuousParams> {
+    /// The die to cut: `--mdi FILE`, else `--die NAME` (default circle-complex), with the
+    /// overrides. Errors name the file and its line.
+    fn die(&self) -> Result<crate::wire::dies::DieJob> {
+        use crate::wire::dies;
+        let o = dies::DieOverrides {
+            zt_mm: self.zt,
+            start: self.start,
+            module_mm: self.module,
+            teeth: self.teeth,
+            pitch_diameter_mm: self.pitch_diameter,
+            pressure_angle_deg: self.pressure_angle,
+        };
+        match &self.mdi {
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                dies::mdi_die(&path.display().to_string(), &text, &o)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+            }
+            None => {
+                let kind = self.die.unwrap_or(DieArg::CircleComplex).into();
+                Ok(dies::thesis_die(kind, &o)?)
+            }
+        }
+    }
+
+    /// The planning parameters: the die's feed, the job file's settings, then the flags.
+    fn params(&self, die_fr_mm2_per_min: f64) -> Result<ContinuousParams> {
+        let defaults =
+            ContinuousParams { fr_mm2_per_min: die_fr_mm2_per_min, ..ContinuousParams::default() };
         let mut prm = match &self.job {
             Some(path) => {
                 let src = std::fs::read_to_string(path)
                     .with_context(|| format!("reading {}", path.display()))?;
-                crate::wire::job_file::parse_spec(&src)
+                crate::wire::job_file::parse_spec_with(&src, defaults)
                     .with_context(|| path.display().to_string())?
             }
-            None => ContinuousParams::default(),
+            None => defaults,
         };
         prm.fr_mm2_per_min = self.fr.unwrap_or(prm.fr_mm2_per_min);
         prm.tol_mm = self.tolerance.unwrap_or(prm.tol_mm);
@@ -356,6 +458,14 @@ pub enum WireCmd {
         #[arg(long, value_name = "S", requires = "stall_at")]
         stall_for: Option<f64>,
     },
+    /// Bhatti Table 11 (circle -> complex, ZT 39, FR 800) side by side: per row the thesis's IK
+    /// values (alpha, beta, trapezoid area, time, totals) and the corrected IK's (ZB1, XB1,
+    /// motor steps rounded, ruled area), then the totals.
+    Table11 {
+        /// CSV (full precision) instead of the aligned table.
+        #[arg(long)]
+        csv: bool,
+    },
 }
 
 fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
@@ -369,8 +479,10 @@ fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
 }
 
 /// The wire manipulator as a job's machine: the DDA's axes 0..3 with their step scales
-/// (src/wire/machine.rs); rotary axes in degrees. Soft limits from the thesis's travel.
-fn wire_job_machine(cfg: &motion::MachineConfig) -> crate::job::Job {
+/// (src/wire/machine.rs); rotary axes in degrees. Soft limits from the thesis's travel, counted
+/// from the job's start `origin` (X, Y mm, beta, alpha deg: the joints of the path's first
+/// point, where the board's positions are zero).
+fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) -> crate::job::Job {
     use crate::wire::ik::{STEPS_PER_DEG_ALPHA, STEPS_PER_DEG_BETA, STEPS_PER_MM_XY};
     use motion::wire::machine as m;
     let axis = |name: &str, steps_per_unit: f64, min: f64, max: f64| crate::job::Axis {
@@ -387,10 +499,10 @@ fn wire_job_machine(cfg: &motion::MachineConfig) -> crate::job::Job {
             tick_hz: cfg.tick_hz,
             timing: cfg.timing,
             axes: vec![
-                axis("X", STEPS_PER_MM_XY, -50.0, 50.0),
-                axis("Y", STEPS_PER_MM_XY, -60.0, 60.0),
-                axis("B", STEPS_PER_DEG_BETA, -65.0, 65.0),
-                axis("A", STEPS_PER_DEG_ALPHA, -70.0, 70.0),
+                axis("X", STEPS_PER_MM_XY, -50.0 - origin[0], 50.0 - origin[0]),
+                axis("Y", STEPS_PER_MM_XY, -60.0 - origin[1], 60.0 - origin[1]),
+                axis("B", STEPS_PER_DEG_BETA, -65.0 - origin[2], 65.0 - origin[2]),
+                axis("A", STEPS_PER_DEG_ALPHA, -70.0 - origin[3], 70.0 - origin[3]),
             ],
         },
         items: Vec::new(),
@@ -399,10 +511,20 @@ fn wire_job_machine(cfg: &motion::MachineConfig) -> crate::job::Job {
 }
 
 pub fn run_wire(cmd: WireCmd) -> Result<()> {
-    let (WireCmd::Plan { plan } | WireCmd::Run { plan, .. }) = &cmd;
-    let prm = plan.params()?;
+    let plan = match &cmd {
+        WireCmd::Plan { plan } | WireCmd::Run { plan, .. } => plan,
+        WireCmd::Table11 { csv } => {
+            use crate::wire::table11;
+            let t = table11::table11(&continuous::circle_complex_path()?, 800.0)?;
+            let text = if *csv { table11::render_csv(&t) } else { table11::render_text(&t) };
+            print!("{text}");
+            return Ok(());
+        }
+    };
+    let die = plan.die()?;
+    let prm = plan.params(die.fr_mm2_per_min)?;
     let (fr, tolerance) = (prm.fr_mm2_per_min, prm.tol_mm);
-    let path = continuous::circle_complex_path()?;
+    let path = die.path()?;
     let cfg = motion::wire::machine::config();
     let mut job = continuous::plan(&path, &cfg, &prm)?;
     if let WireCmd::Run { segments: Some(r), .. } = &cmd {
@@ -422,13 +544,21 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         job.segments = part;
         println!("  only segments       {r:?} of {n}");
     }
-    println!("circle -> complex die, ZT 39 mm, FR {fr} mm^2/min, tolerance {tolerance} mm");
+    println!(
+        "{} die, ZT {} mm, FR {fr} mm^2/min, tolerance {tolerance} mm",
+        die.label, die.die.zt_mm
+    );
+    print_die_figures(&die);
     println!("  segments            {}", job.segments.len());
     println!(
         "  ruled area          {:.3} mm^2 (thesis trapezoids {:.3})",
         job.area_ruled_mm2, job.area_trapezoid_mm2
     );
     println!("  60 A / FR           {:.3} s", job.time_ruled_s);
+    println!(
+        "  thesis 60 A / FR    {:.3} s (its trapezoid areas (RB + RT) ZT / 2, not the ruled area)",
+        crate::wire::path::time_s(job.area_trapezoid_mm2, fr)?
+    );
     let run_model = |segments: &[motion::segment::Segment]| {
         let mut segs = segments.iter().copied();
         motion::model::run(&cfg, || segs.next(), &[], u64::MAX, |_, _| {})
@@ -461,7 +591,11 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, .. } = cmd else {
         return Ok(());
     };
-    let parsed = wire_job_machine(&cfg);
+    let origin = continuous::joints_from_steps(job.point_steps[0]);
+    let parsed = wire_job_machine(
+        &cfg,
+        [origin.x_mm, origin.y_mm, origin.beta_rad.to_degrees(), origin.alpha_rad.to_degrees()],
+    );
     let mut final_steps = [0i64; motion::MAX_AXES];
     final_steps.copy_from_slice(&report.positions[..motion::MAX_AXES]);
     let program = crate::convert::Program {
@@ -484,7 +618,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     let outputs: Vec<crate::plan::Output> =
         job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
     crate::cli::stream(
-        "circle -> complex (wire)",
+        &format!("{} (wire)", die.label),
         &parsed,
         &program,
         &outputs,
@@ -494,6 +628,25 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         true,
         crate::runner::DEFAULT_STATUS_PERIOD_MS,
     )
+}
+
+/// The die's points, start and face areas (the thesis's sector method and the exact polygon).
+fn print_die_figures(die: &crate::wire::dies::DieJob) {
+    use crate::wire::area::{polygon_area_mm2, sector_area_mm2};
+    let (s, d) = (die.start, &die.die);
+    println!(
+        "  points              {} per face, from and back to ({}, {}) mm",
+        d.top.len(),
+        s.x_mm,
+        s.y_mm
+    );
+    for (name, face) in [("top face", &d.top), ("bottom face", &d.bottom)] {
+        println!(
+            "  {name:<19} sector area {:.3} mm^2, polygon {:.3} mm^2",
+            sector_area_mm2(face),
+            polygon_area_mm2(face)
+        );
+    }
 }
 
 /// `wire run` on a board link: the job as a wire job (stall retrace on the board), checked

@@ -748,6 +748,77 @@ mod tests {
         assert_eq!(o.positions, [0; 4]);
     }
 
+    /// After a stall the job resumes at the scenarios' `resume_override` (0.5) for
+    /// `resume_segments` (2) job segments, then at 1.0: the DDA's override is 0.5 through the
+    /// return and the first two job segments after it, 1.0 from the completion of the second
+    /// on; the first of them takes about twice its nominal 2000 ticks, the third its nominal.
+    #[test]
+    fn resumes_at_reduced_feed_for_two_segments() {
+        use crate::wire::scenario::STALL_PARAMS;
+        let j = job();
+        // Retrace distinct from the resume override, so the three phases can be told apart.
+        let p = StallParams { retrace_override: Rate::lit("0.75"), ..STALL_PARAMS };
+        let mut c = WireController::new(&machine::config(), &j, p).unwrap();
+        let half = STALL_PARAMS.resume_override;
+        assert_eq!(half, Rate::lit("0.5"));
+        assert_eq!(STALL_PARAMS.resume_segments, 2);
+        // (job segment index, completion tick) after the return, and the override seen while
+        // each job segment after the return was running.
+        let mut done_after: Vec<(u32, u64)> = Vec::new();
+        let mut seen = [None::<Rate>; 6];
+        let (mut last_done, mut returned, mut n) = (0u32, false, 0u64);
+        let (mut saw_retrace, mut saw_return) = (false, false);
+        while !c.is_finished() && n < 1_000_000 {
+            c.feed().unwrap();
+            c.tick((5000..6000).contains(&n), false);
+            n += 1;
+            let ovr = c.dda().feed_override();
+            match c.phase() {
+                Phase::Retracing => {
+                    saw_retrace = true;
+                    assert_eq!(ovr, p.retrace_override, "retracing, tick {n}");
+                }
+                Phase::Returning => {
+                    saw_return = true;
+                    returned = true;
+                    assert_eq!(ovr, half, "returning, tick {n}");
+                }
+                _ => {}
+            }
+            if c.dda().segments_done() != last_done {
+                last_done = c.dda().segments_done();
+                let id = c.dda().last_done_id().unwrap();
+                if returned && id & RECOVERY_ID == 0 {
+                    done_after.push((id, n));
+                }
+            }
+            // The job segment in progress after the return: the override it runs at (the
+            // change lands at a completion, so sample mid-way through the segment).
+            if returned && c.phase() == Phase::Running && c.dda().state() == MotionState::Moving {
+                let k = done_after.len();
+                let since = done_after.last().map_or(c.stats().first_resume_tick, |d| d.1);
+                if n == since + 500 && k < seen.len() {
+                    seen[k] = Some(ovr);
+                }
+            }
+        }
+        assert_eq!(c.phase(), Phase::Done);
+        assert!(saw_retrace && saw_return);
+        assert_eq!(c.stats().stalls, 1);
+        assert_eq!(c.dda().feed_override(), Rate::ONE, "back to 1.0 at the end");
+        // Stalled in segment 2: segments 3, 4, 5 run after the return.
+        let ids: Vec<u32> = done_after.iter().map(|d| d.0).collect();
+        assert_eq!(ids, [3, 4, 5], "{done_after:?}");
+        assert_eq!(seen[..3], [Some(half), Some(half), Some(Rate::ONE)], "{seen:?}");
+        // Durations: segment 4 (between two reduced-feed completions) runs at half speed, segment
+        // 5 at full speed to rest (2000 ticks plus its ramp down).
+        let d4 = done_after[1].1 - done_after[0].1;
+        let d5 = done_after[2].1 - done_after[1].1;
+        std::eprintln!("after the return: {done_after:?}; segment 4 {d4} ticks, 5 {d5} ticks");
+        assert!((3_800..=4_200).contains(&d4), "segment 4 took {d4} ticks at 0.5");
+        assert!((2_000..=2_600).contains(&d5), "segment 5 took {d5} ticks at 1.0");
+    }
+
     #[test]
     fn estop_cuts_wire_power_at_once() {
         let j = job();

@@ -14,6 +14,7 @@
 use super::backlash::{insert_takeups, SegmentKind};
 use super::ik::{forward_mm, ik_exact, steps_rounded, Joints, Steps};
 use super::ik::{STEPS_PER_DEG_ALPHA, STEPS_PER_DEG_BETA, STEPS_PER_MM_XY};
+use super::limits::Limits;
 use super::path::{ruled_area_mm2, time_s, Path};
 use super::{Point2, WireError};
 use motion::segment::{Rate, Segment, SegmentError};
@@ -25,6 +26,9 @@ use thiserror::Error;
 pub enum JobError {
     #[error(transparent)]
     Wire(#[from] WireError),
+    /// A path point the machine cannot reach: refused before any segment is planned.
+    #[error(transparent)]
+    Limit(Box<LimitViolation>),
     #[error("path step {step}: still off the ruled surface after {pieces} pieces")]
     TooManyPieces { step: usize, pieces: usize },
     #[error("tolerance {tol_mm} mm is not above the step quantisation margin {margin_mm} mm")]
@@ -33,6 +37,25 @@ pub enum JobError {
     AxisRate { index: usize, axis: usize, steps: i64, ticks: u64 },
     #[error("segment {index}: refused by the DDA: {reason:?}")]
     Segment { index: usize, reason: SegmentError },
+}
+
+/// A path point outside the machine's joint limits: which point, where, its joints (corrected
+/// IK) and the rule it breaks.
+#[derive(Clone, Debug, PartialEq, Error)]
+#[error(
+    "path point {index} (bottom ({:.3}, {:.3}) mm, top ({:.3}, {:.3}) mm; X {:.3} mm, \
+     Y {:.3} mm, alpha {:.3} deg, beta {:.3} deg) is outside the machine's limits: {source}",
+    .bottom.x_mm, .bottom.y_mm, .top.x_mm, .top.y_mm, .joints.x_mm, .joints.y_mm,
+    .joints.alpha_rad.to_degrees(), .joints.beta_rad.to_degrees()
+)]
+pub struct LimitViolation {
+    /// Index in the path (0 = the start point).
+    pub index: usize,
+    pub bottom: Point2,
+    pub top: Point2,
+    pub joints: Joints,
+    /// The rule, from [`Limits::check_point`].
+    pub source: WireError,
 }
 
 /// What to plan for.
@@ -51,6 +74,9 @@ pub struct ContinuousParams {
     /// ([`super::backlash`]); all zero plans exactly the uncompensated job. Checked with
     /// [`super::backlash::validate`] by whoever reads it from a user.
     pub backlash_steps: [u32; 4],
+    /// Joint limits every path point must satisfy (the thesis's machine by default): checked
+    /// with the corrected IK before anything is planned.
+    pub limits: Limits,
 }
 
 impl Default for ContinuousParams {
@@ -61,6 +87,7 @@ impl Default for ContinuousParams {
             max_pieces: 4096,
             samples_per_piece: 32,
             backlash_steps: [0; 4],
+            limits: Limits::default(),
         }
     }
 }
@@ -265,7 +292,19 @@ fn split_step(
     }
 }
 
-/// Plans `path` for the machine `cfg`: pieces, per-piece durations at constant area rate,
+/// Checks every point of `path` (corrected IK) against `limits`; the first violation is
+/// returned with the point's index, coordinates and joints.
+pub fn check_limits(path: &Path, limits: &Limits) -> Result<(), JobError> {
+    for (index, (&top, &bottom)) in path.top.iter().zip(&path.bottom).enumerate() {
+        let joints = ik_exact(index, top, bottom, path.zt_mm)?;
+        limits.check_point(index, bottom, path.zt_mm, joints).map_err(|source| {
+            JobError::Limit(Box::new(LimitViolation { index, bottom, top, joints, source }))
+        })?;
+    }
+    Ok(())
+}
+
+/// Plans `path` for the machine `cfg`: every point within `prm.limits`, pieces, per-piece durations at constant area rate,
 /// junction and acceleration limits, as DDA segments with ids 0, 1, ...
 pub fn plan(
     path: &Path,
@@ -274,6 +313,7 @@ pub fn plan(
 ) -> Result<ContinuousJob, JobError> {
     super::positive("fr_mm2_per_min", prm.fr_mm2_per_min)?;
     super::positive("tol_mm", prm.tol_mm)?;
+    check_limits(path, &prm.limits)?;
     let margin_mm = quantisation_margin_mm(path);
     let plan_tol_mm = prm.tol_mm - margin_mm;
     if plan_tol_mm <= 0.0 {

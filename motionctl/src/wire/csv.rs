@@ -7,30 +7,41 @@ use super::{Die, Point2, Result, WireError};
 
 const FIELDS: [&str; 4] = ["XB", "YB", "XT", "YT"];
 
-/// Parses an MDI file into a [`Die`] (top and bottom as given, not closed).
+/// Parses an MDI file into a [`Die`] (top and bottom as given, not closed). Errors name the
+/// file's line (1-based) and what is wrong there.
 pub fn parse_mdi(text: &str) -> Result<Die> {
-    let mut tokens = text
-        .lines()
-        .filter(|l| !l.trim_start().starts_with('#'))
-        .flat_map(|l| l.split(|c: char| c == ',' || c.is_whitespace()))
-        .filter(|t| !t.is_empty());
-    let mut num = |what: String| -> Result<f64> {
-        let t = tokens
-            .next()
-            .ok_or_else(|| WireError::Parse(format!("{what}: missing (file ends early)")))?;
-        let v: f64 =
-            t.parse().map_err(|_| WireError::Parse(format!("{what}: `{t}` is not a number")))?;
+    let last_line = text.lines().count();
+    let mut tokens =
+        text.lines().enumerate().filter(|(_, l)| !l.trim_start().starts_with('#')).flat_map(
+            |(n, l)| {
+                l.split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|t| !t.is_empty())
+                    .map(move |t| (n + 1, t))
+            },
+        );
+    let mut num = |what: String| -> Result<(usize, f64)> {
+        let (line, t) = tokens.next().ok_or_else(|| {
+            WireError::Parse(format!("{what}: missing (the file ends at line {last_line})"))
+        })?;
+        let v: f64 = t
+            .parse()
+            .map_err(|_| WireError::Parse(format!("line {line}: {what}: `{t}` is not a number")))?;
         if v.is_finite() {
-            Ok(v)
+            Ok((line, v))
         } else {
-            Err(WireError::Parse(format!("{what}: `{t}` is not finite")))
+            Err(WireError::Parse(format!("line {line}: {what}: `{t}` is not finite")))
         }
     };
-    let zt = num("ZT (first number)".into())?;
-    let n = num("N (second number)".into())?;
+    let (zt_line, zt) = num("ZT (first number)".into())?;
+    if zt <= 0.0 {
+        return Err(WireError::Parse(format!(
+            "line {zt_line}: ZT (first number): {zt} is not a thickness > 0 mm"
+        )));
+    }
+    let (n_line, n) = num("N (second number)".into())?;
     if !(n >= 1.0 && n.fract() == 0.0 && n <= 1e6) {
         return Err(WireError::Parse(format!(
-            "N (second number): {n} is not a positive whole number"
+            "line {n_line}: N (second number): {n} is not a positive whole number"
         )));
     }
     let n = n as usize;
@@ -38,14 +49,14 @@ pub fn parse_mdi(text: &str) -> Result<Die> {
     for i in 0..n {
         let mut v = [0.0; 4];
         for (k, f) in FIELDS.iter().enumerate() {
-            v[k] = num(format!("point index {i} field {f}"))?;
+            v[k] = num(format!("point index {i} field {f}"))?.1;
         }
         bottom.push(Point2::new(v[0], v[1]));
         top.push(Point2::new(v[2], v[3]));
     }
-    if let Some(t) = tokens.next() {
+    if let Some((line, t)) = tokens.next() {
         return Err(WireError::Parse(format!(
-            "after point index {}: unexpected extra value `{t}`",
+            "line {line}: after point index {}: unexpected extra value `{t}`",
             n - 1
         )));
     }

@@ -63,11 +63,19 @@ struct BacklashTable {
 /// Parses a wire job file into planning parameters (defaults from
 /// [`ContinuousParams::default`] for what it leaves out).
 pub fn parse_spec(src: &str) -> Result<ContinuousParams, WireJobFileError> {
+    parse_spec_with(src, ContinuousParams::default())
+}
+
+/// [`parse_spec`] with `defaults` for what the file leaves out (e.g. a die's own feed).
+pub fn parse_spec_with(
+    src: &str,
+    defaults: ContinuousParams,
+) -> Result<ContinuousParams, WireJobFileError> {
     let f: File = toml::from_str(src).map_err(|e| WireJobFileError::Toml(e.to_string()))?;
     if f.version != 1 {
         return Err(WireJobFileError::Version(f.version));
     }
-    let mut prm = ContinuousParams::default();
+    let mut prm = defaults;
     for (field, value, slot) in [
         ("fr_mm2_per_min", f.fr_mm2_per_min, &mut prm.fr_mm2_per_min),
         ("tolerance_mm", f.tolerance_mm, &mut prm.tol_mm),

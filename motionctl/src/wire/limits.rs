@@ -49,10 +49,12 @@ impl Default for Limits {
 
 /// `90 - atan(w / (d - |off|))` in degrees: the frame-clearance angle of eq. (i)/(ii), or
 /// `None` when the point is beyond the frame. The thesis's BASIC 5570 forgets the `*RD`
-/// (it subtracts radians from degrees, L2961); eq. (i) at L1012 is applied here.
+/// (it subtracts radians from degrees, L2961); eq. (i) at L1012 is applied here. A point right
+/// at the frame (gap 0) may not tilt at all (0 deg): the gear's start point (0, -60) of
+/// Table 12, cut with alpha = beta = 0.
 fn frame_angle_deg(w: f64, d: f64, off: f64) -> Option<f64> {
     let gap = d - off.abs();
-    (gap > 0.0).then(|| 90.0 - (w / gap).atan().to_degrees())
+    (gap >= 0.0).then(|| (90.0 - (w / gap).atan().to_degrees()).max(0.0))
 }
 
 impl Limits {

@@ -10,16 +10,18 @@
 //! pairs with point `i` of the bottom and the pair is a straight ruling line (seed L2205-2213).
 //!
 //! Files: [`shapes`] (circle, complex, crescent, prismatic, star), [`gear`] (Unwin spur gear),
-//! [`csv`] (MDI data files), [`area`] (sector and polygon areas, intermediate sections),
-//! [`ik`] (thesis and corrected inverse kinematics, steps, backlash), [`limits`] (joint limits
-//! per point), [`path`] (machining area/time and joint-space targets per step),
-//! [`continuous`] (the continuous constant area-rate job), [`backlash`] (its lash take-up
-//! segments and a dead-band model), [`job_file`] (the wire job TOML and the firmware table).
+//! [`csv`] (MDI data files), [`dies`] (the dies `wire plan|run` cut), [`area`] (sector and
+//! polygon areas, intermediate sections), [`ik`] (thesis and corrected inverse kinematics,
+//! steps, backlash), [`limits`] (joint limits per point), [`path`] (machining area/time and
+//! joint-space targets per step), [`continuous`] (the continuous constant area-rate job),
+//! [`backlash`] (its lash take-up segments and a dead-band model), [`job_file`] (the wire job
+//! TOML and the firmware table), [`table11`] (Table 11, thesis and corrected IK side by side).
 
 pub mod area;
 pub mod backlash;
 pub mod continuous;
 pub mod csv;
+pub mod dies;
 pub mod gear;
 pub mod ik;
 pub mod job_file;
@@ -27,6 +29,7 @@ pub mod limits;
 pub mod path;
 pub mod run;
 pub mod shapes;
+pub mod table11;
 
 use thiserror::Error;
 
