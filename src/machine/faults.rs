@@ -63,6 +63,9 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         | FaultCode::TickOverrun
         | FaultCode::HomingFailed => "at once (an event, not a level)",
         FaultCode::SensorFault => "sensor input clear",
+        FaultCode::FollowingError => {
+            "at once from the machine's monitor (it re-zeroes), else the sensor's bit clear; homing lost (home again)"
+        }
         _ => "the sensor's fault bit clear",
     }
 }

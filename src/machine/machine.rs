@@ -11,6 +11,7 @@
 
 use super::config::BoardConfig;
 use super::faults::{reaction, FaultLatch, Reaction};
+use super::following::FollowingMonitor;
 use super::homing::{HomeEvent, Homing};
 use super::jog_off::{JogEvent, JogOff};
 use super::limits::SoftLimits;
@@ -249,6 +250,8 @@ pub struct Machine {
     /// A Z-slide job runs (or holds): like an event job, the tick's source is the caller's and
     /// the job ends when the source is idle.
     z_job: bool,
+    /// Commanded (the step counters) against measured, for axes with feedback.
+    following: FollowingMonitor,
 }
 
 impl Default for Machine {
@@ -289,6 +292,7 @@ impl Machine {
             event_job: false,
             paused: false,
             z_job: false,
+            following: FollowingMonitor::new(),
         }
     }
 
@@ -431,7 +435,8 @@ impl Machine {
                 if let Some(&f) = FaultCode::ALL.iter().find(|f| self.active & f.bit() != 0) {
                     return Err(Refusal::CauseActive(f));
                 }
-                if self.homed {
+                // After a following error the counters no longer say where the axis is.
+                if self.homed && !self.latch.has(FaultCode::FollowingError) {
                     MachineState::Ready
                 } else {
                     MachineState::Idle
@@ -460,6 +465,7 @@ impl Machine {
             MachineCommand::SetConfig(new) => {
                 new.validate().map_err(Refusal::InvalidConfig)?;
                 self.install(*new);
+                self.following.resync();
                 self.homed = false;
                 self.homing.cancel();
                 self.jog = None;
@@ -503,6 +509,11 @@ impl Machine {
                 self.freeze();
             }
             MachineCommand::ClearFault => {
+                if self.latch.has(FaultCode::FollowingError) {
+                    self.homed = false;
+                    // The operator accepts where the axes stand: errors count from here.
+                    self.following.resync();
+                }
                 self.latch.clear();
                 self.homing.cancel();
                 self.jog = None;
@@ -567,6 +578,35 @@ impl Machine {
         }
         self.apply_hold(dda);
         TickOut { step, outputs: self.outputs }
+    }
+
+    /// The following-error check (interrupt rate, after [`Machine::tick`] / `tick_with`, once
+    /// per tick on boards with feedback): `measured_steps` is each axis's measured position in
+    /// the frame of [`Machine::raw_positions`] (the board converts encoder counts to steps with
+    /// a factor precomputed at setup), compared with the raw step counters. Axes whose
+    /// `BoardConfig::following` limit is 0 are not checked. An error over the limit for the
+    /// configured debounce latches `FollowingError` (immediate stop, position kept; homing is
+    /// lost when it is cleared). True when it tripped now. Six subtracts and compares, no
+    /// division.
+    #[inline]
+    pub fn feedback(&mut self, measured_steps: &[i64; MAX_AXES]) -> bool {
+        if self.state == MachineState::Boot {
+            return false;
+        }
+        let cfg = &self.cfg.following;
+        match self.following.check(cfg, &self.raw, measured_steps) {
+            Some(_) => {
+                self.raise(FaultCode::FollowingError);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Largest following error per axis since boot, the last `SetConfig` or the last clear of a
+    /// following error, steps.
+    pub fn following_worst_steps(&self) -> [u32; MAX_AXES] {
+        self.following.worst_steps()
     }
 
     /// Level causes and the faults they raise.

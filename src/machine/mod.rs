@@ -5,12 +5,14 @@
 //! * [`faults`]: the fault latch and the reaction per fault class.
 //! * [`machine`]: [`Machine`], which the tick and control tasks drive.
 //! * [`homing`], [`limits`], [`outputs`]: homing sequencer, soft limits, safe outputs.
+//! * [`following`]: the following-error monitor (commanded vs measured, axes with feedback).
 //! * [`watchdog`]: watchdog feeding gate and tick-overrun detector.
 //! * [`persist`]: the config record in NOR flash (version, CRC, two slots), and [`ram_flash`],
 //!   a RAM NOR-flash with real NOR rules for tests and the QEMU scenarios.
 
 pub mod config;
 pub mod faults;
+pub mod following;
 pub mod homing;
 pub mod jog_off;
 pub mod limits;
@@ -24,6 +26,7 @@ pub mod watchdog;
 
 pub use config::{BoardConfig, HomeAxis};
 pub use faults::{reaction, FaultLatch, Reaction};
+pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{
     BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, StepSource, TickOut,
 };
