@@ -34,6 +34,7 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         FaultCode::LimitSwitch
         | FaultCode::SoftLimit
         | FaultCode::ConfigMissing
+        | FaultCode::ConfigCorrupt
         | FaultCode::FollowingError
         | FaultCode::HomingFailed => Reaction::Stop,
         FaultCode::QueueUnderrun
@@ -57,7 +58,7 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         FaultCode::EStop => "e-stop input released",
         FaultCode::LimitSwitch => "every limit switch released",
         FaultCode::LinkLost => "link back",
-        FaultCode::ConfigMissing => "a valid SetConfig accepted",
+        FaultCode::ConfigMissing | FaultCode::ConfigCorrupt => "a valid SetConfig accepted",
         FaultCode::SoftLimit
         | FaultCode::QueueUnderrun
         | FaultCode::TickOverrun

@@ -203,10 +203,27 @@ impl Refusal {
 /// Why a stored config could not be used at boot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BootConfig {
+    /// Never saved (QEMU's read-only flash always reads this way): `ConfigMissing`.
     Missing,
+    /// Something is stored but no complete record of this version (or the flash refused the
+    /// read): `ConfigCorrupt`.
     Corrupt,
+    /// A complete record whose values fail validation: `ConfigCorrupt`.
     Invalid(ConfigError),
 }
+
+impl BootConfig {
+    /// The fault the machine latches for this reason.
+    pub const fn fault(self) -> FaultCode {
+        match self {
+            BootConfig::Missing => FaultCode::ConfigMissing,
+            BootConfig::Corrupt | BootConfig::Invalid(_) => FaultCode::ConfigCorrupt,
+        }
+    }
+}
+
+/// The config faults: levels until a valid `SetConfig`.
+const CONFIG_FAULTS: u32 = FaultCode::ConfigMissing.bit() | FaultCode::ConfigCorrupt.bit();
 
 #[derive(Clone, Debug)]
 pub struct Machine {
@@ -296,8 +313,9 @@ impl Machine {
         }
     }
 
-    /// Leaves `Boot` with the config loaded from flash: a valid one -> `Idle`; missing, corrupt
-    /// or invalid -> safe defaults and `ConfigMissing` (`Fault`). Build the DDA and preparer from
+    /// Leaves `Boot` with the config loaded from flash: a valid one -> `Idle`; missing -> safe
+    /// defaults and `ConfigMissing`, corrupt or invalid -> safe defaults and `ConfigCorrupt`
+    /// (`Fault` either way). Build the DDA and preparer from
     /// [`Machine::config`] afterwards. Outside `Boot` it changes nothing.
     pub fn boot(&mut self, loaded: Result<BoardConfig, BootConfig>) -> MachineState {
         if self.state != MachineState::Boot {
@@ -308,11 +326,12 @@ impl Machine {
                 self.install(cfg);
                 self.enter(MachineState::Idle);
             }
-            Err(_) => {
+            Err(why) => {
                 self.install(BoardConfig::safe_default());
                 self.config_set = false;
-                self.active |= FaultCode::ConfigMissing.bit();
-                self.raise(FaultCode::ConfigMissing);
+                let code = why.fault();
+                self.active |= code.bit();
+                self.raise(code);
             }
         }
         self.state
@@ -322,7 +341,7 @@ impl Machine {
         self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
         self.cfg = cfg;
         self.config_set = true;
-        self.active &= !FaultCode::ConfigMissing.bit();
+        self.active &= !CONFIG_FAULTS;
     }
 
     pub fn state(&self) -> MachineState {
@@ -612,7 +631,7 @@ impl Machine {
     /// Level causes and the faults they raise.
     #[inline]
     fn watch_inputs(&mut self, dda: &Dda, inp: &Inputs) {
-        let mut active = self.active & FaultCode::ConfigMissing.bit();
+        let mut active = self.active & CONFIG_FAULTS;
         if inp.estop {
             active |= FaultCode::EStop.bit();
         }

@@ -45,6 +45,17 @@ pub enum LoadError {
     Flash,
 }
 
+impl LoadError {
+    /// What the machine's boot makes of it: missing stays missing; anything else (including a
+    /// flash that refuses the read) is a corrupt config.
+    pub const fn boot(self) -> super::machine::BootConfig {
+        match self {
+            LoadError::Missing => super::machine::BootConfig::Missing,
+            LoadError::Corrupt | LoadError::Flash => super::machine::BootConfig::Corrupt,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SaveError {
     /// The config does not serialise into [`MAX_PAYLOAD`] bytes.

@@ -10,8 +10,8 @@ use crate::dda::{Dda, Preparer};
 use crate::machine::persist::{ConfigStore, LoadError};
 use crate::machine::ram_flash::RamFlash;
 use crate::machine::{
-    BoardConfig, BootConfig, FollowingConfig, HomeAxis, Inputs, Machine, MachineCommand,
-    MachineState, Outputs, OverrunDetector, Refusal,
+    BoardConfig, FollowingConfig, HomeAxis, Inputs, Machine, MachineCommand, MachineState, Outputs,
+    OverrunDetector, Refusal,
 };
 use crate::planner::{Move, Planner};
 use crate::protocol::{AxisScale, FaultCode, WireConfig};
@@ -272,10 +272,7 @@ impl FaultScenario {
         let mut machine = Machine::new();
         let loaded = if case == Case::ConfigMissing {
             let mut store = ConfigStore::new(SimFlash::new(), 0, 1024).ok()?;
-            store.load().map_err(|e| match e {
-                LoadError::Missing => BootConfig::Missing,
-                LoadError::Corrupt | LoadError::Flash => BootConfig::Corrupt,
-            })
+            store.load().map_err(LoadError::boot)
         } else {
             Ok(config(case))
         };
