@@ -30,8 +30,8 @@ const SWITCH_MAX: i64 = 3_000;
 const INJECT_TICK: u64 = 3_000;
 /// Ticks the scenario keeps running once everything has settled.
 const SETTLE_TICKS: u32 = 100;
-/// Safety net: no scenario comes near it.
-const MAX_TICKS: u64 = 50_000;
+/// Safety net: no scenario comes near it (the longest, the polar homing, takes about 60 000).
+const MAX_TICKS: u64 = 100_000;
 /// Soft limits of the soft-limit cases (steps, both axes).
 const SOFT_LIMIT: i64 = 2_000;
 
@@ -56,10 +56,13 @@ pub enum Case {
     /// The sim plant follows the steps (a few ticks behind) until X jams: the machine's
     /// following-error monitor trips after its debounce.
     FollowingError,
+    /// The polar machine (`polar::job::board_config`) homes: the arm against its end-stop, the
+    /// carriage onto its minimum-radius switch; both origins land on the switch points.
+    HomingPolar,
 }
 
 /// Every case, in the order the scenario list runs them.
-pub const CASES: [Case; 21] = [
+pub const CASES: [Case; 22] = [
     Case::EStop,
     Case::LimitMin(0),
     Case::LimitMax(0),
@@ -81,6 +84,7 @@ pub const CASES: [Case; 21] = [
     Case::Sensor(FaultCode::ResolverLoss),
     Case::Sensor(FaultCode::SensorFault),
     Case::FollowingError,
+    Case::HomingPolar,
 ];
 
 impl Case {
@@ -107,6 +111,7 @@ impl Case {
             Case::Sensor(FaultCode::ResolverLoss) => "fault_resolver_loss",
             Case::Sensor(_) => "fault_sensor",
             Case::FollowingError => "fault_following_error",
+            Case::HomingPolar => "fault_homing_polar",
         }
     }
 
@@ -118,7 +123,7 @@ impl Case {
             Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
             // Jogged off and cleared: the fault it recovered from.
             Case::LimitJogOff => (Ready, FaultCode::LimitSwitch),
-            Case::HomingOk => return (Ready, None),
+            Case::HomingOk | Case::HomingPolar => return (Ready, None),
             Case::HomingNotFound => (Fault, FaultCode::HomingFailed),
             // Refused at the queue: nothing changes, the refusal names the soft limit.
             Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
@@ -148,6 +153,9 @@ fn home_axis(toward_max: bool, max_travel_steps: u32, home_pos_steps: i64) -> Ho
 /// The scenarios' board: two axes, switches at +-3000 steps, wide soft limits and no homing
 /// switches (homing sets the origin where the machine stands), except where a case says.
 pub fn config(case: Case) -> BoardConfig {
+    if case == Case::HomingPolar {
+        return crate::polar::job::board_config();
+    }
     let mut axes = [AxisLimits::UNUSED; MAX_AXES];
     axes[0] = AXIS;
     axes[1] = AXIS;
@@ -223,6 +231,11 @@ const FOLLOWING_LIMIT_STEPS: u32 = 40;
 const FOLLOWING_DEBOUNCE_TICKS: u16 = 8;
 const PLANT_LAG_TICKS: usize = 16;
 
+/// Where the polar homing case starts: the arm 1000 steps (22.5 degrees) off its end-stop,
+/// the carriage 1500 steps (1.5 in) out from minimum radius.
+const POLAR_START_THETA_STEPS: i64 = 1_000;
+const POLAR_START_R_STEPS: i64 = 1_500;
+
 /// The flash the config-missing case boots from: erased, as QEMU's read-only flash reads.
 type SimFlash = RamFlash<2048, 1024>;
 
@@ -290,10 +303,12 @@ impl FaultScenario {
             Case::LimitMax(_) => &TO_Y_MAX,
             Case::SoftLimitQueue | Case::SoftLimitRun => &INSIDE,
             Case::QueueUnderrun => &STREAM,
-            Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing => &[],
+            Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing | Case::HomingPolar => &[],
         };
         let start_phys = match case {
             Case::HomingOk => [-2_000, 2_200, 0, 0, 0, 0],
+            // The arm part-way round, the carriage part-way out (steps from the homes).
+            Case::HomingPolar => [POLAR_START_THETA_STEPS, POLAR_START_R_STEPS, 0, 0, 0, 0],
             _ => [0; MAX_AXES],
         };
         let mut s = FaultScenario {
@@ -344,14 +359,27 @@ impl FaultScenario {
         self.start_phys[axis] + self.rec.net[axis]
     }
 
+    /// Where axis `a`'s (min, max) switches close, sim steps. The polar machine: the arm's
+    /// right end-stop and the carriage's minimum-radius switch at its home (0), the far ends
+    /// of the work area beyond.
+    fn switch_at(&self, a: usize) -> (i64, i64) {
+        match self.case {
+            Case::HomingPolar => {
+                (0, [crate::polar::job::THETA_SPAN_STEPS, crate::polar::job::R_SPAN_STEPS][a & 1])
+            }
+            _ => (SWITCH_MIN, SWITCH_MAX),
+        }
+    }
+
     /// The sim board's inputs this tick.
     fn inputs(&mut self) -> Inputs {
         let mut inp = Inputs::QUIET;
         for a in 0..2 {
-            if self.phys(a) <= SWITCH_MIN {
+            let (min_at, max_at) = self.switch_at(a);
+            if self.phys(a) <= min_at {
                 inp.limit_min |= 1 << a;
             }
-            if self.phys(a) >= SWITCH_MAX {
+            if self.phys(a) >= max_at {
                 inp.limit_max |= 1 << a;
             }
         }
@@ -510,7 +538,9 @@ impl FaultScenario {
             || self.dda.state() == crate::dda::MotionState::Held
             || state == MachineState::Fault && self.dda.rate().to_bits() == 0;
         let final_state = match self.case {
-            Case::HomingOk => state == MachineState::Ready && self.machine.is_homed(),
+            Case::HomingOk | Case::HomingPolar => {
+                state == MachineState::Ready && self.machine.is_homed()
+            }
             Case::LimitJogOff => state == MachineState::Ready && self.cleared.is_some(),
             Case::SoftLimitQueue => self.beyond_tried,
             _ => state == MachineState::Fault,
@@ -553,8 +583,9 @@ impl Scenario for FaultScenario {
         self.case.name()
     }
 
+    /// The case's machine's rate: `TICK_HZ`, except the polar machine's.
     fn tick_hz(&self) -> u32 {
-        TICK_HZ
+        self.machine.config().wire.machine.tick_hz
     }
 
     fn wants_background(&self) -> bool {
@@ -763,6 +794,27 @@ mod tests {
         let r = run(Case::HomingNotFound);
         assert_eq!(r.figure("net0_steps"), Some(-500), "stopped after max_travel");
         assert_eq!(r.figure("homed"), Some(0));
+    }
+
+    #[test]
+    fn polar_homing_puts_both_origins_on_their_switches() {
+        let r = run(Case::HomingPolar);
+        let f = |n: &str| r.figure(n).unwrap();
+        assert_eq!(f("homed"), 1);
+        assert_eq!(f("fault_mask"), 0);
+        let h = crate::polar::job::homing_config();
+        for (a, start) in [(0usize, POLAR_START_THETA_STEPS), (1, POLAR_START_R_STEPS)] {
+            let (pos, phys) = (["pos0_steps", "pos1_steps"][a], ["phys0_steps", "phys1_steps"][a]);
+            // The origin is the switch point (theta: the end-stop, r: minimum radius), where
+            // the documented home position says: machine position = sim position from there.
+            assert_eq!(f(pos), f(phys) + h.axes[a].home_pos_steps, "axis {a}");
+            // Pulled off the switch by the back-off.
+            assert_eq!(f(pos), h.axes[a].home_pos_steps + h.axes[a].backoff_steps as i64);
+            // Net travel: from the start down to the switch, then the back-off out again.
+            let net = f(["net0_steps", "net1_steps"][a]);
+            assert_eq!(net, -start + h.axes[a].backoff_steps as i64, "axis {a}");
+        }
+        assert!(r.ticks < MAX_TICKS);
     }
 
     #[test]
