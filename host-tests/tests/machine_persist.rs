@@ -120,7 +120,8 @@ fn missing_corrupt_and_invalid_each_latch_their_own_code_until_a_valid_config() 
     let mut invalid = good;
     invalid.wire.machine.tick_hz = 0;
     assert!(invalid.validate().is_err());
-    let cases: [(&str, fn(&mut ConfigStore<Flash>, &BoardConfig), FaultCode); 3] = [
+    type Prepare = fn(&mut ConfigStore<Flash>, &BoardConfig);
+    let cases: [(&str, Prepare, FaultCode); 3] = [
         ("missing", |_, _| {}, FaultCode::ConfigMissing),
         (
             "corrupt",

@@ -20,7 +20,9 @@ pub enum Reaction {
 impl Reaction {
     pub const fn name(self) -> &'static str {
         match self {
-            Reaction::Kill => "immediate stop, outputs off, homing lost",
+            Reaction::Kill => {
+                "immediate stop, outputs off, homing lost; steps may be lost mechanically but the counters are exact"
+            }
             Reaction::Stop => "immediate stop (abort), position kept",
             Reaction::Hold => "feed hold (controlled stop on the path)",
         }
@@ -36,7 +38,8 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         | FaultCode::ConfigMissing
         | FaultCode::ConfigCorrupt
         | FaultCode::FollowingError
-        | FaultCode::HomingFailed => Reaction::Stop,
+        | FaultCode::HomingFailed
+        | FaultCode::WatchdogReset => Reaction::Stop,
         FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::LinkLost
@@ -62,7 +65,8 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         FaultCode::SoftLimit
         | FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
-        | FaultCode::HomingFailed => "at once (an event, not a level)",
+        | FaultCode::HomingFailed
+        | FaultCode::WatchdogReset => "at once (an event, not a level)",
         FaultCode::SensorFault => "sensor input clear",
         FaultCode::FollowingError => {
             "at once from the machine's monitor (it re-zeroes), else the sensor's bit clear; homing lost (home again)"

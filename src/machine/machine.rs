@@ -16,6 +16,7 @@ use super::homing::{HomeEvent, Homing};
 use super::jog_off::{JogEvent, JogOff};
 use super::limits::SoftLimits;
 use super::outputs::Outputs;
+use super::reset_cause::ResetCause;
 use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
 use crate::config::{ConfigError, MAX_AXES};
 use crate::dda::{Command, Dda, Preparer, StepOutput, READY_DEPTH};
@@ -318,8 +319,24 @@ impl Machine {
     /// (`Fault` either way). Build the DDA and preparer from
     /// [`Machine::config`] afterwards. Outside `Boot` it changes nothing.
     pub fn boot(&mut self, loaded: Result<BoardConfig, BootConfig>) -> MachineState {
+        self.boot_after_reset(loaded, ResetCause::Unknown)
+    }
+
+    /// [`Machine::boot`] after a reset of cause `reset` (the board decodes RCC_CSR with
+    /// [`ResetCause::from_rcc_csr`]): after a watchdog reset the machine latches
+    /// `WatchdogReset` first (so it is the first fault), then loads the config as `boot` does,
+    /// and stays in `Fault` until `ClearFault` (then `Idle`: never homed after a reset).
+    pub fn boot_after_reset(
+        &mut self,
+        loaded: Result<BoardConfig, BootConfig>,
+        reset: ResetCause,
+    ) -> MachineState {
         if self.state != MachineState::Boot {
             return self.state;
+        }
+        if reset.is_watchdog() {
+            // Boot -> Fault; the `Idle` below is then not an allowed event and is skipped.
+            self.raise(FaultCode::WatchdogReset);
         }
         match loaded.and_then(|c| c.validate().map(|_| c).map_err(BootConfig::Invalid)) {
             Ok(cfg) => {

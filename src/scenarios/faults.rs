@@ -678,6 +678,10 @@ impl Scenario for FaultScenario {
         r.push("jog_sent", self.jog_sent as i64);
         r.push("cleared", self.cleared.map_or(0, |f| f.code() as i64));
         r.push("homed", self.machine.is_homed() as i64);
+        if self.case == Case::EStop {
+            let exact = (0..MAX_AXES).all(|a| raw[a] == dda[a] && raw[a] == self.rec.net[a]);
+            r.push("counters_exact", exact as i64);
+        }
         if self.case == Case::FollowingError {
             r.push("measured0_steps", self.measured[0]);
             r.push("measured1_steps", self.measured[1]);
@@ -736,6 +740,9 @@ mod tests {
             Some(crate::protocol::ErrorCode::OutOfState.code() as i64)
         );
         assert!(r.figure("net0_steps").unwrap() > 0, "moving when the e-stop came");
+        // The report says the counters are exact, and the documented reaction says so too.
+        assert_eq!(r.figure("counters_exact"), Some(1));
+        assert!(reaction(FaultCode::EStop).name().contains("the counters are exact"));
     }
 
     #[test]
