@@ -1,10 +1,11 @@
 //! The config record in NOR flash: round trip, missing, corrupt, generations, and power cuts at
 //! every byte of a save (the old record survives or the new one is complete; never garbage).
 
+use motion::dda::Dda;
 use motion::machine::persist::{ConfigStore, LoadError, RECORD_AREA};
 use motion::machine::ram_flash::NorFlash;
 use motion::machine::ram_flash::{RamFlash, RamFlashError};
-use motion::machine::{BootConfig, Machine, MachineState};
+use motion::machine::{BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal};
 use motion::protocol::FaultCode;
 use motion::scenarios::faults::{config, Case};
 
@@ -98,11 +99,72 @@ fn boot_with_a_corrupt_record_uses_safe_defaults_and_says_so() {
     let mut s = store();
     s.save(&config(Case::EStop)).unwrap();
     s.flash().corrupt(1024 + 40, 0xFF);
-    let loaded = s.load().map_err(|_| BootConfig::Corrupt);
+    let loaded = s.load().map_err(LoadError::boot);
+    assert_eq!(loaded, Err(BootConfig::Corrupt));
     let mut m = Machine::new();
     assert_eq!(m.boot(loaded), MachineState::Fault);
-    assert_eq!(m.faults().first(), Some(FaultCode::ConfigMissing));
+    // The fault says corrupt, not missing.
+    assert_eq!(m.faults().first(), Some(FaultCode::ConfigCorrupt));
+    assert!(!m.faults().has(FaultCode::ConfigMissing));
     assert_eq!(*m.config(), motion::machine::BoardConfig::safe_default());
     // The defaults allow no travel at all.
     assert_eq!(m.config().wire.scale[0].soft_max, 0);
+}
+
+/// Missing (erased flash, as QEMU's reads), corrupt (a bit flipped), invalid (a complete record
+/// whose values fail validation): each boots into Fault with safe defaults and the code that
+/// names it, refuses motion, and refuses ClearFault until a valid SetConfig replaced it.
+#[test]
+fn missing_corrupt_and_invalid_each_latch_their_own_code_until_a_valid_config() {
+    let good = config(Case::EStop);
+    let mut invalid = good;
+    invalid.wire.machine.tick_hz = 0;
+    assert!(invalid.validate().is_err());
+    type Prepare = fn(&mut ConfigStore<Flash>, &BoardConfig);
+    let cases: [(&str, Prepare, FaultCode); 3] = [
+        ("missing", |_, _| {}, FaultCode::ConfigMissing),
+        (
+            "corrupt",
+            |s, c| {
+                s.save(c).unwrap();
+                s.flash().corrupt(1024 + 20, 0x04);
+            },
+            FaultCode::ConfigCorrupt,
+        ),
+        ("invalid", |s, c| s.save(c).unwrap(), FaultCode::ConfigCorrupt),
+    ];
+    for (name, prepare, code) in cases {
+        let mut s = store();
+        prepare(&mut s, &invalid);
+        let loaded = s.load().map_err(LoadError::boot);
+        if name == "invalid" {
+            // The record itself is intact: the machine's validation rejects it.
+            assert_eq!(loaded, Ok(invalid), "{name}");
+        }
+        let mut m = Machine::new();
+        assert_eq!(m.boot(loaded), MachineState::Fault, "{name}");
+        assert_eq!(m.faults().mask(), code.bit(), "{name}: exactly its own code");
+        assert_eq!(m.active_causes(), code.bit(), "{name}: a level until a valid config");
+        let mc = m.config().wire.machine;
+        let mut dda = Dda::new(&mc).unwrap();
+        assert_eq!(
+            m.command(MachineCommand::ClearFault, &mut dda),
+            Err(Refusal::CauseActive(code)),
+            "{name}"
+        );
+        assert!(m.command(MachineCommand::Home, &mut dda).is_err(), "{name}: no motion");
+        m.command(MachineCommand::SetConfig(&good), &mut dda).unwrap();
+        assert_eq!(m.active_causes(), 0, "{name}");
+        assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
+        assert_eq!(*m.config(), good);
+    }
+}
+
+#[test]
+fn the_following_limits_persist_with_the_record() {
+    let cfg = config(Case::FollowingError);
+    assert!(cfg.following.enabled());
+    let mut s = store();
+    s.save(&cfg).unwrap();
+    assert_eq!(s.load().map(|c| c.following), Ok(cfg.following));
 }

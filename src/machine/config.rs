@@ -1,6 +1,7 @@
 //! The board configuration the machine runs with and persists: the link's [`WireConfig`] (step
 //! timing, axis limits, scale and soft limits) plus the homing parameters of each axis.
 
+use super::following::FollowingConfig;
 use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
 use crate::protocol::{AxisScale, WireConfig};
 
@@ -39,6 +40,8 @@ pub struct BoardConfig {
     pub home_order: [u8; MAX_AXES],
     pub home_count: u8,
     pub home: [HomeAxis; MAX_AXES],
+    /// Following-error limits of the axes with feedback ([`FollowingConfig::OFF`]: none).
+    pub following: FollowingConfig,
 }
 
 /// Longest homing travel: a seek must fit one planned move.
@@ -70,12 +73,25 @@ impl BoardConfig {
             home_order: [0; MAX_AXES],
             home_count: 0,
             home: [HomeAxis::UNUSED; MAX_AXES],
+            following: FollowingConfig::OFF,
         }
     }
 
-    /// `wire` with the homing parameters of `h` (validate before use).
+    /// `wire` with the homing parameters of `h` and no following-error check (validate before
+    /// use).
     pub fn with_homing(wire: WireConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
-        BoardConfig { wire, home_order: h.order, home_count: h.count, home: h.axes }
+        BoardConfig {
+            wire,
+            home_order: h.order,
+            home_count: h.count,
+            home: h.axes,
+            following: FollowingConfig::OFF,
+        }
+    }
+
+    /// This config with the following-error limits `f` (validate before use).
+    pub const fn with_following(self, f: FollowingConfig) -> BoardConfig {
+        BoardConfig { following: f, ..self }
     }
 
     /// The homing parameters, as the link carries them.
@@ -121,6 +137,6 @@ impl BoardConfig {
                 return err("max_travel_steps", Some(a), "must be within backoff_steps+1..=2^30");
             }
         }
-        Ok(())
+        self.following.validate(axes)
     }
 }

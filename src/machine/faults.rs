@@ -20,7 +20,9 @@ pub enum Reaction {
 impl Reaction {
     pub const fn name(self) -> &'static str {
         match self {
-            Reaction::Kill => "immediate stop, outputs off, homing lost",
+            Reaction::Kill => {
+                "immediate stop, outputs off, homing lost; steps may be lost mechanically but the counters are exact"
+            }
             Reaction::Stop => "immediate stop (abort), position kept",
             Reaction::Hold => "feed hold (controlled stop on the path)",
         }
@@ -34,8 +36,10 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         FaultCode::LimitSwitch
         | FaultCode::SoftLimit
         | FaultCode::ConfigMissing
+        | FaultCode::ConfigCorrupt
         | FaultCode::FollowingError
-        | FaultCode::HomingFailed => Reaction::Stop,
+        | FaultCode::HomingFailed
+        | FaultCode::WatchdogReset => Reaction::Stop,
         FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::LinkLost
@@ -57,12 +61,16 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         FaultCode::EStop => "e-stop input released",
         FaultCode::LimitSwitch => "every limit switch released",
         FaultCode::LinkLost => "link back",
-        FaultCode::ConfigMissing => "a valid SetConfig accepted",
+        FaultCode::ConfigMissing | FaultCode::ConfigCorrupt => "a valid SetConfig accepted",
         FaultCode::SoftLimit
         | FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
-        | FaultCode::HomingFailed => "at once (an event, not a level)",
+        | FaultCode::HomingFailed
+        | FaultCode::WatchdogReset => "at once (an event, not a level)",
         FaultCode::SensorFault => "sensor input clear",
+        FaultCode::FollowingError => {
+            "at once from the machine's monitor (it re-zeroes), else the sensor's bit clear; homing lost (home again)"
+        }
         _ => "the sensor's fault bit clear",
     }
 }

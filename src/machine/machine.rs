@@ -11,10 +11,12 @@
 
 use super::config::BoardConfig;
 use super::faults::{reaction, FaultLatch, Reaction};
+use super::following::FollowingMonitor;
 use super::homing::{HomeEvent, Homing};
 use super::jog_off::{JogEvent, JogOff};
 use super::limits::SoftLimits;
 use super::outputs::Outputs;
+use super::reset_cause::ResetCause;
 use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
 use crate::config::{ConfigError, MAX_AXES};
 use crate::dda::{Command, Dda, Preparer, StepOutput, READY_DEPTH};
@@ -202,10 +204,27 @@ impl Refusal {
 /// Why a stored config could not be used at boot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BootConfig {
+    /// Never saved (QEMU's read-only flash always reads this way): `ConfigMissing`.
     Missing,
+    /// Something is stored but no complete record of this version (or the flash refused the
+    /// read): `ConfigCorrupt`.
     Corrupt,
+    /// A complete record whose values fail validation: `ConfigCorrupt`.
     Invalid(ConfigError),
 }
+
+impl BootConfig {
+    /// The fault the machine latches for this reason.
+    pub const fn fault(self) -> FaultCode {
+        match self {
+            BootConfig::Missing => FaultCode::ConfigMissing,
+            BootConfig::Corrupt | BootConfig::Invalid(_) => FaultCode::ConfigCorrupt,
+        }
+    }
+}
+
+/// The config faults: levels until a valid `SetConfig`.
+const CONFIG_FAULTS: u32 = FaultCode::ConfigMissing.bit() | FaultCode::ConfigCorrupt.bit();
 
 #[derive(Clone, Debug)]
 pub struct Machine {
@@ -249,6 +268,8 @@ pub struct Machine {
     /// A Z-slide job runs (or holds): like an event job, the tick's source is the caller's and
     /// the job ends when the source is idle.
     z_job: bool,
+    /// Commanded (the step counters) against measured, for axes with feedback.
+    following: FollowingMonitor,
 }
 
 impl Default for Machine {
@@ -289,26 +310,45 @@ impl Machine {
             event_job: false,
             paused: false,
             z_job: false,
+            following: FollowingMonitor::new(),
         }
     }
 
-    /// Leaves `Boot` with the config loaded from flash: a valid one -> `Idle`; missing, corrupt
-    /// or invalid -> safe defaults and `ConfigMissing` (`Fault`). Build the DDA and preparer from
+    /// Leaves `Boot` with the config loaded from flash: a valid one -> `Idle`; missing -> safe
+    /// defaults and `ConfigMissing`, corrupt or invalid -> safe defaults and `ConfigCorrupt`
+    /// (`Fault` either way). Build the DDA and preparer from
     /// [`Machine::config`] afterwards. Outside `Boot` it changes nothing.
     pub fn boot(&mut self, loaded: Result<BoardConfig, BootConfig>) -> MachineState {
+        self.boot_after_reset(loaded, ResetCause::Unknown)
+    }
+
+    /// [`Machine::boot`] after a reset of cause `reset` (the board decodes RCC_CSR with
+    /// [`ResetCause::from_rcc_csr`]): after a watchdog reset the machine latches
+    /// `WatchdogReset` first (so it is the first fault), then loads the config as `boot` does,
+    /// and stays in `Fault` until `ClearFault` (then `Idle`: never homed after a reset).
+    pub fn boot_after_reset(
+        &mut self,
+        loaded: Result<BoardConfig, BootConfig>,
+        reset: ResetCause,
+    ) -> MachineState {
         if self.state != MachineState::Boot {
             return self.state;
+        }
+        if reset.is_watchdog() {
+            // Boot -> Fault; the `Idle` below is then not an allowed event and is skipped.
+            self.raise(FaultCode::WatchdogReset);
         }
         match loaded.and_then(|c| c.validate().map(|_| c).map_err(BootConfig::Invalid)) {
             Ok(cfg) => {
                 self.install(cfg);
                 self.enter(MachineState::Idle);
             }
-            Err(_) => {
+            Err(why) => {
                 self.install(BoardConfig::safe_default());
                 self.config_set = false;
-                self.active |= FaultCode::ConfigMissing.bit();
-                self.raise(FaultCode::ConfigMissing);
+                let code = why.fault();
+                self.active |= code.bit();
+                self.raise(code);
             }
         }
         self.state
@@ -318,7 +358,7 @@ impl Machine {
         self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
         self.cfg = cfg;
         self.config_set = true;
-        self.active &= !FaultCode::ConfigMissing.bit();
+        self.active &= !CONFIG_FAULTS;
     }
 
     pub fn state(&self) -> MachineState {
@@ -431,7 +471,8 @@ impl Machine {
                 if let Some(&f) = FaultCode::ALL.iter().find(|f| self.active & f.bit() != 0) {
                     return Err(Refusal::CauseActive(f));
                 }
-                if self.homed {
+                // After a following error the counters no longer say where the axis is.
+                if self.homed && !self.latch.has(FaultCode::FollowingError) {
                     MachineState::Ready
                 } else {
                     MachineState::Idle
@@ -460,6 +501,7 @@ impl Machine {
             MachineCommand::SetConfig(new) => {
                 new.validate().map_err(Refusal::InvalidConfig)?;
                 self.install(*new);
+                self.following.resync();
                 self.homed = false;
                 self.homing.cancel();
                 self.jog = None;
@@ -503,6 +545,11 @@ impl Machine {
                 self.freeze();
             }
             MachineCommand::ClearFault => {
+                if self.latch.has(FaultCode::FollowingError) {
+                    self.homed = false;
+                    // The operator accepts where the axes stand: errors count from here.
+                    self.following.resync();
+                }
                 self.latch.clear();
                 self.homing.cancel();
                 self.jog = None;
@@ -569,10 +616,39 @@ impl Machine {
         TickOut { step, outputs: self.outputs }
     }
 
+    /// The following-error check (interrupt rate, after [`Machine::tick`] / `tick_with`, once
+    /// per tick on boards with feedback): `measured_steps` is each axis's measured position in
+    /// the frame of [`Machine::raw_positions`] (the board converts encoder counts to steps with
+    /// a factor precomputed at setup), compared with the raw step counters. Axes whose
+    /// `BoardConfig::following` limit is 0 are not checked. An error over the limit for the
+    /// configured debounce latches `FollowingError` (immediate stop, position kept; homing is
+    /// lost when it is cleared). True when it tripped now. Six subtracts and compares, no
+    /// division.
+    #[inline]
+    pub fn feedback(&mut self, measured_steps: &[i64; MAX_AXES]) -> bool {
+        if self.state == MachineState::Boot {
+            return false;
+        }
+        let cfg = &self.cfg.following;
+        match self.following.check(cfg, &self.raw, measured_steps) {
+            Some(_) => {
+                self.raise(FaultCode::FollowingError);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Largest following error per axis since boot, the last `SetConfig` or the last clear of a
+    /// following error, steps.
+    pub fn following_worst_steps(&self) -> [u32; MAX_AXES] {
+        self.following.worst_steps()
+    }
+
     /// Level causes and the faults they raise.
     #[inline]
     fn watch_inputs(&mut self, dda: &Dda, inp: &Inputs) {
-        let mut active = self.active & FaultCode::ConfigMissing.bit();
+        let mut active = self.active & CONFIG_FAULTS;
         if inp.estop {
             active |= FaultCode::EStop.bit();
         }

@@ -5,12 +5,15 @@
 //! * [`faults`]: the fault latch and the reaction per fault class.
 //! * [`machine`]: [`Machine`], which the tick and control tasks drive.
 //! * [`homing`], [`limits`], [`outputs`]: homing sequencer, soft limits, safe outputs.
+//! * [`following`]: the following-error monitor (commanded vs measured, axes with feedback).
 //! * [`watchdog`]: watchdog feeding gate and tick-overrun detector.
+//! * [`reset_cause`]: why the MCU reset (RCC_CSR), so a watchdog reset boots into a fault.
 //! * [`persist`]: the config record in NOR flash (version, CRC, two slots), and [`ram_flash`],
 //!   a RAM NOR-flash with real NOR rules for tests and the QEMU scenarios.
 
 pub mod config;
 pub mod faults;
+pub mod following;
 pub mod homing;
 pub mod jog_off;
 pub mod limits;
@@ -19,15 +22,18 @@ pub mod machine;
 pub mod outputs;
 pub mod persist;
 pub mod ram_flash;
+pub mod reset_cause;
 pub mod state;
 pub mod watchdog;
 
 pub use config::{BoardConfig, HomeAxis};
 pub use faults::{reaction, FaultLatch, Reaction};
+pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{
     BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, StepSource, TickOut,
 };
 pub use outputs::{Outputs, Z_DAC_MID_SCALE};
+pub use reset_cause::ResetCause;
 pub use state::{cell, Cell, CommandKind, MachineState};
 pub use watchdog::{OverrunDetector, WatchdogGate};
 

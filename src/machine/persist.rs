@@ -23,7 +23,8 @@ use embedded_storage::nor_flash::NorFlash;
 
 pub const MAGIC: [u8; 4] = *b"MBCF";
 /// Bump when the meaning of the payload changes; older records then load as corrupt.
-pub const RECORD_VERSION: u16 = 1;
+/// (2: `BoardConfig::following` added.)
+pub const RECORD_VERSION: u16 = 2;
 /// Bytes a record may use in its slot (the commit word at its end).
 pub const RECORD_AREA: usize = 512;
 const HEADER: usize = 12;
@@ -42,6 +43,17 @@ pub enum LoadError {
     Corrupt,
     /// The flash refused a read.
     Flash,
+}
+
+impl LoadError {
+    /// What the machine's boot makes of it: missing stays missing; anything else (including a
+    /// flash that refuses the read) is a corrupt config.
+    pub const fn boot(self) -> super::machine::BootConfig {
+        match self {
+            LoadError::Missing => super::machine::BootConfig::Missing,
+            LoadError::Corrupt | LoadError::Flash => super::machine::BootConfig::Corrupt,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -454,6 +454,8 @@ mod tests {
     fn copy_job_runs_through_the_machine_until_abort() {
         use crate::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
         use crate::protocol::HomingConfig;
+        // The rig has no switches: home where it stands (the real machine:
+        // `polar::job::homing_config`).
         let cfg = BoardConfig::with_homing(crate::polar::job::wire_config(), &HomingConfig::NONE);
         let (mut m, mut dda, mut prep) = crate::machine::homed(cfg);
         m.command(MachineCommand::StartCopy, &mut dda).unwrap();

@@ -3,7 +3,8 @@
 
 use super::scenario::TICK_HZ;
 use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
-use crate::protocol::{AxisScale, WireConfig};
+use crate::machine::{BoardConfig, HomeAxis};
+use crate::protocol::{AxisScale, HomingConfig, WireConfig};
 
 /// Steps per revolution of the arm (dTheta = 2 pi / 16000, the thesis's resolution).
 pub const THETA_STEPS_PER_REV: u32 = 16_000;
@@ -47,6 +48,40 @@ pub fn wire_config() -> WireConfig {
     }
 }
 
+/// Homing: seek speed, latch speed and back-off of both axes (steps/s, steps). The seek is a
+/// fifth of the axis's top rate, the latch a tenth of the seek; the back-off (0.1 in radial,
+/// 2.25 degrees angular) clears a switch's hysteresis.
+pub const HOME_SEARCH_HZ: u32 = 10_000;
+pub const HOME_LATCH_HZ: u32 = 1_000;
+pub const HOME_BACKOFF_STEPS: u32 = 100;
+
+/// How the polar machine homes (Fahim: "right end-stop = angular home; carriage at minimum
+/// radius = radial home"): first the arm clockwise (theta decreasing) against its right
+/// end-stop, then the carriage toward the pole onto its minimum-radius switch. Each: seek,
+/// back off, latch slowly, pull off. The origins are the switch points: theta 0 at the
+/// end-stop, r 0 at minimum radius (3 in from the pole), so the work area is theta
+/// 0..=`THETA_SPAN_STEPS`, r 0..=`R_SPAN_STEPS`, inside the soft limits. The seek may cross the
+/// whole work area (plus the back-off twice) before "switch not found".
+pub fn homing_config() -> HomingConfig {
+    let axis = |span: i64| HomeAxis {
+        toward_max: false,
+        search_hz: HOME_SEARCH_HZ,
+        latch_hz: HOME_LATCH_HZ,
+        backoff_steps: HOME_BACKOFF_STEPS,
+        max_travel_steps: span as u32 + 2 * HOME_BACKOFF_STEPS,
+        home_pos_steps: 0,
+    };
+    let mut axes = [HomeAxis::UNUSED; MAX_AXES];
+    axes[0] = axis(THETA_SPAN_STEPS);
+    axes[1] = axis(R_SPAN_STEPS);
+    HomingConfig { order: [0, 1, 0, 0, 0, 0], count: 2, axes }
+}
+
+/// The polar machine's board config: [`wire_config`] with [`homing_config`].
+pub fn board_config() -> BoardConfig {
+    BoardConfig::with_homing(wire_config(), &homing_config())
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::feed::EventFeed;
@@ -55,10 +90,8 @@ mod tests {
     use super::super::stream::{decode_all, parse_block};
     use super::*;
     use crate::dda::Dda;
-    use crate::machine::{
-        BoardConfig, Inputs, Machine, MachineCommand, MachineState, Refusal, StepSource,
-    };
-    use crate::protocol::{FaultCode, HomingConfig};
+    use crate::machine::{Inputs, Machine, MachineCommand, MachineState, Refusal, StepSource};
+    use crate::protocol::FaultCode;
     use crate::segment::Rate;
 
     fn blocks() -> std::vec::Vec<&'static [u8]> {
@@ -72,7 +105,9 @@ mod tests {
         out
     }
 
-    /// A homed polar machine in `Ready` and its DDA.
+    /// A homed polar machine in `Ready` and its DDA. The rig has no switches, so it homes where
+    /// it stands (`HomingConfig::NONE`); [`homing_config`] is the real machine's, run against
+    /// switches in the fault suite's `fault_homing_polar`.
     fn ready() -> (Machine, Dda) {
         let (m, dda, _) =
             crate::machine::homed(BoardConfig::with_homing(wire_config(), &HomingConfig::NONE));

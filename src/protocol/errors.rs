@@ -153,6 +153,8 @@ coded_enum! {
         WireStall = 16 => ("WireStall", "The wire stayed stalled through the whole retrace distance."),
         FollowingError = 17 => ("FollowingError", "Measured position too far from the commanded one."),
         HomingFailed = 18 => ("HomingFailed", "A homing switch was not found within the axis's travel, or did not release on back-off."),
+        ConfigCorrupt = 19 => ("ConfigCorrupt", "The stored configuration is unusable (CRC, version or validation failed): safe defaults until a valid configuration is set."),
+        WatchdogReset = 20 => ("WatchdogReset", "The board restarted because its watchdog expired (the tick or the control task stopped running); any job was lost."),
     }
 }
 

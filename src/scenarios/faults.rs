@@ -10,7 +10,7 @@ use crate::dda::{Dda, Preparer};
 use crate::machine::persist::{ConfigStore, LoadError};
 use crate::machine::ram_flash::RamFlash;
 use crate::machine::{
-    BoardConfig, BootConfig, HomeAxis, Inputs, Machine, MachineCommand, MachineState, Outputs,
+    BoardConfig, FollowingConfig, HomeAxis, Inputs, Machine, MachineCommand, MachineState, Outputs,
     OverrunDetector, Refusal,
 };
 use crate::planner::{Move, Planner};
@@ -30,8 +30,8 @@ const SWITCH_MAX: i64 = 3_000;
 const INJECT_TICK: u64 = 3_000;
 /// Ticks the scenario keeps running once everything has settled.
 const SETTLE_TICKS: u32 = 100;
-/// Safety net: no scenario comes near it.
-const MAX_TICKS: u64 = 50_000;
+/// Safety net: no scenario comes near it (the longest, the polar homing, takes about 60 000).
+const MAX_TICKS: u64 = 100_000;
 /// Soft limits of the soft-limit cases (steps, both axes).
 const SOFT_LIMIT: i64 = 2_000;
 
@@ -53,10 +53,16 @@ pub enum Case {
     TickOverrun,
     ConfigMissing,
     Sensor(FaultCode),
+    /// The sim plant follows the steps (a few ticks behind) until X jams: the machine's
+    /// following-error monitor trips after its debounce.
+    FollowingError,
+    /// The polar machine (`polar::job::board_config`) homes: the arm against its end-stop, the
+    /// carriage onto its minimum-radius switch; both origins land on the switch points.
+    HomingPolar,
 }
 
 /// Every case, in the order the scenario list runs them.
-pub const CASES: [Case; 20] = [
+pub const CASES: [Case; 22] = [
     Case::EStop,
     Case::LimitMin(0),
     Case::LimitMax(0),
@@ -77,6 +83,8 @@ pub const CASES: [Case; 20] = [
     Case::Sensor(FaultCode::EncoderIndex),
     Case::Sensor(FaultCode::ResolverLoss),
     Case::Sensor(FaultCode::SensorFault),
+    Case::FollowingError,
+    Case::HomingPolar,
 ];
 
 impl Case {
@@ -102,6 +110,8 @@ impl Case {
             Case::Sensor(FaultCode::EncoderIndex) => "fault_encoder_index",
             Case::Sensor(FaultCode::ResolverLoss) => "fault_resolver_loss",
             Case::Sensor(_) => "fault_sensor",
+            Case::FollowingError => "fault_following_error",
+            Case::HomingPolar => "fault_homing_polar",
         }
     }
 
@@ -113,7 +123,7 @@ impl Case {
             Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
             // Jogged off and cleared: the fault it recovered from.
             Case::LimitJogOff => (Ready, FaultCode::LimitSwitch),
-            Case::HomingOk => return (Ready, None),
+            Case::HomingOk | Case::HomingPolar => return (Ready, None),
             Case::HomingNotFound => (Fault, FaultCode::HomingFailed),
             // Refused at the queue: nothing changes, the refusal names the soft limit.
             Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
@@ -123,6 +133,7 @@ impl Case {
             Case::TickOverrun => (Fault, FaultCode::TickOverrun),
             Case::ConfigMissing => (Fault, FaultCode::ConfigMissing),
             Case::Sensor(code) => (Fault, code),
+            Case::FollowingError => (Fault, FaultCode::FollowingError),
         };
         (state, Some(code))
     }
@@ -142,6 +153,9 @@ fn home_axis(toward_max: bool, max_travel_steps: u32, home_pos_steps: i64) -> Ho
 /// The scenarios' board: two axes, switches at +-3000 steps, wide soft limits and no homing
 /// switches (homing sets the origin where the machine stands), except where a case says.
 pub fn config(case: Case) -> BoardConfig {
+    if case == Case::HomingPolar {
+        return crate::polar::job::board_config();
+    }
     let mut axes = [AxisLimits::UNUSED; MAX_AXES];
     axes[0] = AXIS;
     axes[1] = AXIS;
@@ -170,6 +184,7 @@ pub fn config(case: Case) -> BoardConfig {
         home_order: [0, 1, 0, 0, 0, 0],
         home_count: 0,
         home: [HomeAxis::UNUSED; MAX_AXES],
+        following: FollowingConfig::OFF,
     };
     match case {
         Case::HomingOk => {
@@ -181,6 +196,11 @@ pub fn config(case: Case) -> BoardConfig {
         Case::HomingNotFound => {
             cfg.home_count = 1;
             cfg.home[0] = home_axis(false, 500, SWITCH_MIN);
+        }
+        Case::FollowingError => {
+            cfg.following.limit_steps[0] = FOLLOWING_LIMIT_STEPS;
+            cfg.following.limit_steps[1] = FOLLOWING_LIMIT_STEPS;
+            cfg.following.debounce_ticks = FOLLOWING_DEBOUNCE_TICKS;
         }
         _ => {}
     }
@@ -204,6 +224,17 @@ const BEYOND: Move = mv(1_000, 0, 10_000);
 /// The segment the run-time case pushes past the admission check (a stand-in for any path
 /// that bypasses it): x from 1500 to 4000 through the 2000 limit.
 const ROGUE_X_STEPS: i32 = 2_500;
+
+/// The following-error case: limit and debounce, and how far behind the steps the sim's plant
+/// (the measured position) follows. The plant's lag is far inside the limit.
+const FOLLOWING_LIMIT_STEPS: u32 = 40;
+const FOLLOWING_DEBOUNCE_TICKS: u16 = 8;
+const PLANT_LAG_TICKS: usize = 16;
+
+/// Where the polar homing case starts: the arm 1000 steps (22.5 degrees) off its end-stop,
+/// the carriage 1500 steps (1.5 in) out from minimum radius.
+const POLAR_START_THETA_STEPS: i64 = 1_000;
+const POLAR_START_R_STEPS: i64 = 1_500;
 
 /// The flash the config-missing case boots from: erased, as QEMU's read-only flash reads.
 type SimFlash = RamFlash<2048, 1024>;
@@ -235,6 +266,12 @@ pub struct FaultScenario {
     /// Sim plant: where the axes are, in sim steps from the start point.
     start_phys: [i64; MAX_AXES],
     rec: StepRecorder,
+    /// Net steps of the last `PLANT_LAG_TICKS` ticks (the plant's lagging position).
+    plant_ring: [[i64; 2]; PLANT_LAG_TICKS],
+    /// The sim plant's measured position (following-error case), steps from the start point.
+    measured: [i64; MAX_AXES],
+    /// The tick the X error first exceeded the limit.
+    over_tick: u64,
     hash: TraceHash,
     t: u64,
     fault_tick: u64,
@@ -248,27 +285,30 @@ impl FaultScenario {
         let mut machine = Machine::new();
         let loaded = if case == Case::ConfigMissing {
             let mut store = ConfigStore::new(SimFlash::new(), 0, 1024).ok()?;
-            store.load().map_err(|e| match e {
-                LoadError::Missing => BootConfig::Missing,
-                LoadError::Corrupt | LoadError::Flash => BootConfig::Corrupt,
-            })
+            store.load().map_err(LoadError::boot)
         } else {
             Ok(config(case))
         };
         machine.boot(loaded);
         let cfg = machine.config().wire.machine;
         let moves: &'static [Move] = match case {
-            Case::EStop | Case::LinkLoss | Case::TickOverrun | Case::Sensor(_) => &LONG_X,
+            Case::EStop
+            | Case::LinkLoss
+            | Case::TickOverrun
+            | Case::Sensor(_)
+            | Case::FollowingError => &LONG_X,
             Case::LimitMin(0) | Case::LimitJogOff => &TO_X_MIN,
             Case::LimitMax(0) => &TO_X_MAX,
             Case::LimitMin(_) => &TO_Y_MIN,
             Case::LimitMax(_) => &TO_Y_MAX,
             Case::SoftLimitQueue | Case::SoftLimitRun => &INSIDE,
             Case::QueueUnderrun => &STREAM,
-            Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing => &[],
+            Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing | Case::HomingPolar => &[],
         };
         let start_phys = match case {
             Case::HomingOk => [-2_000, 2_200, 0, 0, 0, 0],
+            // The arm part-way round, the carriage part-way out (steps from the homes).
+            Case::HomingPolar => [POLAR_START_THETA_STEPS, POLAR_START_R_STEPS, 0, 0, 0, 0],
             _ => [0; MAX_AXES],
         };
         let mut s = FaultScenario {
@@ -295,6 +335,9 @@ impl FaultScenario {
             overrun_flag: false,
             start_phys,
             rec: StepRecorder::new(),
+            plant_ring: [[0; 2]; PLANT_LAG_TICKS],
+            measured: [0; MAX_AXES],
+            over_tick: 0,
             hash: TraceHash::new(),
             t: 0,
             fault_tick: 0,
@@ -316,14 +359,27 @@ impl FaultScenario {
         self.start_phys[axis] + self.rec.net[axis]
     }
 
+    /// Where axis `a`'s (min, max) switches close, sim steps. The polar machine: the arm's
+    /// right end-stop and the carriage's minimum-radius switch at its home (0), the far ends
+    /// of the work area beyond.
+    fn switch_at(&self, a: usize) -> (i64, i64) {
+        match self.case {
+            Case::HomingPolar => {
+                (0, [crate::polar::job::THETA_SPAN_STEPS, crate::polar::job::R_SPAN_STEPS][a & 1])
+            }
+            _ => (SWITCH_MIN, SWITCH_MAX),
+        }
+    }
+
     /// The sim board's inputs this tick.
     fn inputs(&mut self) -> Inputs {
         let mut inp = Inputs::QUIET;
         for a in 0..2 {
-            if self.phys(a) <= SWITCH_MIN {
+            let (min_at, max_at) = self.switch_at(a);
+            if self.phys(a) <= min_at {
                 inp.limit_min |= 1 << a;
             }
-            if self.phys(a) >= SWITCH_MAX {
+            if self.phys(a) >= max_at {
                 inp.limit_max |= 1 << a;
             }
         }
@@ -482,12 +538,26 @@ impl FaultScenario {
             || self.dda.state() == crate::dda::MotionState::Held
             || state == MachineState::Fault && self.dda.rate().to_bits() == 0;
         let final_state = match self.case {
-            Case::HomingOk => state == MachineState::Ready && self.machine.is_homed(),
+            Case::HomingOk | Case::HomingPolar => {
+                state == MachineState::Ready && self.machine.is_homed()
+            }
             Case::LimitJogOff => state == MachineState::Ready && self.cleared.is_some(),
             Case::SoftLimitQueue => self.beyond_tried,
             _ => state == MachineState::Fault,
         };
         final_state && at_rest && !self.machine.wants_background() && !self.wants_feed()
+    }
+
+    /// The following-error case's plant after this tick's steps: it stands where the steps put
+    /// it `PLANT_LAG_TICKS` ago (a drive that lags), except that X jams at `INJECT_TICK`.
+    fn plant(&mut self) {
+        let slot = (self.t as usize) % PLANT_LAG_TICKS;
+        let lagged = self.plant_ring[slot];
+        self.plant_ring[slot] = [self.rec.net[0], self.rec.net[1]];
+        if self.t < INJECT_TICK {
+            self.measured[0] = lagged[0];
+        }
+        self.measured[1] = lagged[1];
     }
 
     /// Attempts a `ClearFault` while a level cause is still present: the table says refused.
@@ -513,8 +583,9 @@ impl Scenario for FaultScenario {
         self.case.name()
     }
 
+    /// The case's machine's rate: `TICK_HZ`, except the polar machine's.
     fn tick_hz(&self) -> u32 {
-        TICK_HZ
+        self.machine.config().wire.machine.tick_hz
     }
 
     fn wants_background(&self) -> bool {
@@ -546,6 +617,14 @@ impl Scenario for FaultScenario {
         // The sim timer: the tick after INJECT_TICK finds its update flag pending.
         self.overrun_flag =
             self.overrun.after_tick(self.case == Case::TickOverrun && self.t == INJECT_TICK);
+        if self.case == Case::FollowingError {
+            self.plant();
+            self.machine.feedback(&self.measured);
+            let err = self.machine.raw_positions()[0] - self.measured[0];
+            if self.over_tick == 0 && err > FOLLOWING_LIMIT_STEPS as i64 {
+                self.over_tick = self.t;
+            }
+        }
         if !was_fault && self.machine.state() == MachineState::Fault {
             self.fault_tick = self.t;
         }
@@ -599,6 +678,16 @@ impl Scenario for FaultScenario {
         r.push("jog_sent", self.jog_sent as i64);
         r.push("cleared", self.cleared.map_or(0, |f| f.code() as i64));
         r.push("homed", self.machine.is_homed() as i64);
+        if self.case == Case::EStop {
+            let exact = (0..MAX_AXES).all(|a| raw[a] == dda[a] && raw[a] == self.rec.net[a]);
+            r.push("counters_exact", exact as i64);
+        }
+        if self.case == Case::FollowingError {
+            r.push("measured0_steps", self.measured[0]);
+            r.push("measured1_steps", self.measured[1]);
+            r.push("following_worst0_steps", self.machine.following_worst_steps()[0] as i64);
+            r.push("over_tick", self.over_tick as i64);
+        }
         r
     }
 }
@@ -651,6 +740,9 @@ mod tests {
             Some(crate::protocol::ErrorCode::OutOfState.code() as i64)
         );
         assert!(r.figure("net0_steps").unwrap() > 0, "moving when the e-stop came");
+        // The report says the counters are exact, and the documented reaction says so too.
+        assert_eq!(r.figure("counters_exact"), Some(1));
+        assert!(reaction(FaultCode::EStop).name().contains("the counters are exact"));
     }
 
     #[test]
@@ -712,6 +804,27 @@ mod tests {
     }
 
     #[test]
+    fn polar_homing_puts_both_origins_on_their_switches() {
+        let r = run(Case::HomingPolar);
+        let f = |n: &str| r.figure(n).unwrap();
+        assert_eq!(f("homed"), 1);
+        assert_eq!(f("fault_mask"), 0);
+        let h = crate::polar::job::homing_config();
+        for (a, start) in [(0usize, POLAR_START_THETA_STEPS), (1, POLAR_START_R_STEPS)] {
+            let (pos, phys) = (["pos0_steps", "pos1_steps"][a], ["phys0_steps", "phys1_steps"][a]);
+            // The origin is the switch point (theta: the end-stop, r: minimum radius), where
+            // the documented home position says: machine position = sim position from there.
+            assert_eq!(f(pos), f(phys) + h.axes[a].home_pos_steps, "axis {a}");
+            // Pulled off the switch by the back-off.
+            assert_eq!(f(pos), h.axes[a].home_pos_steps + h.axes[a].backoff_steps as i64);
+            // Net travel: from the start down to the switch, then the back-off out again.
+            let net = f(["net0_steps", "net1_steps"][a]);
+            assert_eq!(net, -start + h.axes[a].backoff_steps as i64, "axis {a}");
+        }
+        assert!(r.ticks < MAX_TICKS);
+    }
+
+    #[test]
     fn soft_limits_at_queue_and_at_run_time() {
         let r = run(Case::SoftLimitQueue);
         assert_eq!(
@@ -735,6 +848,112 @@ mod tests {
         assert_eq!(r.figure("dda_underruns"), Some(0));
         assert!(r.figure("net0_steps").unwrap() <= 600);
         assert!(r.figure("steps_after_fault").unwrap() > 0, "decelerated, not aborted");
+    }
+
+    #[test]
+    fn following_error_trips_after_the_jam_plus_limit_plus_debounce() {
+        let r = run(Case::FollowingError);
+        let f = |n: &str| r.figure(n).unwrap();
+        // X jammed at INJECT_TICK: the plant stands where the steps put it PLANT_LAG_TICKS
+        // earlier. The error passes the limit on the step that makes it limit + 1, and the
+        // monitor trips FOLLOWING_DEBOUNCE_TICKS checks later (the last of them included).
+        let jam = f("measured0_steps");
+        assert!(jam > 0, "moving when the jam came");
+        let stop = f("raw0_steps");
+        // The trip is the debounce-th check over the limit, counting the first one.
+        let over = f("over_tick");
+        assert!(over > INJECT_TICK as i64);
+        assert_eq!(f("fault_tick"), over + FOLLOWING_DEBOUNCE_TICKS as i64 - 1);
+        // X steps at most once per 5 ticks (10 kHz feed, 50 kHz tick), so the debounce adds at
+        // most ceil(8 / 5) = 2 steps past the first one over the limit.
+        let past = stop - jam - (FOLLOWING_LIMIT_STEPS as i64 + 1);
+        assert!((0..=2).contains(&past), "{past} steps past the first over the limit");
+        assert_eq!(f("following_worst0_steps"), stop - jam);
+        // Y's plant followed (lagging PLANT_LAG_TICKS) and is caught up at rest.
+        assert_eq!(f("measured1_steps"), f("raw1_steps"));
+        // Before the jam the lagging plant never came near the limit: nothing tripped early.
+        assert_eq!(r.fault, FaultCode::FollowingError.code());
+        assert_eq!(f("fault_mask"), FaultCode::FollowingError.bit() as i64);
+        assert_eq!(f("steps_after_fault"), 0, "immediate stop");
+    }
+
+    /// Without a jam the same plant (lagging 16 ticks, limit 40) never trips, and ClearFault
+    /// after a trip loses the homing (Idle) and re-zeroes the monitor.
+    #[test]
+    fn following_plant_without_jam_never_trips_and_clear_loses_homing() {
+        let cfg = config(Case::FollowingError);
+        let mut m = Machine::new();
+        m.boot(Ok(cfg));
+        let mc = cfg.wire.machine;
+        let (mut dda, mut prep) = (Dda::new(&mc).unwrap(), Preparer::new(&mc).unwrap());
+        m.command(MachineCommand::Home, &mut dda).unwrap();
+        let mut net = [0i64; MAX_AXES];
+        let mut ring = [[0i64; MAX_AXES]; PLANT_LAG_TICKS];
+        let mut tick =
+            |m: &mut Machine, dda: &mut Dda, prep: &mut Preparer, t: usize, jam: bool| {
+                let out = m.tick(dda, &Inputs::QUIET);
+                for a in 0..2 {
+                    if out.step.rise() & (1 << a) != 0 {
+                        net[a] += if out.step.dir() & (1 << a) != 0 { -1 } else { 1 };
+                    }
+                }
+                let lagged = ring[t % PLANT_LAG_TICKS];
+                ring[t % PLANT_LAG_TICKS] = net;
+                let mut meas = lagged;
+                if jam {
+                    meas[0] = 0;
+                }
+                m.feedback(&meas);
+                while m.wants_background() {
+                    m.background(dda, prep);
+                }
+            };
+        for t in 0..10 {
+            tick(&mut m, &mut dda, &mut prep, t, false);
+        }
+        assert_eq!(m.state(), MachineState::Ready);
+        let mut p = Planner::new(&mc);
+        let mut segs = std::collections::VecDeque::new();
+        for mv in STREAM.iter().chain(LONG_X.iter()) {
+            while p.push(mv).is_err() {
+                segs.push_back(p.pop().unwrap());
+            }
+        }
+        p.finish();
+        while let Some(seg) = p.pop() {
+            segs.push_back(seg);
+        }
+        for seg in &segs {
+            m.command(MachineCommand::Queue(seg), &mut dda).unwrap();
+        }
+        m.command(MachineCommand::Start, &mut dda).unwrap();
+        let mut t = 10;
+        while m.state() == MachineState::Running && t < 200_000 {
+            while dda.ready_free() > 0 {
+                let Some(seg) = segs.pop_front() else { break };
+                dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+            }
+            tick(&mut m, &mut dda, &mut prep, t, false);
+            t += 1;
+        }
+        assert_eq!(m.faults().mask(), 0, "a plant within the limit never trips");
+        let worst = m.following_worst_steps();
+        assert!(worst[0] > 0 && worst[0] <= FOLLOWING_LIMIT_STEPS, "worst {worst:?}");
+        // Now jam X at 0 while the counters say it moved: trips at once (error >> limit),
+        // after the debounce.
+        for k in 0..FOLLOWING_DEBOUNCE_TICKS as usize {
+            assert_eq!(m.faults().mask(), 0, "tripped before the debounce, check {k}");
+            tick(&mut m, &mut dda, &mut prep, t + k, true);
+        }
+        assert_eq!(m.faults().first(), Some(FaultCode::FollowingError));
+        assert!(m.is_homed(), "homing kept while latched (position kept)");
+        assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
+        assert!(!m.is_homed());
+        // Re-zeroed: the same standing error no longer counts.
+        for k in 0..50 {
+            tick(&mut m, &mut dda, &mut prep, t + 100 + k, true);
+        }
+        assert!(m.faults().is_clear());
     }
 
     #[test]
