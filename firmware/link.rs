@@ -31,7 +31,8 @@ use heapless::Deque;
 use motion::config::MAX_AXES;
 use motion::dda::{Command, MotionState, Prepared, Preparer};
 use motion::machine::{
-    BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal, WatchdogGate,
+    BoardConfig, BootConfig, Machine, MachineCommand, MachineState, Refusal, ResetCause,
+    WatchdogGate,
 };
 use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
@@ -134,11 +135,15 @@ pub struct Motion {
 }
 
 impl Motion {
-    /// Boots the machine with `loaded` (the flash record; QEMU has none) and builds the DDA from
-    /// the config it ends up with (safe defaults when missing or corrupt).
-    pub fn boot(loaded: Result<BoardConfig, BootConfig>) -> Option<(Self, Preparer)> {
+    /// Boots the machine with `loaded` (the flash record; QEMU has none) after a reset of cause
+    /// `reset`, and builds the DDA from the config it ends up with (safe defaults when missing
+    /// or corrupt).
+    pub fn boot(
+        loaded: Result<BoardConfig, BootConfig>,
+        reset: ResetCause,
+    ) -> Option<(Self, Preparer)> {
         let mut machine = Machine::new();
-        machine.boot(loaded);
+        machine.boot_after_reset(loaded, reset);
         let cfg = machine.config().wire.machine;
         let dda = Dda::new(&cfg).ok()?;
         let preparer = Preparer::new(&cfg).ok()?;

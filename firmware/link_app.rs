@@ -26,7 +26,7 @@ mod app {
         WAKE_TICKS, WATCHDOG,
     };
     use core::sync::atomic::Ordering::Relaxed;
-    use motion::machine::{BoardConfig, Inputs, OverrunDetector};
+    use motion::machine::{BoardConfig, Inputs, OverrunDetector, ResetCause};
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
@@ -65,6 +65,7 @@ mod app {
         // before it runs.
         let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
         let board::Board {
+            reset_csr,
             mut tick_timer,
             mut step_port,
             estop,
@@ -88,7 +89,9 @@ mod app {
         }
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
-        let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load()));
+        // After a watchdog reset the machine boots in Fault with WatchdogReset.
+        let reset = ResetCause::from_rcc_csr(reset_csr);
+        let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load(), reset));
         let tick_hz = motion.machine.config().wire.machine.tick_hz;
         let mut tick_rate = tick_timer.rate_control();
         if !tick_rate.set(tick_hz) {

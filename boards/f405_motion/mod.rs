@@ -80,6 +80,9 @@ pub const HOST_BAUD: u32 = 460_800;
 
 /// Everything the app needs from the board, configured and idle (drivers disabled).
 pub struct Board {
+    /// RCC_CSR as it was at reset: why the chip reset (`motion::machine::ResetCause`).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub reset_csr: u32,
     pub tick_timer: TickTimer,
     pub step_port: StepPort,
     #[cfg_attr(feature = "link", allow(dead_code))]
@@ -124,6 +127,10 @@ pub struct Capabilities {
 }
 
 pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
+    // Why the chip reset (watchdog, pin, power-on...), read before anything else and then
+    // cleared, so the next reset reports only itself.
+    let reset_csr = dp.RCC.csr().read().bits();
+    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
     let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
     clocks::enable_peripherals(&dp.RCC);
     pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC);
@@ -140,6 +147,7 @@ pub fn init(dp: pac::Peripherals, core: &mut cortex_m::Peripherals, tick_hz: u32
     #[cfg_attr(not(feature = "link"), allow(unused_variables))]
     let z_dac = z_dac::ZDac::new(dp.DAC);
     Board {
+        reset_csr,
         tick_timer: TickTimer::new(dp.TIM2, clocks.apb1_timer_hz, tick_hz),
         step_port: StepPort::new(dp.GPIOC, dp.GPIOB),
         cycles: CycleCounter::new(core),

@@ -46,6 +46,9 @@ pub const HOST_BAUD: u32 = 115_200;
 
 /// Everything the app needs from the board, configured and idle.
 pub struct Board {
+    /// RCC_CSR as it was at reset: why the chip reset (`motion::machine::ResetCause`).
+    #[cfg_attr(not(feature = "link"), allow(dead_code))]
+    pub reset_csr: u32,
     pub tick_timer: TickTimer,
     pub step_port: StepPort,
     #[cfg_attr(feature = "link", allow(dead_code))]
@@ -75,8 +78,11 @@ pub struct Board {
 }
 
 pub fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Board {
+    // QEMU does not model RCC: this reads 0, a reset of unknown cause (never a watchdog one).
+    let reset_csr = dp.RCC.csr().read().bits();
     let clocks = clocks::init(&dp.RCC);
     Board {
+        reset_csr,
         tick_timer: TickTimer::new(dp.TIM2, clocks.tim2_hz, tick_hz),
         step_port: StepPort::new(),
         cycles: CycleCounter::new(dp.TIM5),

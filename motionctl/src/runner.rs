@@ -291,9 +291,9 @@ pub fn ask_status(s: &mut Session) -> anyhow::Result<Status> {
 }
 
 /// Brings a connected board to `Ready` with `cfg`, as every job runner starts: refuses a board
-/// with a latched fault other than `ConfigMissing` or one that is busy, sends `cfg` when the
-/// board's differs (or a fault is latched), clears `ConfigMissing` (the one fault sending the
-/// config removes), and homes when the board is not homed and `home` allows it. `what` names
+/// with a latched fault other than `ConfigMissing` / `ConfigCorrupt` or one that is busy, sends
+/// `cfg` when the board's differs (or a fault is latched), clears either of those two (the
+/// faults sending the config removes; a corrupt record is reported), and homes when the board is not homed and `home` allows it. `what` names
 /// the machine in messages. Returns the board's status from before the config was sent.
 pub fn ready_board(
     s: &mut Session,
@@ -315,8 +315,11 @@ pub fn ready_board(
         }
     };
     let st = status(s)?;
+    // The two faults that sending a config removes; anything else needs the operator.
     let config_missing = FaultCode::ConfigMissing.bit();
-    if st.faults & !config_missing != 0 {
+    let config_corrupt = FaultCode::ConfigCorrupt.bit();
+    let replaceable = config_missing | config_corrupt;
+    if st.faults & !replaceable != 0 {
         return Err(format!(
             "the board has faults latched ({}): find the cause, then `motionctl clear-fault`",
             fault_names(st.faults)
@@ -339,6 +342,12 @@ pub fn ready_board(
     if st.faults == config_missing {
         query(s, RequestBody::ClearFault, "ClearFault")?;
         say("cleared ConfigMissing (the board had no stored config)");
+    } else if st.faults == config_corrupt {
+        query(s, RequestBody::ClearFault, "ClearFault")?;
+        say(&format!(
+            "cleared ConfigCorrupt: the board's stored config failed its check and was replaced by \
+             the {what}'s (check the board's flash if this happens again)"
+        ));
     }
     let now = status(s)?;
     if now.machine != MachineState::Ready {
