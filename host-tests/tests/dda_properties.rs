@@ -39,7 +39,9 @@ fn segment_strategy(spacing: u32) -> impl Strategy<Value = Segment> {
         still,
     )
         .prop_map(move |(t, frac, entry, exit, accel, still)| {
-            let max = (t / spacing) as i32;
+            // 15/16 of one step per `spacing` ticks: the config's max_rate_hz is
+            // tick_hz / spacing rounded down, which a segment at exactly that spacing can exceed.
+            let max = (t / spacing) as i32 * 15 / 16;
             let mut steps = [0i32; MAX_AXES];
             for (i, (s, f)) in steps.iter_mut().zip(frac).enumerate() {
                 *s = if still >> i & 1 != 0 { 0 } else { f * max / 1000 };
