@@ -133,7 +133,7 @@ pub struct WirePlanArgs {
     /// Die to cut, one of the thesis's (with its ZT, FR and start point) [default:
     /// circle-complex, plate 4 / Table 11].
     #[arg(long, value_enum, value_name = "NAME")]
-    die: Option<DieArg>,
+    die: Option<crate::wire::dies::ThesisDie>,
     /// A user die from an MDI data file: ZT, N, then N x (XB, YB, XT, YT), numbers separated
     /// by commas or blanks, `#` comment lines; cut from and back to the centre at FR 800.
     #[arg(long, value_name = "FILE", conflicts_with = "die")]
@@ -157,43 +157,6 @@ pub struct WirePlanArgs {
     /// --die gear: pressure angle, deg [default: 20].
     #[arg(long, value_name = "DEG")]
     pressure_angle: Option<f64>,
-}
-
-/// `--die NAME`: the thesis's dies ([`crate::wire::dies::ThesisDie`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum DieArg {
-    /// Plate 4 / Table 11: circle R 25 over the complex shape RI 20, ZT 39, FR 800.
-    CircleComplex,
-    /// Plate 9: circle R 25 over circle R 20, ZT 49, FR 800.
-    Plate9,
-    /// Plate 10: square 50 over square 30, ZT 49, FR 800.
-    Plate10,
-    /// Plate 16: circle R 20 over crescent R 15, ZT 49, FR 800.
-    Plate16,
-    /// Plate 19 stage 1: circle R 3.5 over R 3.5, ZT 49, FR 400.
-    Plate19Stage1,
-    /// Plate 19 stage 2: circle R 15 over R 2, ZT 49, FR 500.
-    Plate19Stage2,
-    /// Plate 19 stage 3: circle R 18 over R 10, ZT 49, FR 500.
-    Plate19Stage3,
-    /// Table 12: Unwin spur gear m 6, PD 72, PA 20, ZT 30, FR 500, from (0, -60).
-    Gear,
-}
-
-impl From<DieArg> for crate::wire::dies::ThesisDie {
-    fn from(d: DieArg) -> Self {
-        use crate::wire::dies::ThesisDie as T;
-        match d {
-            DieArg::CircleComplex => T::CircleComplex,
-            DieArg::Plate9 => T::Plate9,
-            DieArg::Plate10 => T::Plate10,
-            DieArg::Plate16 => T::Plate16,
-            DieArg::Plate19Stage1 => T::Plate19Stage1,
-            DieArg::Plate19Stage2 => T::Plate19Stage2,
-            DieArg::Plate19Stage3 => T::Plate19Stage3,
-            DieArg::Gear => T::Gear,
-        }
-    }
 }
 
 /// `--start X,Y`: two numbers, mm.
@@ -239,7 +202,7 @@ impl WirePlanArgs {
                     .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
             }
             None => {
-                let kind = self.die.unwrap_or(DieArg::CircleComplex).into();
+                let kind = self.die.unwrap_or(crate::wire::dies::ThesisDie::CircleComplex);
                 Ok(dies::thesis_die(kind, &o)?)
             }
         }

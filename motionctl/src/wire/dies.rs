@@ -12,8 +12,8 @@ use super::shapes::{
 };
 use super::{Die, Point2, Result, WireError};
 
-/// A die of the thesis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A die of the thesis (also `motionctl wire --die NAME`: the doc lines are its help).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ThesisDie {
     /// Plate 4 / Table 11: top circle R 25 (the thesis's arc multipliers), bottom complex shape
     /// RI 20, N 80, ZT 39 mm, FR 800 mm^2/min. The default of `wire plan|run`.
@@ -24,10 +24,11 @@ pub enum ThesisDie {
     Plate10,
     /// Plate 16: circle R 20 over crescent R 15, N 60, ZT 49, FR 800.
     Plate16,
-    /// Plate 19, the tapered die's stages: R 3.5 over R 3.5 (FR 400), R 15 over R 2 and R 18
-    /// over R 10 with the bottom circle from 180 deg (FR 500); N 60, ZT 49.
+    /// Plate 19 (a tapered die) stage 1: R 3.5 over R 3.5, N 60, ZT 49, FR 400.
     Plate19Stage1,
+    /// Plate 19 stage 2: R 15 over R 2, the bottom circle from 180 deg, N 60, ZT 49, FR 500.
     Plate19Stage2,
+    /// Plate 19 stage 3: R 18 over R 10, the bottom circle from 180 deg, N 60, ZT 49, FR 500.
     Plate19Stage3,
     /// Table 12: Unwin spur gear m 6, PD 72 (12 teeth), PA 20 deg, 8 points per flank, ZT 30,
     /// FR 500, from and back to (0, -60).
