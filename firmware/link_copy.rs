@@ -9,7 +9,9 @@
 
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::polar::copy::CopyMode;
-use motion::polar::copy_link::{take_batch, CopySource, TeachRecorder, TEACH_BATCH, TEACH_BLOCKS};
+use motion::polar::copy_link::{
+    take_batch, CopySource, TeachRead, TeachRecorder, TEACH_BATCH, TEACH_BLOCKS,
+};
 use motion::polar::playback::SizeScale;
 use motion::polar::StepEvent;
 use motion::protocol::{BlockBytes, ErrorCode, Status, TeachChunk};
@@ -122,22 +124,19 @@ const TEACH_PASSES: usize = 8;
 
 /// `ReadTeach { block }`.
 pub fn read(rec: &mut TeachRecorder<TEACH_BLOCKS>, m: &Motion, block: u16) -> TeachChunk {
-    let (taught_events, lost_events) = counts(m, rec);
-    let r = rec.read(block);
-    TeachChunk {
-        block,
-        bytes: BlockBytes::from_slice(r.bytes).unwrap_or_default(),
-        ended: r.ended,
-        taught_events,
-        lost_events,
-    }
+    let counts = counts(m, rec);
+    chunk(block, rec.read(block), counts)
 }
 
 /// A retransmitted `ReadTeach`: the block the last one asked for, nothing dropped.
 pub fn resend(rec: &TeachRecorder<TEACH_BLOCKS>, m: &Motion) -> TeachChunk {
-    let (taught_events, lost_events) = counts(m, rec);
+    let counts = counts(m, rec);
     let block = rec.front_seq();
-    let r = rec.peek(block);
+    chunk(block, rec.peek(block), counts)
+}
+
+/// The reply carrying block `block` as `r` holds it, with the taught and lost counts.
+fn chunk(block: u16, r: TeachRead<'_>, (taught_events, lost_events): (u32, u32)) -> TeachChunk {
     TeachChunk {
         block,
         bytes: BlockBytes::from_slice(r.bytes).unwrap_or_default(),

@@ -477,12 +477,7 @@ pub(crate) fn stream(
     let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
     println!("job        {label} ({segments} segments) on {target}");
     let result = runner::run(&mut t, parsed, program, outputs, expected, opts);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let report = match result {
-        Ok(r) => r,
-        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let report = crate::qemu::finish(qemu_guard, result)?;
     print!("{}", report.text(&axes));
     println!("{}", report.machine_line());
     if !report.ok() {

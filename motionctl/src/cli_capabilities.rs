@@ -300,12 +300,7 @@ fn run_milling_board(
         fault: fault.unwrap_or(motion::protocol::SimForceFault::None),
     };
     let result = run::run(&mut *t, &job, &opts);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let r = match result {
-        Ok(r) => r,
-        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let r = crate::qemu::finish(qemu_guard, result)?;
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} ms", v * 1e3));
     println!(
         "force job  {} statuses, {:.2} s wall, {} board ticks, {} control updates",
@@ -644,12 +639,7 @@ fn run_wire_job(
     expected.copy_from_slice(&model.positions[..4]);
     let cfg = crate::runner::wire_config(parsed, program);
     let result = crate::wire::run::run(&mut *t, cfg, segments, expected, model.ticks, &opts);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let r = match result {
-        Ok(r) => r,
-        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let r = crate::qemu::finish(qemu_guard, result)?;
     println!(
         "wire job   {} segments, {:.2} s wall, {} board ticks",
         r.segments, r.seconds, r.board_ticks
@@ -712,12 +702,7 @@ fn fourier_run(a: &FourierRunArgs) -> Result<()> {
     let (mut t, qemu_guard) = a.link.open()?;
     let say = |m: &str| eprintln!("motionctl: {m}");
     let result = zrun::run(&mut *t, &table, &opts, &say);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let r = match result {
-        Ok(r) => r,
-        Err(e) => anyhow::bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let r = crate::qemu::finish(qemu_guard, result)?;
     println!(
         "z job      X {} -> {} in at {} in/s, {} rpm, {:?} output; {} board ticks, {:.2} s wall",
         a.x_start, a.x_end, a.feed, a.rpm, a.output, r.board_ticks, r.seconds

@@ -29,6 +29,17 @@ pub struct Qemu {
     pub log: PathBuf,
 }
 
+/// Stops `qemu` (when the job ran on one) and passes the job's `result` on; an error then
+/// names QEMU's log, where the firmware's side of it is.
+pub fn finish<T, E: std::fmt::Display>(
+    qemu: Option<Qemu>,
+    result: Result<T, E>,
+) -> anyhow::Result<T> {
+    let log_note = qemu.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
+    drop(qemu);
+    result.map_err(|e| anyhow::anyhow!("{e}{}", log_note.unwrap_or_default()))
+}
+
 impl Drop for Qemu {
     fn drop(&mut self) {
         let _ = self.child.kill();

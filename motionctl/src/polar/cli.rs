@@ -214,12 +214,7 @@ fn run_stream(
         progress: true,
     };
     let result = super::run::run(&mut t, &bytes, &opts);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let r = match result {
-        Ok(r) => r,
-        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let r = crate::qemu::finish(qemu_guard, result)?;
     println!(
         "events     {} fired, {} in {} ({} blocks)",
         r.events_fired,
@@ -298,12 +293,7 @@ fn run_copy(
         seconds,
     };
     let result = super::copy::copy(&mut t, &opts);
-    let log_note = qemu_guard.as_ref().map(|q| format!(" (QEMU log: {})", q.log.display()));
-    drop(qemu_guard);
-    let r = match result {
-        Ok(r) => r,
-        Err(e) => bail!("{e}{}", log_note.unwrap_or_default()),
-    };
+    let r = crate::qemu::finish(qemu_guard, result)?;
     println!(
         "copy       {} waypoints; encoders moved arm {} carriage {} counts",
         r.waypoints, r.encoder_moves[0], r.encoder_moves[1]
