@@ -271,6 +271,7 @@ struct Gate {
 pub struct Dda {
     lanes: Lanes,
     timing: TickTiming,
+    /// Ticks run; during a cruise, those before it began (see [`Dda::now`]).
     now: u64,
 
     // Active segment (`remaining == 0`: none).
@@ -302,8 +303,6 @@ pub struct Dda {
     hist: u32,
     /// DIR levels in [`StepOutput`]'s place; DIR cannot change during a cruise.
     cruise_dir: u32,
-    /// The cruise runs the six-lane kernel (a copy of `wide`, next to the countdown).
-    cruise_wide: bool,
     idle_ticks: u32,
     cruise_enabled: bool,
 
@@ -361,7 +360,6 @@ impl Dda {
             cruise_phase: 0,
             hist: 0,
             cruise_dir: 0,
-            cruise_wide: false,
             idle_ticks: 0,
             cruise_enabled: true,
             rate: 0,
@@ -392,7 +390,7 @@ impl Dda {
         if self.cruise_ticks != 0 {
             self.cruise_ticks -= 1;
             // Direct calls (no function pointer): the divide check follows every one.
-            return if self.cruise_wide {
+            return if self.wide {
                 self.cruise_tick::<true>()
             } else {
                 self.cruise_tick::<false>()
@@ -409,8 +407,9 @@ impl Dda {
     /// A tick at a settled rate (<= 1.0) with one-tick pulses, no gate and no command due, at
     /// least a virtual tick before the segment ends or deceleration could begin: exactly what
     /// [`Dda::full_tick`] would do there, without re-deriving the rate. Only the phase (held
-    /// as `phase - ONE`, wrapping, while cruising), the lanes and `hist` change: `now`, `remaining`, the budget and the edge ring are brought
-    /// up to date on leaving (see [`Dda::leave_fast`]). One instance per lane count
+    /// as `phase - ONE`, wrapping, while cruising), the lanes and `hist` change: `now`,
+    /// `remaining`, the budget and the edge ring are brought up to date on leaving (see
+    /// [`Dda::leave_fast`]). One instance per lane count
     /// (`WIDE`: six lanes), picked on entering the cruise. Out of line: the idle path stays
     /// free of the register saves the lane kernel needs.
     #[inline(never)]
@@ -544,7 +543,6 @@ impl Dda {
         self.cruise_phase = self.phase;
         self.phase = self.phase.wrapping_sub(ONE);
         self.cruise_dir = StepOutput::dir_bits(self.dir);
-        self.cruise_wide = self.wide;
         self.hist = 0;
         for back in (0..HIST_TICKS).rev() {
             let rise = self.ring[(self.now.wrapping_sub(back as u64) & RING_MASK) as usize];

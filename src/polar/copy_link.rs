@@ -284,7 +284,7 @@ pub fn take_batch(copy: &mut CopyMode, buf: &mut [StepEvent; TEACH_BATCH]) -> us
 #[cfg(test)]
 mod tests {
     use super::super::playback::SizeScale;
-    use super::super::stream::decode_all;
+    use super::super::stream::{decode_all, net_steps};
     use super::*;
     use proptest::prelude::*;
 
@@ -364,13 +364,7 @@ mod tests {
     fn recorder_keeps_every_event_when_the_host_keeps_up() {
         let counts_at = |t: u32| [(t / 5) as i32, -((t / 3) as i32)];
         let (bytes, c, rec) = record(30_000, 10, counts_at);
-        let mut sum = [0i64; 2];
-        let mut n = 0u32;
-        decode_all(&bytes, |e| {
-            sum[e.axis as usize] += if e.negative { -1 } else { 1 };
-            n += 1;
-        })
-        .unwrap();
+        let (sum, n) = net_steps(&bytes);
         assert_eq!(c.teach_overflow, 0);
         assert_eq!(rec.lost, 0);
         assert_eq!(n, c.taught_total);
@@ -390,8 +384,7 @@ mod tests {
         }
         let total = theta[40_000] as u64;
         let (bytes, c, rec) = record(40_000, u32::MAX, |t| [theta[t as usize], 0]);
-        let mut n = 0u32;
-        decode_all(&bytes, |_| n += 1).unwrap();
+        let (_, n) = net_steps(&bytes);
         assert!(c.teach_overflow > 0);
         // Every event is either in the stream or counted as lost: nothing vanishes silently.
         assert_eq!(n as u64 + c.teach_overflow as u64 + rec.lost as u64, total);

@@ -40,4 +40,14 @@ impl StepEvent {
     pub const fn from_code(dt_ticks: u32, code: u8) -> Self {
         StepEvent { dt_ticks, axis: code & 1, negative: code & 2 != 0 }
     }
+
+    /// The step as a signed count: -1 or +1.
+    #[inline]
+    pub const fn signed(&self) -> i32 {
+        if self.negative {
+            -1
+        } else {
+            1
+        }
+    }
 }

@@ -74,7 +74,7 @@ impl StepPins {
     /// Adds one recorded step; radial ones pass through the m/k scaler (at most 4 subtractions).
     #[inline]
     pub fn add(&mut self, ev: StepEvent) {
-        let s: i32 = if ev.negative { -1 } else { 1 };
+        let s = ev.signed();
         if ev.axis & 1 != AXIS_R {
             self.pending[0] += s;
             return;

@@ -434,6 +434,15 @@ pub fn plain_event_len(ev: &StepEvent) -> usize {
 }
 
 /// Decodes a whole multi-block stream into `out` via a callback; checks block sequence order.
+/// Test helper: the net steps per axis (theta, r) of a whole stream, and its event count.
+#[cfg(test)]
+pub(crate) fn net_steps(bytes: &[u8]) -> ([i64; 2], u32) {
+    let mut net = [0i64; 2];
+    let n = decode_all(bytes, |e| net[(e.axis & 1) as usize] += e.signed() as i64)
+        .expect("a valid stream");
+    (net, n)
+}
+
 pub fn decode_all(mut bytes: &[u8], mut out: impl FnMut(StepEvent)) -> Result<u32, StreamError> {
     let mut expect_seq: u16 = 0;
     let mut n = 0u32;

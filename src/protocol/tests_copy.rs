@@ -3,7 +3,7 @@
 use super::tests::config;
 use super::*;
 use crate::machine::MachineState;
-use crate::polar::stream::decode_all;
+use crate::polar::stream::net_steps;
 
 fn req(seq: u32, body: RequestBody) -> Request {
     Request { seq, body }
@@ -148,13 +148,7 @@ fn teach_is_read_back_whole_through_retransmissions() {
         }
     };
     assert_eq!(end.lost_events, 0);
-    let mut sum = [0i64; 2];
-    let mut n = 0u32;
-    decode_all(&bytes, |e| {
-        sum[e.axis as usize] += if e.negative { -1 } else { 1 };
-        n += 1;
-    })
-    .unwrap();
+    let (sum, n) = net_steps(&bytes);
     assert_eq!(sum, [600, 40]);
     assert_eq!(n, end.taught_events);
     // Every count of the path is an event: |400| + |150| + |350| on theta, 100 + 400 + 340 on r.

@@ -259,22 +259,7 @@ fn new_requests_round_trip_and_fit_a_frame() {
         }
         assert_eq!(got, Some(req));
     }
-    // The largest Status (every Z field at its widest) still fits an Ack.
-    let s = Status {
-        tick: u64::MAX,
-        positions: [i64::MIN; MAX_AXES],
-        z_state: u8::MAX,
-        z_x_in_q24: i32::MIN,
-        z_cmd_in_q32: i32::MIN,
-        z_max_following_nin: i64::MIN,
-        z_steps: i64::MIN,
-        z_dac_code: u16::MAX,
-        z_spindle_rpm_milli: i64::MIN,
-        ..Status::default()
-    };
-    let resp = Response::Ack { seq: u32::MAX, credits: u16::MAX, reply: Reply::Status(s) };
-    let mut buf = [0u8; MAX_FRAME_WIRE];
-    assert!(encode_frame(&resp, &mut buf).is_ok());
+    // The largest Status (the Z fields too) fitting an Ack: `largest_messages_fit_the_frame_buffers`.
     // An oversized chunk does not decode (BlockBytes caps it) or is refused by the session.
     let mut r = Rig::new(0);
     let big = BlockBytes::from_slice(&[0; MAX_Z_CHUNK + 1]).unwrap();

@@ -105,7 +105,7 @@ pub fn model(bytes: &[u8], scale: SizeScale) -> anyhow::Result<CopyModel> {
         while i < events.len() && (first || events[i].dt_ticks == 0) {
             let e = events[i];
             let a = (e.axis & 1) as usize;
-            counts[a] = counts[a].wrapping_add(if e.negative { -1 } else { 1 });
+            counts[a] = counts[a].wrapping_add(e.signed());
             first = false;
             i += 1;
         }
