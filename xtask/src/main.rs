@@ -11,6 +11,7 @@
 //! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A as a force job on the link firmware in QEMU (simulated plant), then with a stuck force channel, and checks settling, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
+//! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
 //! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
@@ -22,6 +23,7 @@ mod divcheck;
 mod e2e;
 mod firmware;
 mod golden;
+mod isr_profile;
 mod milling_e2e;
 mod polar_e2e;
 mod scenarios;
@@ -50,6 +52,9 @@ commands:
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
+  isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
+                                                        interrupt on real jobs in QEMU; per-tick instructions
+                                                        and modelled cycles by situation
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
                                                         (f405-motion: the host-link firmware)";
 
@@ -139,6 +144,10 @@ fn run() -> Result<()> {
             };
             setup::ensure(&root)?;
             bench::run(&root, quick)
+        }
+        "isr-profile" => {
+            setup::ensure(&root)?;
+            isr_profile::run(&root, rest).map(drop)
         }
         "flash" => {
             let [board] = rest else {
