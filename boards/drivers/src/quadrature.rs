@@ -96,6 +96,11 @@ impl<A: InputPin, B: InputPin> SoftDecoder<A, B> {
     pub fn release(self) -> (A, B) {
         (self.a, self.b)
     }
+
+    /// The pins (a simulated encoder drives its lines through them).
+    pub fn pins_mut(&mut self) -> (&mut A, &mut B) {
+        (&mut self.a, &mut self.b)
+    }
 }
 
 fn read<A: InputPin, B: InputPin>(a: &mut A, b: &mut B) -> Option<u8> {
