@@ -11,27 +11,32 @@
 
 use core::convert::Infallible;
 
-use board_drivers::{ad2s1210::Ad2s1210, ads131m04::Ads131m04};
+#[cfg(feature = "resolver-spi")]
+use board_drivers::ad2s1210::Ad2s1210;
+#[cfg(feature = "force-spi")]
+use board_drivers::ads131m04::Ads131m04;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
-use super::pins::{configure_one, GpioIn, GpioOut, Mode, Pin, Port};
+#[cfg(feature = "force-spi")]
+use super::pins::GpioIn;
+use super::pins::{configure_one, GpioOut, Mode, Pin, Port};
 use crate::pac;
 
 /// Core clock, for [`CycleDelay`].
 const CORE_HZ: u32 = 168_000_000;
 /// CR1.BR = 0b011: PCLK2 84 MHz / 16 = 5.25 MHz (both chips take up to 25 MHz).
-const BAUD_DIV16: u32 = 0b011 << 3;
-const CR1_CPHA: u32 = 1 << 0;
-const CR1_CPOL: u32 = 1 << 1;
-const CR1_MSTR: u32 = 1 << 2;
-const CR1_SPE: u32 = 1 << 6;
-const CR1_SSI: u32 = 1 << 8;
-const CR1_SSM: u32 = 1 << 9;
-const SR_RXNE: u32 = 1 << 0;
-const SR_TXE: u32 = 1 << 1;
-const SR_BSY: u32 = 1 << 7;
+const BAUD_DIV16: u16 = 0b011 << 3;
+const CR1_CPHA: u16 = 1 << 0;
+const CR1_CPOL: u16 = 1 << 1;
+const CR1_MSTR: u16 = 1 << 2;
+const CR1_SPE: u16 = 1 << 6;
+const CR1_SSI: u16 = 1 << 8;
+const CR1_SSM: u16 = 1 << 9;
+const SR_RXNE: u16 = 1 << 0;
+const SR_TXE: u16 = 1 << 1;
+const SR_BSY: u16 = 1 << 7;
 
 const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
     Pin { name, port, pin, mode }
@@ -81,7 +86,7 @@ pub fn init(spi: pac::SPI1, _rcc: &pac::RCC, a: &pac::GPIOA, c: &pac::GPIOC) -> 
 pub struct Spi1Device {
     spi: pac::SPI1,
     cs: GpioOut,
-    mode_bits: u32,
+    mode_bits: u16,
 }
 
 impl Spi1Device {
@@ -94,7 +99,7 @@ impl Spi1Device {
     fn byte(&mut self, out: u8) -> u8 {
         while self.spi.sr().read().bits() & SR_TXE == 0 {}
         // SAFETY: DR takes any 8-bit value in 8-bit frame mode.
-        self.spi.dr().write(|w| unsafe { w.bits(out as u32) });
+        self.spi.dr().write(|w| unsafe { w.bits(out as u16) });
         while self.spi.sr().read().bits() & SR_RXNE == 0 {}
         self.spi.dr().read().bits() as u8
     }
@@ -114,7 +119,12 @@ impl SpiDevice<u8> for Spi1Device {
         for op in operations.iter_mut() {
             match op {
                 Operation::Read(buf) => buf.iter_mut().for_each(|b| *b = self.byte(0)),
-                Operation::Write(buf) => buf.iter().for_each(|&b| drop(self.byte(b))),
+                Operation::Write(buf) => {
+                    for &b in buf.iter() {
+                        // The byte clocked in while writing is not wanted.
+                        let _ = self.byte(b);
+                    }
+                }
                 Operation::Transfer(read, write) => {
                     for i in 0..read.len().max(write.len()) {
                         let r = self.byte(write.get(i).copied().unwrap_or(0));

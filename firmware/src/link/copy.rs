@@ -35,6 +35,12 @@ impl CopyState {
     }
 }
 
+impl Default for CopyState {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The copy job runs (the machine's source job is ours).
 pub fn live(m: &Motion) -> bool {
     m.copy.running && m.machine.event_job()
