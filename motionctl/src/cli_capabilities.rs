@@ -695,7 +695,7 @@ fn fourier_run(a: &FourierRunArgs) -> Result<()> {
         anyhow::bail!("--rpm must be within (0, 100000)");
     }
     let table = match &a.table {
-        Some(p) => zrun::read_table(p)?,
+        Some(p) => zrun::read_table(p)?.1,
         None => zrun::WireTable::douglass()?,
     };
     let opts = ZRunOptions {

@@ -27,6 +27,8 @@ pub mod forex4;
 pub mod paraboloid;
 pub mod run;
 pub mod table;
+pub mod table_file;
+pub mod units;
 
 pub use accurate::{AccurateOptions, ToolNoseModel};
 pub use fit::{CartesianGrid, Harmonics};
