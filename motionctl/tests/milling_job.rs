@@ -88,6 +88,11 @@ fn bad_jobs_name_the_field_and_the_range() {
         ),
         ("feed_per_tooth_mm = 0.381", "feed_per_tooth_mm = 1", "programmed feed of 2000.0 mm/min"),
         ("kc_n_per_mm2 = 4100", "kc_n_per_mm2 = 0", "cut.kc_n_per_mm2 = 0"),
+        (
+            "step_at_mm = 10",
+            "step_at_mm = 900",
+            "s of machine time at the steady feeds; a job runs at most 120 s",
+        ),
         ("b_after_mm = 10", "b_after_mm = -inf", "cut.b_after_mm = -inf"),
         ("step_at_mm = 10", "step_at_mm = 10\nb_mm = 3", "unknown field `b_mm`"),
     ] {

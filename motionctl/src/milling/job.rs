@@ -173,6 +173,8 @@ pub mod limits {
     /// the steady feed.
     pub const MIN_AFTER_STEP_MM: f64 = 3.0;
     pub const AFTER_STEP_S: f64 = 0.6;
+    /// Longest move, in machine time at the steady feeds (the host model simulates it).
+    pub const MAX_MACHINE_S: f64 = 120.0;
 }
 
 /// `value` checked against `lo..=hi` (`lo` excluded when `lo_open`), in `unit`.
@@ -326,6 +328,14 @@ pub fn parse(src: &str) -> Result<MillingJob, MillingJobError> {
     // Machine time: the move at a tenth of the slower steady feed, and 5 s to spare.
     let steady_before_mm_s = (f.force.fnom_n / (kc * b0 * tau)).min(feed / 60.0);
     let slowest = steady_before_mm_s.min(steady_after_mm_s).max(MIN_FEED_MM_MIN / 60.0);
+    if move_mm / slowest > MAX_MACHINE_S {
+        return Err(MillingJobError::Relation(format!(
+            "the move ({move_mm:.1} mm: 2 mm to the wall, cut.step_at_mm = {step_at}, then \
+             {after_mm:.1} mm) takes about {:.0} s of machine time at the steady feeds; a job runs \
+             at most {MAX_MACHINE_S:.0} s (a shorter cut.step_at_mm or a higher feed)",
+            move_mm / slowest
+        )));
+    }
     let max_s = 5.0 + 10.0 * move_mm / slowest;
     let setup = MillingSetup {
         control,
