@@ -185,6 +185,11 @@ fn all_responses() -> Vec<Response> {
         tick_hz: 100_000,
         max_window: RESULT_MEMORY as u16,
         max_segments_per_frame: MAX_SEGMENTS_PER_FRAME as u8,
+        last_panic: Some(PanicSite {
+            file: FixedStr::tail("firmware/src/bin/link.rs"),
+            line: 281,
+            column: 25,
+        }),
     };
     let mut v = vec![
         Response::Ack { seq: 0, credits: 0, reply: Reply::None },

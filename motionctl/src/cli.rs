@@ -522,6 +522,14 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
         Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
         Ok(Reply::Status(st)) => {
             crate::outln!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
+            if let Some(p) = &info.last_panic {
+                crate::outln!(
+                    "last panic {}:{}:{} (before the last reset)",
+                    p.file.as_str(),
+                    p.line,
+                    p.column
+                );
+            }
             crate::outln!(
                 "state      {:?} ({}), motion {:?}, tick {}",
                 st.machine,

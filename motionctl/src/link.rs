@@ -241,7 +241,18 @@ impl<'a> Session<'a> {
                             info.version
                         )));
                     }
-                    HostEvent::Connected(info) => return Ok(info),
+                    HostEvent::Connected(info) => {
+                        if let Some(p) = &info.last_panic {
+                            eprintln!(
+                                "motionctl: the board restarted after a firmware panic at \
+                                 {}:{}:{} (fault Panicked; `motionctl clear-fault` once noted)",
+                                p.file.as_str(),
+                                p.line,
+                                p.column
+                            );
+                        }
+                        return Ok(info);
+                    }
                     HostEvent::ConnectFailed(r) if r.code == ErrorCode::Version => {
                         return Err(LinkFailure::Refused(format!(
                             "board does not speak protocol v{PROTOCOL_VERSION} (motionctl's): \

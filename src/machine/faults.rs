@@ -39,7 +39,11 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         | FaultCode::ConfigCorrupt
         | FaultCode::FollowingError
         | FaultCode::HomingFailed
-        | FaultCode::WatchdogReset => Reaction::Stop,
+        | FaultCode::WatchdogReset
+        | FaultCode::SegmentRejected
+        | FaultCode::BoardSetup
+        | FaultCode::TickRate
+        | FaultCode::Panicked => Reaction::Stop,
         FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::LinkLost
@@ -61,12 +65,17 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         FaultCode::EStop => "e-stop input released",
         FaultCode::LimitSwitch => "every limit switch released",
         FaultCode::LinkLost => "link back",
-        FaultCode::ConfigMissing | FaultCode::ConfigCorrupt => "a valid SetConfig accepted",
+        FaultCode::ConfigMissing | FaultCode::ConfigCorrupt | FaultCode::TickRate => {
+            "a valid SetConfig accepted"
+        }
         FaultCode::SoftLimit
         | FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::HomingFailed
-        | FaultCode::WatchdogReset => "at once (an event, not a level)",
+        | FaultCode::WatchdogReset
+        | FaultCode::SegmentRejected
+        | FaultCode::BoardSetup
+        | FaultCode::Panicked => "at once (an event, not a level)",
         FaultCode::SensorFault => "sensor input clear",
         FaultCode::FollowingError => {
             "at once from the machine's monitor (it re-zeroes), else the sensor's bit clear; homing lost (home again)"

@@ -211,6 +211,8 @@ pub enum BootConfig {
     Corrupt,
     /// A complete record whose values fail validation: `ConfigCorrupt`.
     Invalid(ConfigError),
+    /// A valid record whose tick rate this board's timer cannot make: `TickRate`.
+    UnsupportedTickRate { tick_hz: u32 },
 }
 
 impl BootConfig {
@@ -219,12 +221,14 @@ impl BootConfig {
         match self {
             BootConfig::Missing => FaultCode::ConfigMissing,
             BootConfig::Corrupt | BootConfig::Invalid(_) => FaultCode::ConfigCorrupt,
+            BootConfig::UnsupportedTickRate { .. } => FaultCode::TickRate,
         }
     }
 }
 
 /// The config faults: levels until a valid `SetConfig`.
-const CONFIG_FAULTS: u32 = FaultCode::ConfigMissing.bit() | FaultCode::ConfigCorrupt.bit();
+const CONFIG_FAULTS: u32 =
+    FaultCode::ConfigMissing.bit() | FaultCode::ConfigCorrupt.bit() | FaultCode::TickRate.bit();
 
 #[derive(Clone, Debug)]
 pub struct Machine {
@@ -832,6 +836,13 @@ impl Machine {
     /// A Z-slide job runs or holds ([`MachineCommand::StartZ`]): the tick's source is the Z job.
     pub fn z_job(&self) -> bool {
         self.z_job
+    }
+
+    /// A fault the board found outside the tick (a peripheral that refused its setup, a
+    /// segment the DDA refused, a panic before the last reset): latched with its class's
+    /// reaction, as if the machine had found it.
+    pub fn board_fault(&mut self, code: FaultCode) {
+        self.raise(code);
     }
 
     /// Latches `code`; a new fault gets its class's reaction and the machine goes to `Fault`.

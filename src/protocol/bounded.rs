@@ -31,6 +31,19 @@ impl<const N: usize> FixedStr<N> {
         FixedStr(out)
     }
 
+    /// The last at most `N` bytes of `s`, from a character boundary (a path's tail names its
+    /// file).
+    pub fn tail(s: &str) -> Self {
+        let mut start = s.len().saturating_sub(N);
+        while !s.is_char_boundary(start) {
+            start += 1;
+        }
+        let mut out = heapless::String::new();
+        // Cannot fail: `s.len() - start <= N`.
+        let _ = out.push_str(&s[start..]);
+        FixedStr(out)
+    }
+
     pub fn as_str(&self) -> &str {
         self.0.as_str()
     }

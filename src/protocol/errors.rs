@@ -155,6 +155,10 @@ coded_enum! {
         HomingFailed = 18 => ("HomingFailed", "A homing switch was not found within the axis's travel, or did not release on back-off."),
         ConfigCorrupt = 19 => ("ConfigCorrupt", "The stored configuration is unusable (CRC, version or validation failed): safe defaults until a valid configuration is set."),
         WatchdogReset = 20 => ("WatchdogReset", "The board restarted because its watchdog expired (the tick or the control task stopped running); any job was lost."),
+        SegmentRejected = 21 => ("SegmentRejected", "The board refused a queued segment when preparing it for the DDA although the queue had accepted it: the job stopped, positions kept."),
+        BoardSetup = 22 => ("BoardSetup", "A board peripheral refused its configuration at start-up (the spindle encoder timer): jobs that need it cannot run; check the board and restart it."),
+        TickRate = 23 => ("TickRate", "The stored tick rate is not one this board's timer can make: safe defaults until a configuration with a supported rate is set."),
+        Panicked = 24 => ("Panicked", "The firmware stopped on an internal error and restarted; `motionctl status` and the boot log name the source location. Any job was lost."),
     }
 }
 

@@ -12,11 +12,13 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 3;
+pub const PROTOCOL_VERSION: u16 = 4;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
 pub const FIRMWARE_NAME_LEN: usize = 24;
+/// Longest source path a [`PanicSite`] carries (the tail is kept: it names the file).
+pub const PANIC_FILE_LEN: usize = 40;
 /// Longest config field name in an `InvalidConfig` NAK.
 pub const FIELD_NAME_LEN: usize = 24;
 /// Largest feed override, as `Rate` bits (2.0).
@@ -539,6 +541,18 @@ pub struct HelloInfo {
     /// Requests the board remembers for retransmission: the host's window must not exceed it.
     pub max_window: u16,
     pub max_segments_per_frame: u8,
+    /// Where the firmware panicked before the last reset, if it did (also latched as the
+    /// `Panicked` fault).
+    pub last_panic: Option<PanicSite>,
+}
+
+/// A source location the firmware panicked at: the file's path (its last
+/// [`PANIC_FILE_LEN`] bytes), line and column.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PanicSite {
+    pub file: FixedStr<PANIC_FILE_LEN>,
+    pub line: u32,
+    pub column: u32,
 }
 
 /// Motion state on the wire.

@@ -254,6 +254,7 @@ struct Session {
 pub struct BoardLink {
     firmware: FixedStr<FIRMWARE_NAME_LEN>,
     capabilities: u32,
+    last_panic: Option<PanicSite>,
     session: Option<Session>,
     memo: [Option<Memo>; RESULT_MEMORY],
     status_period_ms: u16,
@@ -270,11 +271,17 @@ impl BoardLink {
         BoardLink {
             firmware: FixedStr::truncated(firmware),
             capabilities,
+            last_panic: None,
             session: None,
             memo: [const { None }; RESULT_MEMORY],
             status_period_ms: 0,
             status_due_ms: None,
         }
+    }
+
+    /// The panic the board found recorded at boot, reported in every `HelloInfo`.
+    pub fn set_last_panic(&mut self, site: PanicSite) {
+        self.last_panic = Some(site);
     }
 
     /// The next seq the board will execute, if a session is open.
@@ -357,6 +364,7 @@ impl BoardLink {
             tick_hz: cfg.machine.tick_hz,
             max_window: RESULT_MEMORY as u16,
             max_segments_per_frame: super::MAX_SEGMENTS_PER_FRAME as u8,
+            last_panic: self.last_panic.clone(),
         }
     }
 

@@ -216,6 +216,11 @@ pub(crate) fn extreme_responses() -> Vec<Response> {
         tick_hz: u32::MAX,
         max_window: u16::MAX,
         max_segments_per_frame: u8::MAX,
+        last_panic: Some(PanicSite {
+            file: FixedStr::tail(&"ÿ".repeat(PANIC_FILE_LEN)),
+            line: u32::MAX,
+            column: u32::MAX,
+        }),
     };
     let mut v = vec![
         Response::Ack { seq, credits, reply: Reply::None },

@@ -56,6 +56,8 @@ commands:
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
                                                         and modelled cycles by situation
+  qemu ELF SECONDS                                       run a firmware ELF in QEMU for at most SECONDS, print its
+                                                        decoded defmt log
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
                                                         (f405-motion: the host-link firmware)";
 
@@ -149,6 +151,15 @@ fn run() -> Result<()> {
         "isr-profile" => {
             setup::ensure(&root)?;
             isr_profile::run(&root, rest).map(drop)
+        }
+        "qemu" => {
+            let [elf, secs] = rest else { bail!("usage: cargo xtask qemu ELF SECONDS") };
+            let run = firmware::run_qemu_for(
+                std::path::Path::new(elf),
+                std::time::Duration::from_secs(secs.parse()?),
+            )?;
+            run.print("  fw| ");
+            Ok(())
         }
         "flash" => {
             let [board] = rest else {

@@ -30,7 +30,7 @@ mod app {
         TickTimer as _, Watchdog as _,
     };
     use core::sync::atomic::Ordering::Relaxed;
-    use motion::machine::{BoardConfig, Inputs, OverrunDetector};
+    use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
     use motion_firmware::board;
     use motion_firmware::link::{
@@ -91,17 +91,43 @@ mod app {
         if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::force::ADC_START_HZ).ok()) {
             link::force::ADC_SAMPLE_HZ.store(hz, Relaxed);
         }
-        if !link::zslide::init(&mut spindle) {
-            defmt::panic!("spindle encoder config refused");
-        }
+        let spindle_ok = link::zslide::init(&mut spindle);
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
-        // After a watchdog reset the machine boots in Fault with WatchdogReset.
-        let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load(), reset));
-        let tick_hz = motion.machine.config().wire.machine.tick_hz;
+        // After a watchdog reset the machine boots in Fault with WatchdogReset. A stored tick
+        // rate this timer cannot make boots on safe defaults with TickRate.
         let mut tick_rate = tick_timer.rate_control();
+        let loaded = config.load().and_then(|c| {
+            let tick_hz = c.wire.machine.tick_hz;
+            if tick_rate.set(tick_hz) {
+                Ok(c)
+            } else {
+                defmt::error!("stored tick rate {=u32} Hz not supported by this board", tick_hz);
+                Err(BootConfig::UnsupportedTickRate { tick_hz })
+            }
+        });
+        let Some((mut motion, preparer)) = Motion::boot(loaded, reset) else {
+            defmt::error!("the safe default config is refused: the firmware is broken");
+            board::exit(false)
+        };
+        let tick_hz = motion.machine.config().wire.machine.tick_hz;
         if !tick_rate.set(tick_hz) {
-            defmt::panic!("stored tick rate {=u32} Hz not supported by this board", tick_hz);
+            defmt::error!("tick rate {=u32} Hz not supported by this board", tick_hz);
+            motion.machine.board_fault(FaultCode::BoardSetup);
+        }
+        if !spindle_ok {
+            defmt::error!("the spindle encoder refused its configuration");
+            motion.machine.board_fault(FaultCode::BoardSetup);
+        }
+        let last_panic = motion_firmware::panic::take_recorded();
+        if let Some(site) = &last_panic {
+            defmt::error!(
+                "the firmware panicked before this reset at {=str}:{=u32}:{=u32}",
+                site.file.as_str(),
+                site.line,
+                site.column
+            );
+            motion.machine.board_fault(FaultCode::Panicked);
         }
         defmt::println!(
             "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud; \
@@ -119,7 +145,10 @@ mod app {
             &mut name,
             format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
         );
-        let link = Link::new(&name, preparer, tick_rate);
+        let mut link = Link::new(&name, preparer, tick_rate);
+        if let Some(site) = last_panic {
+            link.board.set_last_panic(site);
+        }
         watchdog.start(link::WATCHDOG_TIMEOUT_MS);
 
         let (feeder_wake, feeder_waits) = make_signal!(());
@@ -274,15 +303,20 @@ mod app {
                 let Some(next) = link.lock(|l| l.next_prepared(&mut motion)) else {
                     break;
                 };
-                // Segments were checked against this config when queued: a refusal is a bug.
-                let prepared = match next {
-                    Ok(p) => p,
+                // Segments were checked against this config when queued, and only this task
+                // pushes into a queue that had room: a refusal here is a board bug, and it stops
+                // the job with a fault instead of running on without the segment.
+                let pushed = match next {
+                    Ok(prepared) => motion.lock(|m| m.dda.push(&prepared)).is_ok(),
                     Err((id, e)) => {
-                        defmt::panic!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e))
+                        defmt::error!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e));
+                        false
                     }
                 };
-                // Only this task pushes, and there was room.
-                defmt::unwrap!(motion.lock(|m| m.dda.push(&prepared)).ok());
+                if !pushed {
+                    motion.lock(|m| m.machine.board_fault(FaultCode::SegmentRejected));
+                    break;
+                }
             }
         }
     }

@@ -136,7 +136,13 @@ impl Motion {
     ) -> Option<(Self, Preparer)> {
         let mut machine = Machine::new();
         machine.boot_after_reset(loaded, reset);
-        let cfg = machine.config().wire.machine;
+        let mut cfg = machine.config().wire.machine;
+        if cfg.validate().is_err() {
+            // A validated config the DDA or preparer still refuses: the safe defaults instead.
+            machine = Machine::new();
+            machine.boot_after_reset(Err(BootConfig::Corrupt), reset);
+            cfg = machine.config().wire.machine;
+        }
         let dda = Dda::new(&cfg).ok()?;
         let preparer = Preparer::new(&cfg).ok()?;
         WAKE_TICKS.store(wake_ticks(cfg.tick_hz), Relaxed);

@@ -418,7 +418,10 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
             name: "turning (Z slide)",
             args: with_fw(
                 vec![s("fourier"), s("run")],
-                &["--rpm", "360", "--x-end", "0.02", "--feed", "0.1", "--output", "steps"],
+                &[
+                    "--rpm", "360", "--x-end", "0.02", "--feed", "0.1", "--blend", "0.005",
+                    "--output", "steps",
+                ],
             ),
             max_ticks: None,
         },
