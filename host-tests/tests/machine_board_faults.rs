@@ -56,3 +56,21 @@ fn a_panic_site_keeps_the_tail_of_a_long_path() {
     assert!(t.len() <= PANIC_FILE_LEN && s.ends_with(t.as_str()));
     assert_eq!(FixedStr::<PANIC_FILE_LEN>::tail("link.rs").as_str(), "link.rs");
 }
+
+/// A home position near i64's end would overflow the position sums (raw + offset): refused by
+/// validation with the field and axis, at the limit accepted.
+#[test]
+fn a_home_position_beyond_2_pow_46_steps_is_refused() {
+    use motion::machine::MAX_HOME_POS_STEPS;
+    let mut cfg = config(Case::HomingOk);
+    let a = cfg.home_order[0] as usize;
+    for bad in [i64::MIN, i64::MAX, MAX_HOME_POS_STEPS + 1, -MAX_HOME_POS_STEPS - 1] {
+        cfg.home[a].home_pos_steps = bad;
+        let e = cfg.validate().expect_err("refused");
+        assert_eq!((e.field, e.axis), ("home_pos_steps", Some(a as u8)), "{bad}");
+    }
+    for ok in [MAX_HOME_POS_STEPS, -MAX_HOME_POS_STEPS, 0] {
+        cfg.home[a].home_pos_steps = ok;
+        assert!(cfg.validate().is_ok(), "{ok}");
+    }
+}

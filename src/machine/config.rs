@@ -46,6 +46,9 @@ pub struct BoardConfig {
 
 /// Longest homing travel: a seek must fit one planned move.
 pub const MAX_HOME_TRAVEL_STEPS: u32 = 1 << 30;
+/// Largest |home_pos_steps|: 2^46 steps is over 8 000 km at 10 steps/um, and keeps every
+/// position sum (raw steps + offset) far from i64's range.
+pub const MAX_HOME_POS_STEPS: i64 = 1 << 46;
 
 impl BoardConfig {
     /// The config used when none is stored (or it is corrupt): slow, no travel allowed (soft
@@ -135,6 +138,9 @@ impl BoardConfig {
             }
             if h.max_travel_steps <= h.backoff_steps || h.max_travel_steps > MAX_HOME_TRAVEL_STEPS {
                 return err("max_travel_steps", Some(a), "must be within backoff_steps+1..=2^30");
+            }
+            if h.home_pos_steps.unsigned_abs() > MAX_HOME_POS_STEPS as u64 {
+                return err("home_pos_steps", Some(a), "must be within -2^46..=2^46");
             }
         }
         self.following.validate(axes)

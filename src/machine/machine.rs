@@ -395,7 +395,7 @@ impl Machine {
     pub fn positions(&self) -> [i64; MAX_AXES] {
         let mut p = self.raw;
         for i in 0..MAX_AXES {
-            p[i] += self.offset[i];
+            p[i] = p[i].saturating_add(self.offset[i]);
         }
         p
     }
@@ -743,7 +743,9 @@ impl Machine {
             HomeEvent::Stop => self.freeze(),
             HomeEvent::Latched { axis } => {
                 let a = (axis as usize).min(MAX_AXES - 1);
-                self.offset[a] = self.cfg.home[a].home_pos_steps - self.raw[a];
+                // Saturating: a validated home position and a raw count from real travel are far
+                // from i64's range, and a wrapped offset would be a wrong position.
+                self.offset[a] = self.cfg.home[a].home_pos_steps.saturating_sub(self.raw[a]);
                 self.freeze();
             }
             HomeEvent::NotFound { .. } | HomeEvent::Stuck { .. } => {

@@ -26,7 +26,7 @@ pub mod reset_cause;
 pub mod state;
 pub mod watchdog;
 
-pub use config::{BoardConfig, HomeAxis};
+pub use config::{BoardConfig, HomeAxis, MAX_HOME_POS_STEPS};
 pub use faults::{reaction, FaultLatch, Reaction};
 pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{
