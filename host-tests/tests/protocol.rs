@@ -396,6 +396,8 @@ fn run_lossy(seed: u64, n_segments: u32, frame_loss: f64, byte_noise: f64) -> Si
     let mut completed = HashSet::new();
     let mut setup_sent = false;
     let mut last_status_req = 0;
+    // Frames the board must count as bad: failed COBS/CRC, or not a request.
+    let mut bad_frames = 0u32;
     host.connect(rng.next() as u32);
     let mut now = 0u64;
     while done_ids.len() < n_segments as usize || host.in_flight() > 0 {
@@ -437,6 +439,8 @@ fn run_lossy(seed: u64, n_segments: u32, frame_loss: f64, byte_noise: f64) -> Si
         // Board: receive, answer, stream status, run the machine.
         for b in h2b.deliver(now) {
             if let Some(r) = board_rx.push(b) {
+                bad_frames += r.is_err_and(|_| true) as u32
+                    + r.is_ok_and(|m| decode_request(m).is_err()) as u32;
                 let resp = board.on_frame(r, &mut target);
                 assert!(
                     !matches!(
@@ -477,6 +481,11 @@ fn run_lossy(seed: u64, n_segments: u32, frame_loss: f64, byte_noise: f64) -> Si
     assert_eq!(done_ids, expected, "seed {seed}: segments lost, repeated or reordered");
     assert_eq!(target.queued_total, n_segments as u64, "seed {seed}: a segment was queued twice");
     assert!(target.max_depth <= CAPACITY);
+    let counted = board.status(&target).counters.frames_bad;
+    assert_eq!(counted, bad_frames, "seed {seed}: the board's bad-frame count");
+    if byte_noise > 0.0 {
+        assert!(counted > 0, "seed {seed}: byte noise and no bad frame counted");
+    }
     SimResult {
         ms: now,
         sent_frames: host.sent_frames,

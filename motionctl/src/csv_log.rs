@@ -27,12 +27,23 @@ impl CsvLog {
             head.push_str(&format!(",{name}_mm"));
         }
         head.push_str(",override,queue_depth,credits,job_segments_done");
+        head.push_str(
+            ",usart_overruns,frames_bad,responses_dropped,tick_overruns,steps_deferred,\
+             host_retransmits,host_bad_frames_in",
+        );
         writeln!(log.out, "{head}")?;
         Ok(log)
     }
 
-    /// One row; `job_done` = segments done since the job started.
-    pub fn row(&mut self, wall_ms: u64, s: &Status, job_done: u32) -> io::Result<()> {
+    /// One row; `job_done` = segments done since the job started; `host` = the host link's
+    /// (retransmissions, garbled frames in) then.
+    pub fn row(
+        &mut self,
+        wall_ms: u64,
+        s: &Status,
+        job_done: u32,
+        host: (u64, u64),
+    ) -> io::Result<()> {
         let mut line = format!("{wall_ms},{},{:?}", s.tick, s.state);
         for (i, _) in self.axes.iter().enumerate() {
             line.push_str(&format!(",{}", s.positions[i]));
@@ -42,6 +53,17 @@ impl CsvLog {
         }
         let ovr = Rate::from_bits(s.override_bits).to_num::<f64>();
         line.push_str(&format!(",{ovr:.4},{},{},{job_done}", s.queue_depth, s.credits));
+        let c = &s.counters;
+        line.push_str(&format!(
+            ",{},{},{},{},{},{},{}",
+            c.usart_overruns,
+            c.frames_bad,
+            c.responses_dropped,
+            c.tick_overruns,
+            c.steps_deferred,
+            host.0,
+            host.1
+        ));
         writeln!(self.out, "{line}")
     }
 

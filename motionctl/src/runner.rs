@@ -19,8 +19,8 @@ use crate::transport::Transport;
 use motion::dda::Command;
 use motion::machine::MachineState;
 use motion::protocol::{
-    AxisScale, ErrorCode, FaultCode, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
+    AxisScale, BoardCounters, ErrorCode, FaultCode, HostConfig, HostEvent, Reply, RequestBody,
+    SegmentBatch, Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::{order_hash, Segment};
 use motion::MAX_AXES;
@@ -93,6 +93,8 @@ pub struct RunReport {
     pub max_credits: u16,
     pub queue_full_naks: u64,
     pub noise: Option<(NoiseStats, NoiseStats)>,
+    /// The board's counters over the run (its final Status's less its first).
+    pub board: BoardCounters,
     pub problems: Vec<String>,
 }
 
@@ -181,6 +183,13 @@ impl RunReport {
             self.max_credits,
             self.max_queue_depth,
             self.queue_full_naks
+        );
+        let c = &self.board;
+        let _ = writeln!(
+            t,
+            "board      {} USART overruns, {} bad frames, {} answers dropped, {} tick overruns, \
+             {} steps deferred",
+            c.usart_overruns, c.frames_bad, c.responses_dropped, c.tick_overruns, c.steps_deferred
         );
         if let Some((to, from)) = self.noise {
             let _ = writeln!(
@@ -654,7 +663,8 @@ pub fn run(
                     let done = job_done(&st);
                     if let Some(csv) = opts.csv.as_mut() {
                         let wall_ms = t0.elapsed().as_millis() as u64;
-                        csv.row(wall_ms, &st, done)
+                        let host = (s.host.retransmissions, s.stats.bad_frames_in);
+                        csv.row(wall_ms, &st, done, host)
                             .map_err(|e| err(format!("writing the CSV log: {e}")))?;
                     }
                     if ever_started && finished_at.is_none() {
@@ -878,7 +888,8 @@ pub fn run(
         // The log ends with the board's final state even when noise took the last periodic
         // status: this one was asked for, and answered reliably.
         let wall_ms = t0.elapsed().as_millis() as u64;
-        csv.row(wall_ms, &fin, job_done(&fin))
+        let host = (s.host.retransmissions, s.stats.bad_frames_in);
+        csv.row(wall_ms, &fin, job_done(&fin), host)
             .map_err(|e| err(format!("writing the CSV log: {e}")))?;
         csv.flush().map_err(|e| err(format!("writing the CSV log: {e}")))?;
     }
@@ -900,6 +911,7 @@ pub fn run(
     report.bad_frames_in = s.stats.bad_frames_in;
     report.reconnects = s.stats.reconnects;
     report.noise = s.transport().noise_stats();
+    report.board = fin.counters.since(&base.counters);
     report.statuses = rate_count;
     if let (Some((w0, k0)), Some((w1, k1))) = (rate_first, rate_last) {
         let n = rate_count.saturating_sub(1) as f64;

@@ -274,6 +274,7 @@ pub struct Machine {
     z_job: bool,
     /// Commanded (the step counters) against measured, for axes with feedback.
     following: FollowingMonitor,
+    tick_overruns: u32,
 }
 
 impl Default for Machine {
@@ -315,6 +316,7 @@ impl Machine {
             paused: false,
             z_job: false,
             following: FollowingMonitor::new(),
+            tick_overruns: 0,
         }
     }
 
@@ -453,6 +455,11 @@ impl Machine {
     }
 
     /// Ticks seen.
+    /// Ticks that overran their period since boot (modular u32).
+    pub fn tick_overruns(&self) -> u32 {
+        self.tick_overruns
+    }
+
     pub fn ticks(&self) -> u64 {
         self.ticks
     }
@@ -680,6 +687,7 @@ impl Machine {
             self.raise(FaultCode::EStop);
         }
         if inp.tick_overrun {
+            self.tick_overruns = self.tick_overruns.wrapping_add(1);
             self.raise(FaultCode::TickOverrun);
         }
         // Switches matter while anything may move; the homing switch is the sequencer's.

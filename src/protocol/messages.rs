@@ -485,6 +485,35 @@ pub struct TeachChunk {
     pub lost_events: u32,
 }
 
+/// Counts of recovered trouble since boot. Each is modular (u32, wraps after 2^32): compare two
+/// readings with `wrapping_sub`, as [`BoardCounters::since`] does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BoardCounters {
+    /// Received bytes lost because the USART's data register was not read in time.
+    pub usart_overruns: u32,
+    /// Frames that failed COBS, length or CRC checks, or did not decode as a request.
+    pub frames_bad: u32,
+    /// Answers that did not fit the transmit queue whole and were dropped (the host resends).
+    pub responses_dropped: u32,
+    /// Ticks that started after their period had passed.
+    pub tick_overruns: u32,
+    /// Steps the DDA held back a tick (direction setup or a step pulse still high).
+    pub steps_deferred: u32,
+}
+
+impl BoardCounters {
+    /// Counts from `earlier` to `self`, correct across one wrap of each counter.
+    pub fn since(&self, earlier: &BoardCounters) -> BoardCounters {
+        BoardCounters {
+            usart_overruns: self.usart_overruns.wrapping_sub(earlier.usart_overruns),
+            frames_bad: self.frames_bad.wrapping_sub(earlier.frames_bad),
+            responses_dropped: self.responses_dropped.wrapping_sub(earlier.responses_dropped),
+            tick_overruns: self.tick_overruns.wrapping_sub(earlier.tick_overruns),
+            steps_deferred: self.steps_deferred.wrapping_sub(earlier.steps_deferred),
+        }
+    }
+}
+
 /// More about a NAK.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum NakDetail {
@@ -651,6 +680,8 @@ pub struct Status {
     /// The current (or last) copy job: events recorded and events lost (teach).
     pub taught_events: u32,
     pub lost_events: u32,
+    /// What the board recovered from without a fault, counted since boot.
+    pub counters: BoardCounters,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

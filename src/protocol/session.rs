@@ -255,6 +255,10 @@ pub struct BoardLink {
     firmware: FixedStr<FIRMWARE_NAME_LEN>,
     capabilities: u32,
     last_panic: Option<PanicSite>,
+    /// Frames that failed their checks or did not decode (`BoardCounters::frames_bad`).
+    frames_bad: u32,
+    /// The serial port's counts, noted by the firmware ([`BoardLink::note_port`]).
+    port: (u32, u32),
     session: Option<Session>,
     memo: [Option<Memo>; RESULT_MEMORY],
     status_period_ms: u16,
@@ -272,11 +276,18 @@ impl BoardLink {
             firmware: FixedStr::truncated(firmware),
             capabilities,
             last_panic: None,
+            frames_bad: 0,
+            port: (0, 0),
             session: None,
             memo: [const { None }; RESULT_MEMORY],
             status_period_ms: 0,
             status_due_ms: None,
         }
+    }
+
+    /// The serial port's receive overruns and dropped answers so far, for `Status::counters`.
+    pub fn note_port(&mut self, usart_overruns: u32, responses_dropped: u32) {
+        self.port = (usart_overruns, responses_dropped);
     }
 
     /// The panic the board found recorded at boot, reported in every `HelloInfo`.
@@ -297,16 +308,23 @@ impl BoardLink {
     ) -> Response {
         match frame {
             Ok(msg) => self.handle_message(msg, t),
-            Err(e) => self.link_nak(e.error_code(), t),
+            Err(e) => {
+                self.frames_bad = self.frames_bad.wrapping_add(1);
+                self.link_nak(e.error_code(), t)
+            }
         }
     }
 
     /// Handles CRC-checked message bytes.
     pub fn handle_message(&mut self, msg: &[u8], t: &mut impl LinkTarget) -> Response {
-        match decode_request(msg) {
-            Ok(req) => self.handle(&req, t),
-            Err(Malformed { seq: None }) => self.link_nak(ErrorCode::Malformed, t),
-            Err(Malformed { seq: Some(seq) }) => self.sequenced(seq, MALFORMED_KIND, t, |_, _| {
+        let malformed = match decode_request(msg) {
+            Ok(req) => return self.handle(&req, t),
+            Err(m) => m,
+        };
+        self.frames_bad = self.frames_bad.wrapping_add(1);
+        match malformed {
+            Malformed { seq: None } => self.link_nak(ErrorCode::Malformed, t),
+            Malformed { seq: Some(seq) } => self.sequenced(seq, MALFORMED_KIND, t, |_, _| {
                 Err((ErrorCode::Malformed, NakDetail::None))
             }),
         }
@@ -349,6 +367,8 @@ impl BoardLink {
         s.credits = t.credits();
         s.event_credits = t.event_credits();
         s.next_seq = self.next_seq().unwrap_or(0);
+        s.counters.frames_bad = self.frames_bad;
+        (s.counters.usart_overruns, s.counters.responses_dropped) = self.port;
         s
     }
 

@@ -103,6 +103,13 @@ fn extreme_status() -> Status {
         encoder_counts: [i32::MIN; 2],
         taught_events: u32::MAX,
         lost_events: u32::MAX,
+        counters: BoardCounters {
+            usart_overruns: u32::MAX,
+            frames_bad: u32::MAX,
+            responses_dropped: u32::MAX,
+            tick_overruns: u32::MAX,
+            steps_deferred: u32::MAX,
+        },
     }
 }
 
@@ -765,4 +772,27 @@ fn arm_wire_in_ready_arms_and_sim_inject_needs_the_capability() {
     assert!(matches!(r, Response::Ack { seq: 3, .. }), "{r:?}");
     assert!(t.sim_wire_stall);
     assert!(wire_params_ok(&wire_params()));
+}
+
+#[test]
+fn board_counters_since_is_right_across_a_wrap() {
+    let earlier = BoardCounters {
+        usart_overruns: u32::MAX - 1,
+        frames_bad: 5,
+        responses_dropped: u32::MAX,
+        tick_overruns: 0,
+        steps_deferred: 7,
+    };
+    let now = BoardCounters {
+        usart_overruns: 2,
+        frames_bad: 9,
+        responses_dropped: 0,
+        tick_overruns: 3,
+        steps_deferred: 7,
+    };
+    let d = now.since(&earlier);
+    assert_eq!(
+        (d.usart_overruns, d.frames_bad, d.responses_dropped, d.tick_overruns, d.steps_deferred),
+        (4, 4, 1, 3, 0)
+    );
 }

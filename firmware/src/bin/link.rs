@@ -353,7 +353,8 @@ mod app {
         let mut overruns_seen = 0;
         loop {
             cx.local.status_waits.wait().await;
-            let overruns = host_port.lock(|p| p.serial.overruns());
+            let (overruns, dropped) = host_port.lock(|p| (p.serial.overruns(), p.dropped));
+            link.lock(|l| l.board.note_port(overruns, dropped));
             if overruns != overruns_seen {
                 // Lost bytes fail a frame's CRC; the host retransmits. Worth a line in the log.
                 defmt::warn!("USART1 receive overruns: {=u32}", overruns);

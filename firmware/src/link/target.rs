@@ -10,8 +10,8 @@ use motion::machine::{BoardConfig, MachineCommand, MachineState, Refusal};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    ErrorCode, ForceJobParams, HomingConfig, LinkTarget, SimMillingParams, Status, TeachChunk,
-    WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, SimMillingParams, Status,
+    TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
 use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
@@ -145,6 +145,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 homed: mc.is_homed(),
                 events_fired: m.playback.fired(),
                 event_blocks: self.link.events.blocks() as u16,
+                counters: BoardCounters {
+                    tick_overruns: mc.tick_overruns(),
+                    steps_deferred: d.deferred_steps(),
+                    ..BoardCounters::default()
+                },
                 ..Status::default()
             };
             wire::status(m, &mut s);
