@@ -150,7 +150,11 @@ fn run() -> Result<()> {
         }
         "isr-profile" => {
             setup::ensure(&root)?;
-            isr_profile::run(&root, rest).map(drop)
+            let figures = isr_profile::run(&root, rest)?;
+            for (key, value) in &figures.keys {
+                println!("{key:<36} {value}");
+            }
+            Ok(())
         }
         "qemu" => {
             let [elf, secs] = rest else { bail!("usage: cargo xtask qemu ELF SECONDS") };

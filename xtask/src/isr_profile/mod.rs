@@ -266,7 +266,7 @@ fn profile_job(
             (prog.symbol_at(a).map_or_else(|| format!("{a:#010x}"), |s| s.name.clone()), n)
         })
         .collect();
-    top.sort_by(|a, b| b.1.cmp(&a.1));
+    top.sort_by_key(|b| std::cmp::Reverse(b.1));
     top.truncate(12);
     Ok(JobProfile {
         name: job.name,
