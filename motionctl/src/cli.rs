@@ -1,22 +1,18 @@
 //! The command line: argument parsing, job loading and the subcommands.
 
+use crate::board_link;
+pub use crate::board_link::LinkArgs;
 use crate::convert::{self, Program};
 use crate::gcode;
 use crate::job::{self, Job};
 use crate::link::{describe_rejection, Session};
-use crate::noise::Noisy;
 use crate::plan::{self, Summary};
-use crate::qemu::{self, Qemu};
-use crate::runner::{self, RunOptions};
-use crate::transport::{self, LinkTarget, Transport};
+use crate::runner;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use motion::protocol::{HostConfig, Reply, RequestBody, MAX_OVERRIDE_BITS};
-use std::io::IsTerminal;
+use motion::protocol::{Reply, RequestBody, MAX_OVERRIDE_BITS};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 #[derive(Parser, Debug)]
 #[command(name = "motionctl", version, about = "Plan and run motion-board jobs")]
@@ -118,49 +114,6 @@ pub struct JobArgs {
     pub machine: Option<PathBuf>,
 }
 
-#[derive(Args, Debug)]
-pub struct LinkArgs {
-    /// Serial port of the board.
-    #[arg(long, value_name = "PATH", conflicts_with_all = ["qemu", "tcp"])]
-    pub port: Option<String>,
-    /// Serial speed (8N1).
-    #[arg(long, value_name = "N", default_value_t = transport::DEFAULT_BAUD)]
-    pub baud: u32,
-    /// Start the link firmware in QEMU (netduinoplus2) and talk to it (`run` only; implies
-    /// --home: the simulated machine has no switches).
-    #[arg(long, conflicts_with = "tcp")]
-    pub qemu: bool,
-    /// Home the board before the job if it is not homed (`run` only); without it an unhomed
-    /// board is an error.
-    #[arg(long)]
-    pub home: bool,
-    /// With --qemu: the firmware ELF [default: target/fw-netduinoplus2-link/firmware, built
-    /// with `cargo xtask build --board netduinoplus2 --link` when missing].
-    #[arg(long, value_name = "PATH", requires = "qemu")]
-    pub firmware: Option<PathBuf>,
-    /// A board UART bridged to TCP, e.g. a QEMU started by hand.
-    #[arg(long, value_name = "HOST:PORT")]
-    pub tcp: Option<String>,
-    /// The in-process simulated board (for trying motionctl without hardware).
-    #[arg(long, hide = true, conflicts_with_all = ["qemu", "tcp", "port"])]
-    pub sim: bool,
-    /// Test only: corrupt or drop this fraction of bytes both ways (0..=1).
-    #[arg(long, hide = true, value_name = "RATE", value_parser = parse_rate, default_value_t = 0.0)]
-    pub noise: f64,
-    /// Test only: seed of the --noise generator.
-    #[arg(long, hide = true, value_name = "N", default_value_t = 1)]
-    pub seed: u64,
-    /// Retransmission timeout, ms [default: 100 for serial, 50 otherwise].
-    #[arg(long, hide = true, value_name = "MS")]
-    pub rto_ms: Option<u64>,
-    /// Most unanswered requests.
-    #[arg(long, hide = true, value_name = "N", default_value_t = 8)]
-    pub window: usize,
-    /// Most segments per QueueSegments request (1..=4).
-    #[arg(long, hide = true, value_name = "N", default_value_t = 4)]
-    pub batch: usize,
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum JobFormat {
     Toml,
@@ -173,70 +126,6 @@ fn parse_override(s: &str) -> Result<f64, String> {
         return Err(format!("must be within 0..=2, got {f}"));
     }
     Ok(f)
-}
-
-fn parse_rate(s: &str) -> Result<f64, String> {
-    let f: f64 = s.parse().map_err(|_| format!("expected a number, found {s:?}"))?;
-    if !(0.0..=1.0).contains(&f) {
-        return Err(format!("must be within 0..=1, got {f}"));
-    }
-    Ok(f)
-}
-
-impl LinkArgs {
-    pub fn target(&self) -> Result<LinkTarget> {
-        if self.qemu {
-            return Ok(LinkTarget::Qemu { firmware: self.firmware.clone() });
-        }
-        if self.sim {
-            return Ok(LinkTarget::Sim);
-        }
-        if let Some(addr) = &self.tcp {
-            return Ok(LinkTarget::Tcp { addr: addr.clone() });
-        }
-        match &self.port {
-            Some(port) => Ok(LinkTarget::Serial { port: port.clone(), baud: self.baud }),
-            None => bail!("no link given: pass --port PATH, --tcp HOST:PORT or --qemu"),
-        }
-    }
-
-    pub fn host_config(&self, target: &LinkTarget) -> HostConfig {
-        let rto = match target {
-            LinkTarget::Serial { .. } => 100,
-            _ => 50,
-        };
-        HostConfig { rto_ms: self.rto_ms.unwrap_or(rto).max(1), window: self.window.clamp(1, 32) }
-    }
-
-    /// Opens the link (starting QEMU for --qemu; the guard kills it when dropped), with the
-    /// noise proxy in between when asked for.
-    pub fn open(&self) -> Result<(Box<dyn Transport>, Option<Qemu>)> {
-        let target = self.target()?;
-        let (t, guard): (Box<dyn Transport>, Option<Qemu>) = match &target {
-            LinkTarget::Qemu { firmware } => {
-                let say = |m: &str| eprintln!("motionctl: {m}");
-                let elf = qemu::find_firmware(firmware.as_deref(), &say)?;
-                let (q, tcp) = Qemu::start(&elf)?;
-                eprintln!(
-                    "motionctl: QEMU netduinoplus2 running {} (UART on 127.0.0.1:{}, log {})",
-                    elf.display(),
-                    q.port,
-                    q.log.display()
-                );
-                (Box::new(tcp), Some(q))
-            }
-            other => (transport::open(other)?, None),
-        };
-        if self.noise > 0.0 {
-            eprintln!(
-                "motionctl: noise proxy: {:.2} % of bytes corrupted or dropped, seed {}",
-                self.noise * 100.0,
-                self.seed
-            );
-            return Ok((Box::new(Noisy::new(t, self.noise, self.seed)), guard));
-        }
-        Ok((t, guard))
-    }
 }
 
 /// The format of `path` by its extension.
@@ -429,64 +318,9 @@ fn run_job(
     let mut expected = [0i64; motion::MAX_AXES];
     expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
     let label = job.job.display().to_string();
-    stream(&label, &parsed, &program, &outputs, &expected, link, log_csv, yes, status_ms)
-}
-
-/// Streams planned `outputs` to the board and checks the result against `expected` (the host
-/// model's final positions): the end of `motionctl run` and of the capability `run` commands.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn stream(
-    label: &str,
-    parsed: &Job,
-    program: &Program,
-    outputs: &[plan::Output],
-    expected: &[i64; motion::MAX_AXES],
-    link: &LinkArgs,
-    log_csv: Option<&Path>,
-    yes: bool,
-    status_ms: u16,
-) -> Result<()> {
-    if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
-        bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
-    }
-    let target = link.target()?;
-    let host = link.host_config(&target);
-    let axes = runner::axes_of(parsed);
-    let csv = match log_csv {
-        Some(p) => Some(crate::csv_log::CsvLog::create(p, axes.clone())?),
-        None => None,
-    };
-    let interactive = !yes && std::io::stdin().is_terminal();
-    let interrupt = Arc::new(AtomicBool::new(false));
-    {
-        let flag = interrupt.clone();
-        // Fails only if a handler is already set (tests calling this twice): keep the first.
-        let _ = ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::SeqCst));
-    }
-    let (mut t, qemu_guard) = link.open()?;
-    let opts = RunOptions {
-        interactive,
-        status_period_ms: status_ms,
-        host,
-        max_batch: link.batch,
-        csv,
-        progress: true,
-        interrupt: Some(interrupt),
-        home: link.home || link.qemu || link.sim,
-    };
-    let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
-    crate::outln!("job        {label} ({segments} segments) on {target}");
-    let result = runner::run(&mut t, parsed, program, outputs, expected, opts);
-    let report = crate::qemu::finish(qemu_guard, result)?;
-    crate::out!("{}", report.text(&axes));
-    crate::outln!("{}", report.machine_line());
-    if !report.ok() {
-        bail!("verification failed: {}", report.problems.join("; "));
-    }
-    crate::outln!(
-        "result     OK: every segment executed once, in order; positions match the host model"
-    );
-    Ok(())
+    board_link::stream(
+        &label, &parsed, &program, &outputs, &expected, link, log_csv, yes, status_ms,
+    )
 }
 
 /// `status`, `hold`, `resume`, `abort`, `override`: one request, its answer printed.

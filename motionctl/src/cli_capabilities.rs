@@ -139,7 +139,7 @@ pub enum WireCmd {
         #[command(flatten)]
         plan: WirePlanArgs,
         #[command(flatten)]
-        link: crate::cli::LinkArgs,
+        link: crate::board_link::LinkArgs,
         /// Write every board status report to this CSV file (plain-segment runs only).
         #[arg(long, value_name = "FILE")]
         log_csv: Option<PathBuf>,
@@ -318,7 +318,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     }
     let outputs: Vec<crate::plan::Output> =
         job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
-    crate::cli::stream(
+    crate::board_link::stream(
         &format!("{} (wire)", die.label),
         &parsed,
         &program,
@@ -357,7 +357,7 @@ fn run_wire_job(
     program: &crate::convert::Program,
     segments: &[motion::segment::Segment],
     model: &motion::report::Report,
-    link: &crate::cli::LinkArgs,
+    link: &crate::board_link::LinkArgs,
     stall: Option<crate::wire::run::SimStall>,
 ) -> Result<()> {
     use motion::wire::scenario::STALL_PARAMS as P;

@@ -5,6 +5,7 @@
 //! [`convert::Program`] -> [`plan::Stream`] (segments and events) -> a link ([`transport`],
 //! [`link`], [`runner`]) or the host model ([`plan::simulate`]).
 
+pub mod board_link;
 pub mod cli;
 pub mod cli_capabilities;
 pub mod convert;

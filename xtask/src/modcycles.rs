@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 /// modules of the cycle, sorted).
 pub const ALLOWED: &[(&str, &[&str])] = &[
     (".", &["protocol::force_tests", "protocol::tests"]),
-    ("motionctl", &["cli", "cli_capabilities", "polar::cli"]),
     ("motionctl", &["noise", "sim_board", "transport"]),
 ];
 

@@ -89,7 +89,7 @@ pub struct TableArgs {
 #[derive(Args, Debug)]
 pub struct FourierRunArgs {
     #[command(flatten)]
-    pub link: crate::cli::LinkArgs,
+    pub link: crate::board_link::LinkArgs,
     /// Spindle speed, rpm (QEMU: the simulated spindle's; a real spindle must turn at it).
     #[arg(long, default_value_t = 360.0, allow_negative_numbers = true)]
     pub rpm: f64,

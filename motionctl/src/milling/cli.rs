@@ -38,7 +38,7 @@ pub enum MillingCmd {
     Run {
         job: PathBuf,
         #[command(flatten)]
-        link: crate::cli::LinkArgs,
+        link: crate::board_link::LinkArgs,
         /// Write every board status of the job to this CSV.
         #[arg(long, alias = "log-csv", value_name = "FILE")]
         csv: Option<PathBuf>,
@@ -121,7 +121,7 @@ fn milling_simulate(
 
 fn milling_board(
     path: &std::path::Path,
-    link: &crate::cli::LinkArgs,
+    link: &crate::board_link::LinkArgs,
     csv: Option<PathBuf>,
     plot: Option<PathBuf>,
     as_json: bool,

@@ -143,7 +143,7 @@ pub enum PolarCmd {
     Run {
         file: std::path::PathBuf,
         #[command(flatten)]
-        link: crate::cli::LinkArgs,
+        link: crate::board_link::LinkArgs,
         /// Speed scale (the feed override), 0.25..=2.
         #[arg(long, default_value_t = 1.0)]
         speed: f64,
@@ -156,7 +156,7 @@ pub enum PolarCmd {
     /// On a simulator board (--qemu) the host moves the simulated encoders along --template.
     Copy {
         #[command(flatten)]
-        link: crate::cli::LinkArgs,
+        link: crate::board_link::LinkArgs,
         /// Radial size scale M:K (M radial steps per K encoder counts), each 1..=4.
         #[arg(long, default_value = "1:1", value_parser = parse_size)]
         size: SizeScale,
@@ -183,7 +183,7 @@ pub fn parse_size(s: &str) -> Result<SizeScale, String> {
 /// `polar run`: opens the link (QEMU, serial, TCP or the simulated board), plays the stream.
 fn run_stream(
     file: &std::path::Path,
-    link: &crate::cli::LinkArgs,
+    link: &crate::board_link::LinkArgs,
     speed: f64,
     size: SizeScale,
 ) -> anyhow::Result<()> {
@@ -271,7 +271,7 @@ fn template(spec: &str) -> anyhow::Result<super::copy::Trace> {
 
 /// `polar copy`: opens the link, copies, saves the taught stream, prints the summary.
 fn run_copy(
-    link: &crate::cli::LinkArgs,
+    link: &crate::board_link::LinkArgs,
     size: SizeScale,
     teach: Option<&std::path::Path>,
     template_spec: Option<&str>,
