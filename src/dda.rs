@@ -17,8 +17,10 @@ use crate::fixed_math::isqrt_u64;
 use crate::segment::{order_hash, Rate, Segment, SegmentError, ORDER_HASH_START};
 use heapless::{Deque, Vec};
 
+pub mod feed_arbiter;
 pub mod lane_kernel_check;
 pub mod lanes;
+use feed_arbiter::{FeedArbiter, OverrideSource};
 use lanes::{Lane, Lanes};
 
 const ONE: u32 = 1 << Rate::FRAC_NBITS;
@@ -123,8 +125,11 @@ pub struct QueueFull;
 /// Feed commands; they act on the tick after they are applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Command {
-    /// Feed override, 0..=2.0 (larger values are clamped to 2.0).
+    /// The operator's feed override factor, 0..=2.0 (larger values are clamped to 2.0).
     SetOverride(Rate),
+    /// The running capability's feed factor (force loop, wire retrace), 0..=2.0; the DDA runs
+    /// at the product of both factors ([`feed_arbiter`]).
+    CapabilityOverride(Rate),
     /// Decelerate at the segment's acceleration and stop on the path.
     Hold,
     /// Leave a hold and accelerate back to the commanded feed.
@@ -136,6 +141,9 @@ impl defmt::Format for Command {
     fn format(&self, f: defmt::Formatter) {
         match self {
             Command::SetOverride(r) => defmt::write!(f, "SetOverride({=u32}/2^30)", r.to_bits()),
+            Command::CapabilityOverride(r) => {
+                defmt::write!(f, "CapabilityOverride({=u32}/2^30)", r.to_bits())
+            }
             Command::Hold => defmt::write!(f, "Hold"),
             Command::Resume => defmt::write!(f, "Resume"),
         }
@@ -310,6 +318,8 @@ pub struct Dda {
     rate: u32,
     phase: u32,
     rate_sq: u64,
+    /// The operator and capability factors behind `ovr` (their clamped product).
+    arbiter: FeedArbiter,
     ovr: u32,
     holding: bool,
 
@@ -365,6 +375,7 @@ impl Dda {
             rate: 0,
             rate_sq: 0,
             phase: 0,
+            arbiter: FeedArbiter::new(),
             ovr: ONE,
             holding: false,
             dir: 0,
@@ -838,7 +849,10 @@ impl Dda {
     pub fn apply(&mut self, cmd: Command) {
         self.leave_fast();
         match cmd {
-            Command::SetOverride(r) => self.ovr = r.to_bits().min(MAX_RATE),
+            Command::SetOverride(r) => self.ovr = self.arbiter.set(OverrideSource::Operator, r),
+            Command::CapabilityOverride(r) => {
+                self.ovr = self.arbiter.set(OverrideSource::Capability, r)
+            }
             Command::Hold => self.holding = true,
             Command::Resume => self.holding = false,
         }
@@ -952,8 +966,14 @@ impl Dda {
         Rate::from_bits(self.rate)
     }
 
+    /// The override the DDA runs at: the operator's factor times the capability's.
     pub fn feed_override(&self) -> Rate {
         Rate::from_bits(self.ovr)
+    }
+
+    /// One source's own factor (the operator's is what a sender's override shows).
+    pub fn override_factor(&self, source: OverrideSource) -> Rate {
+        self.arbiter.factor(source)
     }
 
     pub fn segments_done(&self) -> u32 {

@@ -855,6 +855,12 @@ pub fn run(
                     }
                     Command::Hold => (RequestBody::Hold, "hold"),
                     Command::Resume => (RequestBody::Resume, "resume"),
+                    // Only the board's own controllers set the capability factor; a job file
+                    // cannot schedule one (convert.rs makes operator overrides only).
+                    Command::CapabilityOverride(_) => {
+                        feed_next += 1;
+                        continue;
+                    }
                 };
                 let seq = s.send(body).map_err(link_err)?;
                 pending.insert(seq, Pending::Feed(what));

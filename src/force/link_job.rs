@@ -603,7 +603,7 @@ pub fn link_tick(
             let pos = machine.positions().get(job.axis).copied().unwrap_or(0);
             let t = job.tick_sim(pos);
             if let Some(rate) = t.set_override {
-                dda.apply(Command::SetOverride(rate));
+                dda.apply(Command::CapabilityOverride(rate));
             }
         } else {
             job.end();

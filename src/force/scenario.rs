@@ -439,7 +439,7 @@ impl ForceScenario {
             self.s.fault_x = self.x_steps;
             self.dda.apply(Command::Hold);
         } else if !o.hold && o.feed.to_bits() != self.ovr_bits {
-            self.dda.apply(Command::SetOverride(o.feed));
+            self.dda.apply(Command::CapabilityOverride(o.feed));
         }
         self.ovr_bits = o.feed.to_bits();
         self.last = (self.ticks, force_mn, self.ovr_bits, self.x_steps);

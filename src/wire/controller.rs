@@ -294,7 +294,7 @@ impl WireCore {
                 if self.resume_left > 0 {
                     self.resume_left -= 1;
                     if self.resume_left == 0 {
-                        dda.apply(Command::SetOverride(Rate::ONE));
+                        dda.apply(Command::CapabilityOverride(Rate::ONE));
                     }
                 }
             }
@@ -343,7 +343,7 @@ impl WireCore {
                 let s = dda.state();
                 if (s == MotionState::Held || s == MotionState::Idle) && self.stop_here(dda) {
                     self.phase = if self.phase == Phase::Stopping && self.stalled {
-                        dda.apply(Command::SetOverride(self.params.retrace_override));
+                        dda.apply(Command::CapabilityOverride(self.params.retrace_override));
                         self.retraced_steps = 0;
                         Phase::Retracing
                     } else {
@@ -500,7 +500,7 @@ impl WireCore {
 
     fn start_return(&mut self, dda: &mut Dda) {
         self.wire_on = true;
-        dda.apply(Command::SetOverride(self.params.resume_override));
+        dda.apply(Command::CapabilityOverride(self.params.resume_override));
     }
 
     fn return_next<J: JobTable + ?Sized>(
@@ -520,7 +520,7 @@ impl WireCore {
             self.stats.first_resume_tick = dda.now();
         }
         if self.resume_left == 0 {
-            dda.apply(Command::SetOverride(Rate::ONE));
+            dda.apply(Command::CapabilityOverride(Rate::ONE));
         }
         self.feed_job(dda, job)
     }

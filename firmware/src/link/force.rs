@@ -160,7 +160,7 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
             f.get(2).copied().unwrap_or(0),
         ];
         if let Some(rate) = job.sample(&counts, pos).set_override {
-            dda.apply(Command::SetOverride(rate));
+            dda.apply(Command::CapabilityOverride(rate));
         }
     }
 }
