@@ -127,6 +127,7 @@ impl Block {
     pub fn locate(&self, at: At) -> Option<(usize, usize)> {
         match at {
             At::Line => None,
+            At::Span(s, e) => Some((s, e)),
             At::Pos(p) => Some(
                 self.spans.iter().find(|s| s.1 <= p && p < s.2).map_or((p, p + 1), |s| (s.1, s.2)),
             ),
@@ -171,7 +172,10 @@ pub(crate) fn read_items(text: &[u8], env: &mut Env, ctx: &ReadCtx) -> Res<Block
         c.peek() == b'o' || m_number == Some(98) || (m_number == Some(99) && ctx.call_level > 0);
     if oline {
         let start = c.pos;
-        let o = crate::oword::read_o(&mut c, env, ctx)?;
+        let o = crate::oword::read_o(&mut c, env, ctx).map_err(|mut f| {
+            f.at = At::Span(start, c.pos.max(start + 1));
+            f
+        })?;
         block.spans.push((b'o' as u16, start, c.pos));
         block.o = Some(o);
         if ctx.skipping_o.is_some() {
@@ -221,12 +225,14 @@ fn read_one_item(c: &mut Cursor, block: &mut Block, env: &mut Env, ctx: &ReadCtx
     let r = read_word(c, block, env, ctx, letter);
     let end = c.pos.max(start + 1);
     match letter {
-        b'g' | b'm' | b'(' | b';' => {}
+        b'(' | b';' => {}
+        b'g' | b'm' if r.is_ok() => {}
         _ => block.spans.push((letter as u16, start, end)),
     }
+    // A reading error points at the whole word.
     r.map_err(|mut f| {
-        if f.at == At::Line {
-            f.at = At::Pos(start);
+        if matches!(f.at, At::Line | At::Pos(_)) {
+            f.at = At::Span(start, end);
         }
         f
     })

@@ -99,6 +99,8 @@ pub(crate) enum At {
     Line,
     /// A byte index into the prepared (downcased, blank-free) line.
     Pos(usize),
+    /// A byte range of the prepared line (a word).
+    Span(usize, usize),
     /// The word starting with this (lowercase) letter.
     Letter(u8),
     /// The G-code of this modal group.

@@ -358,6 +358,7 @@ impl<S: LineSource> Interpreter<S> {
                     Some(b) => b.locate(at),
                     None => match at {
                         At::Pos(i) => Some((i, i + 1)),
+                        At::Span(s, e) => Some((s, e)),
                         _ => None,
                     },
                 };

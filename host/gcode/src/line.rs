@@ -157,7 +157,12 @@ impl Core {
     ) -> Res<Outcome> {
         self.emitted = 0;
         if let Some(o) = block.o.clone() {
-            self.control(&o, here, src)?;
+            self.control(&o, here, src).map_err(|mut f| {
+                if f.at == At::Line {
+                    f.at = At::Letter(b'o');
+                }
+                f
+            })?;
             return Ok(Outcome::Ok);
         }
         if self.s.skipping_o.is_some() {

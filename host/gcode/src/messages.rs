@@ -134,9 +134,9 @@ pub fn multiple_words(letter: u8) -> String {
     }
 }
 
-/// rs274's "Bad character" message: printable characters quoted, others in octal.
+/// rs274's "Bad character" message: printable characters up to 'z' quoted, others in octal.
 pub fn bad_character(c: u8) -> String {
-    if c.is_ascii_graphic() {
+    if c.is_ascii_graphic() && c <= b'z' {
         format!("Bad character '{}' used", c as char)
     } else {
         format!("Bad character '\\{c:03o}' used")
