@@ -389,7 +389,7 @@ pub fn execute(cli: Cli) -> Result<()> {
     match cli.command {
         Cmd::Plan { job } => {
             let (parsed, program, summary) = plan_job(&job)?;
-            print!("{}", summary_text(&job.job, &parsed, &program, &summary));
+            crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
             Ok(())
         }
         Cmd::Run { job, link, log_csv, yes, status_ms } => {
@@ -475,15 +475,15 @@ pub(crate) fn stream(
         home: link.home || link.qemu || link.sim,
     };
     let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
-    println!("job        {label} ({segments} segments) on {target}");
+    crate::outln!("job        {label} ({segments} segments) on {target}");
     let result = runner::run(&mut t, parsed, program, outputs, expected, opts);
     let report = crate::qemu::finish(qemu_guard, result)?;
-    print!("{}", report.text(&axes));
-    println!("{}", report.machine_line());
+    crate::out!("{}", report.text(&axes));
+    crate::outln!("{}", report.machine_line());
     if !report.ok() {
         bail!("verification failed: {}", report.problems.join("; "));
     }
-    println!(
+    crate::outln!(
         "result     OK: every segment executed once, in order; positions match the host model"
     );
     Ok(())
@@ -499,7 +499,7 @@ fn home_board(link: &LinkArgs) -> Result<()> {
     let (mut t, _guard) = link.open()?;
     let mut s = Session::new(&mut t, link.host_config(&target));
     let info = s.connect()?;
-    runner::home(&mut s, info.tick_hz, &|m: &str| println!("motionctl: {m}"))
+    runner::home(&mut s, info.tick_hz, &|m: &str| crate::outln!("motionctl: {m}"))
         .map_err(|e| anyhow!("{e}"))
 }
 
@@ -521,8 +521,8 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
     match s.request(body)? {
         Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
         Ok(Reply::Status(st)) => {
-            println!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
-            println!(
+            crate::outln!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
+            crate::outln!(
                 "state      {:?} ({}), motion {:?}, tick {}",
                 st.machine,
                 if st.homed { "homed" } else { "not homed" },
@@ -534,25 +534,25 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
                     .map(|c| c.scale[i].steps_per_unit_milli as f64 / 1000.0)
                     .filter(|&v| v > 0.0);
                 match spm {
-                    Some(spm) => println!(
+                    Some(spm) => crate::outln!(
                         "axis {i}     {} steps ({:.4} mm)",
                         st.positions[i],
                         st.positions[i] as f64 / spm
                     ),
-                    None => println!("axis {i}     {} steps", st.positions[i]),
+                    None => crate::outln!("axis {i}     {} steps", st.positions[i]),
                 }
             }
             let ovr = motion::Rate::from_bits(st.override_bits).to_num::<f64>();
-            println!("override   {ovr:.3}");
-            println!("queue      {} queued, {} free", st.queue_depth, st.credits);
-            println!("segments   {} done, last id {:?}", st.segments_done, st.last_done_id);
+            crate::outln!("override   {ovr:.3}");
+            crate::outln!("queue      {} queued, {} free", st.queue_depth, st.credits);
+            crate::outln!("segments   {} done, last id {:?}", st.segments_done, st.last_done_id);
             if st.faults != 0 {
                 let names: Vec<&str> = motion::protocol::FaultCode::ALL
                     .iter()
                     .filter(|f| st.faults & f.bit() != 0)
                     .map(|f| f.name())
                     .collect();
-                println!("faults     {}", names.join(", "));
+                crate::outln!("faults     {}", names.join(", "));
             }
             if st.causes != 0 {
                 let names: Vec<&str> = motion::protocol::FaultCode::ALL
@@ -560,13 +560,13 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
                     .filter(|f| st.causes & f.bit() != 0)
                     .map(|f| f.name())
                     .collect();
-                println!(
+                crate::outln!(
                     "causes     {} (present now: clear-fault waits for them)",
                     names.join(", ")
                 );
             }
         }
-        Ok(_) => println!("{what}: ok"),
+        Ok(_) => crate::outln!("{what}: ok"),
     }
     Ok(())
 }
@@ -588,7 +588,7 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match execute(cli) {
+    match execute(cli).and_then(|()| crate::out::finish().map_err(|e| anyhow!(e))) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let msg = format!("{e:#}").replace('\n', " ");

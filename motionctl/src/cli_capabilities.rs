@@ -76,9 +76,9 @@ pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
         FourierCmd::Run(args) => fourier_run(&args),
         FourierCmd::Table { mode: FourierMode::Thesis, firmware_rust } => {
             let t = forex4::forex4_table(&Forex4Params::listing())?;
-            println!("FOREX4 (Appendix B-1), Table 2-2 format: X, C00, C01, C02, C03 (in)");
+            crate::outln!("FOREX4 (Appendix B-1), Table 2-2 format: X, C00, C01, C02, C03 (in)");
             for line in forex4::format_for30(&t) {
-                println!("{line}");
+                crate::outln!("{line}");
             }
             if firmware_rust.is_some() {
                 anyhow::bail!("--firmware-rust takes the accurate table: use --mode accurate");
@@ -87,18 +87,21 @@ pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
         }
         FourierCmd::Table { mode: FourierMode::Accurate, firmware_rust } => {
             let acc = firmware_table::douglass_accurate()?;
-            println!(
+            crate::outln!(
                 "accurate Douglass table: {} rows, dX = {DOUGLASS_DX_IN} in, largest neglected \
                  harmonic {:.3e} in",
                 acc.table.len(),
                 acc.max_neglected_in
             );
-            println!("{:>6} {:>13} {:>13} {:>13} {:>13}", "X", "C00", "C01", "C02", "C03");
+            crate::outln!("{:>6} {:>13} {:>13} {:>13} {:>13}", "X", "C00", "C01", "C02", "C03");
             for (i, r) in acc.table.rows().iter().enumerate() {
                 let x = acc.table.x_at(i);
-                println!(
+                crate::outln!(
                     "{x:6.2} {:13.9} {:13.9} {:13.9} {:13.9}",
-                    r.c00_in, r.c01_in, r.c02_in, r.c03_in
+                    r.c00_in,
+                    r.c01_in,
+                    r.c02_in,
+                    r.c03_in
                 );
             }
             if let Some(path) = firmware_rust {
@@ -107,7 +110,7 @@ pub fn run_fourier(cmd: FourierCmd) -> Result<()> {
                 >(&acc.table)?;
                 std::fs::write(&path, firmware_table::render_power_table(&fixed))
                     .with_context(|| format!("writing {}", path.display()))?;
-                println!("wrote {}", path.display());
+                crate::outln!("wrote {}", path.display());
             }
             Ok(())
         }
@@ -302,15 +305,15 @@ fn run_milling_board(
     let result = run::run(&mut *t, &job, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} ms", v * 1e3));
-    println!(
+    crate::outln!(
         "force job  {} statuses, {:.2} s wall, {} board ticks, {} control updates",
         r.trace.len(),
         r.seconds,
         r.board_ticks,
         r.updates
     );
-    println!("X          {} steps; host model {}", r.x_steps, r.expected_x_steps);
-    println!(
+    crate::outln!("X          {} steps; host model {}", r.x_steps, r.expected_x_steps);
+    crate::outln!(
         "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step \
          (host model {})",
         r.peak_n,
@@ -319,14 +322,14 @@ fn run_milling_board(
     );
     if let Some(p) = log_csv {
         run::write_csv(&p, &r.trace)?;
-        println!("wrote {}", p.display());
+        crate::outln!("wrote {}", p.display());
     }
     if let Some(p) = png {
         let points = run::plot_points(&r.trace);
         simulate::write_png(&p, &points, job.control.fnom_mn as f64 / 1e3)?;
-        println!("wrote {}", p.display());
+        crate::outln!("wrote {}", p.display());
     }
-    println!("{}", r.summary_line());
+    crate::outln!("{}", r.summary_line());
     if !r.ok() {
         for p in &r.problems {
             eprintln!("motionctl: {p}");
@@ -348,21 +351,25 @@ pub fn run_milling(cmd: MillingCmd) -> Result<()> {
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
     let job = job::parse(&src).with_context(|| path.display().to_string())?;
     let (report, trace) = simulate::run(&job)?;
-    println!("{} control updates over {:.3} s", trace.len(), trace.last().map_or(0.0, |p| p.t_s));
-    println!(
+    crate::outln!(
+        "{} control updates over {:.3} s",
+        trace.len(),
+        trace.last().map_or(0.0, |p| p.t_s)
+    );
+    crate::outln!(
         "fault      {}",
         if report.fault == 0 { "none".to_string() } else { fault_name(report.fault) }
     );
     for f in &report.figures {
-        println!("  {:<28} {}", f.name, f.value);
+        crate::outln!("  {:<28} {}", f.name, f.value);
     }
     if let Some(p) = csv {
         simulate::write_csv(&p, &trace)?;
-        println!("wrote {}", p.display());
+        crate::outln!("wrote {}", p.display());
     }
     if let Some(p) = png {
         let labelled = simulate::write_png(&p, &trace, job.control.fnom_mn as f64 / 1e3)?;
-        println!(
+        crate::outln!(
             "wrote {}{}",
             p.display(),
             if labelled {
@@ -475,7 +482,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             use crate::wire::table11;
             let t = table11::table11(&continuous::circle_complex_path()?, 800.0)?;
             let text = if *csv { table11::render_csv(&t) } else { table11::render_text(&t) };
-            print!("{text}");
+            crate::out!("{text}");
             return Ok(());
         }
     };
@@ -500,20 +507,22 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             first.entry_rate = motion::segment::Rate::ZERO;
         }
         job.segments = part;
-        println!("  only segments       {r:?} of {n}");
+        crate::outln!("  only segments       {r:?} of {n}");
     }
-    println!(
+    crate::outln!(
         "{} die, ZT {} mm, FR {fr} mm^2/min, tolerance {tolerance} mm",
-        die.label, die.die.zt_mm
+        die.label,
+        die.die.zt_mm
     );
     print_die_figures(&die);
-    println!("  segments            {}", job.segments.len());
-    println!(
+    crate::outln!("  segments            {}", job.segments.len());
+    crate::outln!(
         "  ruled area          {:.3} mm^2 (thesis trapezoids {:.3})",
-        job.area_ruled_mm2, job.area_trapezoid_mm2
+        job.area_ruled_mm2,
+        job.area_trapezoid_mm2
     );
-    println!("  60 A / FR           {:.3} s", job.time_ruled_s);
-    println!(
+    crate::outln!("  60 A / FR           {:.3} s", job.time_ruled_s);
+    crate::outln!(
         "  thesis 60 A / FR    {:.3} s (its trapezoid areas (RB + RT) ZT / 2, not the ruled area)",
         crate::wire::path::time_s(job.area_trapezoid_mm2, fr)?
     );
@@ -524,7 +533,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
     };
     let report = run_model(&job.segments)?;
     let t = report.ticks as f64 / cfg.tick_hz as f64;
-    println!(
+    crate::outln!(
         "  host model          {t:.3} s ({:+.0} ppm), {} segments, final steps {:?}",
         (t / job.time_ruled_s - 1.0) * 1e6,
         report.segments,
@@ -537,7 +546,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         let bare =
             continuous::plan(&path, &cfg, &ContinuousParams { backlash_steps: [0; 4], ..prm })?;
         let bare_s = run_model(&bare.segments)?.ticks as f64 / cfg.tick_hz as f64;
-        println!(
+        crate::outln!(
             "  backlash            {:?} steps (X, Y, beta, alpha): {takeups} take-up segments, \
              {:.3} s nominal; +{:.3} s on the host model ({:.3} s without)",
             prm.backlash_steps,
@@ -592,14 +601,14 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
 fn print_die_figures(die: &crate::wire::dies::DieJob) {
     use crate::wire::area::{polygon_area_mm2, sector_area_mm2};
     let (s, d) = (die.start, &die.die);
-    println!(
+    crate::outln!(
         "  points              {} per face, from and back to ({}, {}) mm",
         d.top.len(),
         s.x_mm,
         s.y_mm
     );
     for (name, face) in [("top face", &d.top), ("bottom face", &d.bottom)] {
-        println!(
+        crate::outln!(
             "  {name:<19} sector area {:.3} mm^2, polygon {:.3} mm^2",
             sector_area_mm2(face),
             polygon_area_mm2(face)
@@ -640,17 +649,22 @@ fn run_wire_job(
     let cfg = crate::runner::wire_config(parsed, program);
     let result = crate::wire::run::run(&mut *t, cfg, segments, expected, model.ticks, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
-    println!(
+    crate::outln!(
         "wire job   {} segments, {:.2} s wall, {} board ticks",
-        r.segments, r.seconds, r.board_ticks
+        r.segments,
+        r.seconds,
+        r.board_ticks
     );
-    println!("positions  {:?} steps; host model {:?}", r.positions, r.expected_positions);
-    println!(
+    crate::outln!("positions  {:?} steps; host model {:?}", r.positions, r.expected_positions);
+    crate::outln!(
         "stall      {} stalls, {} retrace and {} return segments, largest retrace {} steps",
-        r.stalls, r.retraces, r.returns, r.max_retrace_steps
+        r.stalls,
+        r.retraces,
+        r.returns,
+        r.max_retrace_steps
     );
     // One machine-readable line for scripts (xtask wire-e2e).
-    println!(
+    crate::outln!(
         "wire-summary x={} y={} beta={} alpha={} stalls={} retraces={} returns={} \
          max_retrace_steps={} board_ticks={} segments={}",
         r.positions[0],
@@ -670,7 +684,7 @@ fn run_wire_job(
         }
         anyhow::bail!("the wire job failed {} check(s)", r.problems.len());
     }
-    println!("result     OK");
+    crate::outln!("result     OK");
     Ok(())
 }
 
@@ -703,29 +717,38 @@ fn fourier_run(a: &FourierRunArgs) -> Result<()> {
     let say = |m: &str| eprintln!("motionctl: {m}");
     let result = zrun::run(&mut *t, &table, &opts, &say);
     let r = crate::qemu::finish(qemu_guard, result)?;
-    println!(
+    crate::outln!(
         "z job      X {} -> {} in at {} in/s, {} rpm, {:?} output; {} board ticks, {:.2} s wall",
-        a.x_start, a.x_end, a.feed, a.rpm, a.output, r.board_ticks, r.seconds
+        a.x_start,
+        a.x_end,
+        a.feed,
+        a.rpm,
+        a.output,
+        r.board_ticks,
+        r.seconds
     );
-    println!(
+    crate::outln!(
         "steps      X {} Z {}; host model X {} Z {}",
-        r.x_steps, r.z_steps, r.model.x_steps, r.model.z_steps
+        r.x_steps,
+        r.z_steps,
+        r.model.x_steps,
+        r.model.z_steps
     );
-    println!(
+    crate::outln!(
         "following  max {:.3} uin; host model {:.3} uin",
         r.max_following_nin as f64 / 1e3,
         r.model.max_following_nin as f64 / 1e3
     );
     if let Some(at) = r.step_at_tick {
-        println!(
+        crate::outln!(
             "speed step +{} % at board tick {at}; final {:.3} rpm",
             a.speed_step_pct,
             r.final_rpm_milli as f64 / 1e3
         );
     }
-    println!("faults     {:#x}", r.faults);
+    crate::outln!("faults     {:#x}", r.faults);
     // One machine-readable line for scripts (xtask zslide-e2e).
-    println!(
+    crate::outln!(
         "zslide-summary x_steps={} z_steps={} model_x_steps={} model_z_steps={} \
          max_following_nin={} model_max_following_nin={} faults={} z_state={} board_ticks={} \
          model_ticks={} step_at_tick={} final_rpm_milli={}",
@@ -748,6 +771,6 @@ fn fourier_run(a: &FourierRunArgs) -> Result<()> {
         }
         anyhow::bail!("the Z-slide job failed {} check(s)", r.problems.len());
     }
-    println!("result     OK");
+    crate::outln!("result     OK");
     Ok(())
 }

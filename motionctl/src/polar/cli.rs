@@ -215,30 +215,38 @@ fn run_stream(
     };
     let result = super::run::run(&mut t, &bytes, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
-    println!(
+    crate::outln!(
         "events     {} fired, {} in {} ({} blocks)",
         r.events_fired,
         r.events,
         file.display(),
         r.blocks
     );
-    println!(
+    crate::outln!(
         "positions  theta {} r {} steps; host model theta {} r {}",
-        r.positions[0], r.positions[1], r.expected_positions[0], r.expected_positions[1]
+        r.positions[0],
+        r.positions[1],
+        r.expected_positions[0],
+        r.expected_positions[1]
     );
-    println!(
+    crate::outln!(
         "time       {:.2} s wall; model {} ticks, board ~{} ticks (status-resolution)",
-        r.seconds, r.model_ticks, r.board_ticks
+        r.seconds,
+        r.model_ticks,
+        r.board_ticks
     );
-    println!(
+    crate::outln!(
         "link       {} frames out, {} retransmitted, {} link NAKs, {} garbled frames in",
-        r.frames_out, r.retransmissions, r.link_naks, r.bad_frames_in
+        r.frames_out,
+        r.retransmissions,
+        r.link_naks,
+        r.bad_frames_in
     );
-    println!("{}", r.machine_line());
+    crate::outln!("{}", r.machine_line());
     if !r.ok() {
         bail!("verification failed: {}", r.problems.join("; "));
     }
-    println!("result     OK: every event fired once; positions match the host model");
+    crate::outln!("result     OK: every event fired once; positions match the host model");
     Ok(())
 }
 
@@ -294,17 +302,24 @@ fn run_copy(
     };
     let result = super::copy::copy(&mut t, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
-    println!(
+    crate::outln!(
         "copy       {} waypoints; encoders moved arm {} carriage {} counts",
-        r.waypoints, r.encoder_moves[0], r.encoder_moves[1]
+        r.waypoints,
+        r.encoder_moves[0],
+        r.encoder_moves[1]
     );
-    println!(
+    crate::outln!(
         "positions  theta {} r {} steps (size {}:{}); host model theta {} r {}",
-        r.positions[0], r.positions[1], size.m, size.k, r.model.positions[0], r.model.positions[1]
+        r.positions[0],
+        r.positions[1],
+        size.m,
+        size.k,
+        r.model.positions[0],
+        r.model.positions[1]
     );
     if let Some(path) = teach {
         std::fs::write(path, &r.stream).with_context(|| format!("writing {}", path.display()))?;
-        println!(
+        crate::outln!(
             "teach      {} events in {} blocks -> {} ({} lost)",
             r.stream_events,
             r.blocks,
@@ -312,11 +327,11 @@ fn run_copy(
             r.lost_events
         );
     }
-    println!("{}", r.machine_line());
+    crate::outln!("{}", r.machine_line());
     if !r.ok() {
         bail!("verification failed: {}", r.problems.join("; "));
     }
-    println!("result     OK");
+    crate::outln!("result     OK");
     Ok(())
 }
 
@@ -349,7 +364,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             let d = digitize(c.as_ref(), &setup)?;
             let ticks: u64 = d.events.iter().map(|e| e.dt_ticks as u64).sum();
             let radial = d.events.iter().filter(|e| e.axis == 1).count();
-            println!(
+            crate::outln!(
                 "{} events ({radial} radial, {} angular), path {:.4} in, duration {:.4} s at Vt {:.4} in/s, min radius of curvature {:.4} in",
                 d.events.len(),
                 d.events.len() - radial,
@@ -359,7 +374,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 d.min_rho_in
             );
             for w in &d.warnings {
-                println!("warning: {w}");
+                crate::outln!("warning: {w}");
             }
             if let Some(path) = out {
                 let mut bytes = Vec::new();
@@ -371,7 +386,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 enc.finish(&mut |b: &[u8]| bytes.extend_from_slice(b));
                 std::fs::write(&path, &bytes)
                     .with_context(|| format!("writing {}", path.display()))?;
-                println!(
+                crate::outln!(
                     "wrote {} ({} bytes, {} blocks)",
                     path.display(),
                     bytes.len(),
@@ -385,7 +400,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 std::fs::read(&file).with_context(|| format!("reading {}", file.display()))?;
             let mut text = String::new();
             let r = super::dump::dump(&bytes, tick_hz, &mut text);
-            print!("{text}");
+            crate::out!("{text}");
             r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
         }
         PolarCmd::Run { file, link, speed, size } => run_stream(&file, &link, speed, size),
@@ -404,7 +419,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 bail!("no feasible pole found for {contour}");
             };
             let area = pole::area_error_in2(c.as_ref(), o.pole.xy(), &res, 4);
-            println!(
+            crate::outln!(
                 "pole C = {:.4} in ({:.3} cm), beta = {:.4} rad; F1 = {:.5} (F_dif {:.1}, F_sum {:.1}, {} evaluations)",
                 o.pole.c_in,
                 o.pole.c_in * super::CM_PER_IN,
@@ -414,7 +429,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 o.f1.f_sum,
                 o.evals
             );
-            println!(
+            crate::outln!(
                 "area error {:.6} in^2 = {:.3} mm^2; constraints: {:?}",
                 area,
                 area * MM2_PER_IN2,
