@@ -62,10 +62,10 @@ fn table_text_parses_into_the_same_wire_bytes() {
         let c = t.row(r).unwrap().map(|v| v as f64 / (1u64 << 32) as f64);
         text += &format!("{x:.9} {:.14} {:.14} {:.14} {:.14}\n", c[0], c[1], c[2], c[3]);
     }
-    let parsed = WireTable::parse(&text).unwrap();
+    let parsed = WireTable::parse("text", &text).unwrap();
     let built_in = WireTable::douglass().unwrap();
     assert_eq!(parsed.header, built_in.header);
     assert_eq!(parsed.bytes, built_in.bytes);
-    assert!(WireTable::parse("1 2 3 4 5\n").is_err());
-    assert!(WireTable::parse("0 0 0 0 0\n0.1 0 0 0 0\n0.3 0 0 0 0\n").is_err());
+    assert!(WireTable::parse("t", "1 2 3 4 5\n").is_err());
+    assert!(WireTable::parse("t", "0 0 0 0 0\n0.1 0 0 0 0\n0.3 0 0 0 0\n").is_err());
 }

@@ -196,12 +196,8 @@ pub fn check_sim(s: &SimMillingParams) -> Result<(), &'static str> {
     if s.spindle_mrev_s == 0 {
         return Err("spindle_mrev_s");
     }
-    // K a b per step of chip must fit the plant's u64 Q16 product: N/mm^3 up to 10^5, depths up
-    // to 1 m.
-    if s.k_n_per_mm3 > 100_000 {
-        return Err("k_n_per_mm3");
-    }
-    for (v, f) in [(s.a_um, "a_um"), (s.b_before_um, "b_before_um"), (s.b_after_um, "b_after_um")] {
+    // Kc b per step of chip must fit the plant's u64 Q16 product: any u32 Kc, depths up to 1 m.
+    for (v, f) in [(s.b_before_um, "b_before_um"), (s.b_after_um, "b_after_um")] {
         if v > 1_000_000 {
             return Err(f);
         }
@@ -225,8 +221,7 @@ pub fn check_sim(s: &SimMillingParams) -> Result<(), &'static str> {
 /// The plant of a simulator board for `job` (its sample rate and flutes).
 pub fn plant_params(s: &SimMillingParams, job: &ForceJobParams) -> PlantParams {
     PlantParams {
-        k_n_per_mm3: s.k_n_per_mm3,
-        a_um: s.a_um,
+        kc_mn_per_mm2: s.kc_mn_per_mm2,
         b_before_um: s.b_before_um,
         b_after_um: s.b_after_um,
         step_at_um: s.step_at_um,
@@ -296,8 +291,7 @@ pub fn job_params(ctl: &ControlParams, chain: &ChainConfig, axis: u8) -> ForceJo
 /// The wire parameters of a simulated plant (the inverse of [`plant_params`]).
 pub fn sim_params(plant: &PlantParams, fault: SimForceFault, fault_at_um: u32) -> SimMillingParams {
     SimMillingParams {
-        k_n_per_mm3: plant.k_n_per_mm3,
-        a_um: plant.a_um,
+        kc_mn_per_mm2: plant.kc_mn_per_mm2,
         b_before_um: plant.b_before_um,
         b_after_um: plant.b_after_um,
         step_at_um: plant.step_at_um,
@@ -634,8 +628,7 @@ pub fn phase_of(m: Mode) -> ForcePhase {
 impl SimMillingParams {
     /// No cut: the plant never meets the work (zero force).
     pub const AIR: SimMillingParams = SimMillingParams {
-        k_n_per_mm3: 0,
-        a_um: 0,
+        kc_mn_per_mm2: 0,
         b_before_um: 0,
         b_after_um: 0,
         step_at_um: 0,

@@ -1,5 +1,5 @@
 //! The milling plant the simulation cuts: force from the stepped X position (eq 4.17,
-//! F = K a b [x(t) - x(t - tau)], tau = 1/(z N)), the optional two-tooth periodic force
+//! F = K a b [x(t) - x(t - tau)] = Kc b [x(t) - x(t - tau)], tau = 1/(z N)), the optional two-tooth periodic force
 //! (eq 4.19: factor 1 + sin(z N 2 pi t)), spindle compliance across passes, and the ADC that turns
 //! force into counts for the chain. Integer-only; setup divides.
 
@@ -9,10 +9,9 @@ pub const MAX_DELAY_SAMPLES: usize = 1024;
 /// Plant setup.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PlantParams {
-    /// Force coefficient K of eq 4.17 (205) or 4.19 (93), N/mm^3.
-    pub k_n_per_mm3: u32,
-    /// Radial depth a, um.
-    pub a_um: u32,
+    /// Cutting constant Kc: force per mm^2 of chip section (axial depth b times the chip the
+    /// tooth takes), mN/mm^2; eq 4.17's `K a` (205 N/mm^3 x 20 mm = 4100 N/mm^2).
+    pub kc_mn_per_mm2: u32,
     /// Axial depth b before and after the step, um, and the penetration where it steps, um.
     pub b_before_um: u32,
     pub b_after_um: u32,
@@ -66,9 +65,9 @@ impl MillingPlant {
         if delay == 0 || delay >= MAX_DELAY_SAMPLES as u64 {
             return Err(PlantConfigError::Delay);
         }
-        // F[mN] = K a b dx: N/mm^3 * um * um * nm is 1e-12 N = 1e-9 mN.
+        // F[mN] = Kc b dx: mN/mm^2 * um * nm is 1e-9 mN.
         let c = |b_um: u32| {
-            let k = p.k_n_per_mm3 as u128 * p.a_um as u128 * b_um as u128 * p.nm_per_step as u128;
+            let k = p.kc_mn_per_mm2 as u128 * b_um as u128 * p.nm_per_step as u128;
             ((k << 16) / 1_000_000_000).min(u64::MAX as u128) as u64
         };
         Ok(MillingPlant {
@@ -207,8 +206,7 @@ mod tests {
 
     pub(crate) fn case_a() -> PlantParams {
         PlantParams {
-            k_n_per_mm3: 205,
-            a_um: 20_000,
+            kc_mn_per_mm2: 4_100_000,
             b_before_um: 2_500,
             b_after_um: 10_000,
             step_at_um: 10_000,

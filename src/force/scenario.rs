@@ -5,6 +5,10 @@
 //! b = 2.5 mm for 10 mm, then b = 10 mm; Fnom = 4100 N, tau = 30 ms. Fault variants inject a
 //! saturated channel, a stuck channel, a spindle stop (5 mm into the cut) or lower the trip level
 //! below the force at the step; each must end in a feed hold with the position exact.
+//!
+//! [`ForceScenario::custom`] runs the same loop on a milling job's [`MillingSetup`] (its nominal
+//! force and thresholds, spindle speed, teeth, cutting constant, feed and move); every figure of
+//! the report is then the job's.
 
 use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use crate::dda::{Command, Dda, MotionState, Preparer};
@@ -114,15 +118,21 @@ pub fn machine() -> MachineConfig {
     }
 }
 
-/// The single move: rapid feed, ramp at the axis acceleration.
+/// The single move of Case A: rapid feed, ramp at the axis acceleration.
 pub fn segment() -> Segment {
-    let d = MOVE_STEPS as u64;
-    let duration = (d * TICK_HZ as u64).div_ceil(RAPID_STEPS_PER_S as u64);
+    segment_for(MOVE_STEPS, RAPID_STEPS_PER_S)
+}
+
+/// The single move of a job: `move_steps` (> 0) along X at `steps_per_s` (override 1.0), ramp
+/// at the axis acceleration.
+pub fn segment_for(move_steps: i32, steps_per_s: u32) -> Segment {
+    let d = move_steps.max(1) as u64;
+    let duration = (d * TICK_HZ as u64).div_ceil(steps_per_s.max(1) as u64);
     // Rate change per tick = a / v_nominal / tick_hz, v_nominal = d tick_hz / duration.
     let accel_bits = ((ACCEL_STEPS_PER_S2 as u128 * duration as u128) << 30)
         / (d as u128 * TICK_HZ as u128 * TICK_HZ as u128);
     let mut steps = [0; MAX_AXES];
-    steps[0] = MOVE_STEPS;
+    steps[0] = d as i32;
     Segment {
         steps,
         duration_ticks: duration as u32,
@@ -178,8 +188,8 @@ pub fn chain_config() -> ChainConfig {
 /// The plant setup of Case A (eq 4.17, a = 20 mm, b 2.5 -> 10 mm at 10 mm, tau = 30 ms).
 pub fn plant_params() -> PlantParams {
     PlantParams {
-        k_n_per_mm3: 205,
-        a_um: 20_000,
+        // K a of eq 4.17: 205 N/mm^3 x 20 mm.
+        kc_mn_per_mm2: 4_100_000,
         b_before_um: 2_500,
         b_after_um: 10_000,
         step_at_um: 10_000,
@@ -189,6 +199,39 @@ pub fn plant_params() -> PlantParams {
         teeth: 4,
         spindle_mrev_s: SPINDLE_MREV_S,
         periodic: false,
+    }
+}
+
+/// A milling job's setup for the closed loop: the control law (nominal force, thresholds,
+/// gains, the feed at override 1.0), the force chain (teeth, nominal spindle speed), the cut
+/// (cutting constant, depths, spindle speed) and the move (from the start, [`WALL_STEPS`] before
+/// the wall, to its end).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MillingSetup {
+    pub control: ControlParams,
+    pub chain: ChainConfig,
+    pub plant: PlantParams,
+    /// Length of the move, steps (> 0).
+    pub move_steps: i32,
+    /// The run stops after this many ticks of machine time whatever happens.
+    pub max_ticks: u64,
+}
+
+impl MillingSetup {
+    /// Case A (trip 18 kN).
+    pub fn case_a() -> Self {
+        MillingSetup {
+            control: control_params(18_000_000),
+            chain: chain_config(),
+            plant: plant_params(),
+            move_steps: MOVE_STEPS,
+            max_ticks: MAX_TICKS,
+        }
+    }
+
+    /// The job's move.
+    pub fn segment(&self) -> Segment {
+        segment_for(self.move_steps, self.control.steps_per_s_at_one)
     }
 }
 
@@ -238,6 +281,9 @@ pub struct ForceScenario {
     s: Stats,
     /// (tick, force, override, X) at the latest control update.
     last: (u64, u32, u32, i64),
+    /// The job's nominal force (the settling band is +-10 % of it), mN.
+    fnom_mn: u32,
+    max_ticks: u64,
 }
 
 /// A scenario setup failed (a bug in the constants above; tests build every variant).
@@ -264,35 +310,32 @@ impl ForceScenario {
         } else {
             plant_params()
         };
-        Self::with_params(variant, params, plant)
+        let setup = MillingSetup { control: params, plant, ..MillingSetup::case_a() };
+        Self::with_setup(variant, &setup)
     }
 
-    /// The Case A run with another control setup and cut (a milling job's parameters).
-    pub fn custom(params: ControlParams, plant: PlantParams) -> Result<Self, SetupError> {
-        Self::with_params(Variant::CaseA, params, plant)
+    /// The Case A run on a milling job's setup.
+    pub fn custom(setup: &MillingSetup) -> Result<Self, SetupError> {
+        Self::with_setup(Variant::CaseA, setup)
     }
 
-    fn with_params(
-        variant: Variant,
-        params: ControlParams,
-        plant: PlantParams,
-    ) -> Result<Self, SetupError> {
+    fn with_setup(variant: Variant, setup: &MillingSetup) -> Result<Self, SetupError> {
         let cfg = machine();
         let mut dda = Dda::new(&cfg).map_err(|_| SetupError)?;
         let mut prep = Preparer::new(&cfg).map_err(|_| SetupError)?;
-        let p = prep.prepare(&segment()).map_err(|_| SetupError)?;
+        let p = prep.prepare(&setup.segment()).map_err(|_| SetupError)?;
         dda.push(&p).map_err(|_| SetupError)?;
         Ok(ForceScenario {
             variant,
             dda,
-            plant: MillingPlant::new(plant).map_err(|_| SetupError)?,
+            plant: MillingPlant::new(setup.plant).map_err(|_| SetupError)?,
             // True zeros off the calibration's guess; force along (0.48, 0.64, 0.60).
             adc: SimAdc::new([2085, 2036, 2053], [31_457, 41_943, 39_322], 9_770),
-            chain: ForceChain::new(chain_config()).map_err(|_| SetupError)?,
-            ctl: ForceController::new(params).map_err(|_| SetupError)?,
+            chain: ForceChain::new(setup.chain).map_err(|_| SetupError)?,
+            ctl: ForceController::new(setup.control).map_err(|_| SetupError)?,
             x_steps: 0,
             sub: 0,
-            spindle_mrev_s: SPINDLE_MREV_S,
+            spindle_mrev_s: setup.plant.spindle_mrev_s,
             air: true,
             ovr_bits: u32::MAX,
             fault: None,
@@ -303,6 +346,8 @@ impl ForceScenario {
             hist_at: 0,
             s: Stats { late_min_mn: u32::MAX, min_after_step_mn: u32::MAX, ..Stats::default() },
             last: (0, 0, 0, 0),
+            fnom_mn: setup.control.fnom_mn,
+            max_ticks: setup.max_ticks,
         })
     }
 
@@ -352,8 +397,8 @@ impl ForceScenario {
         if since > WINDOW_TICKS {
             return;
         }
-        let band = FNOM_MN / 10;
-        let outside = force_mn.abs_diff(FNOM_MN) > band;
+        let band = self.fnom_mn / 10;
+        let outside = force_mn.abs_diff(self.fnom_mn) > band;
         if outside {
             s.last_outside_tick = t;
         }
@@ -443,7 +488,7 @@ impl Scenario for ForceScenario {
         }
         let window_over = self.s.step_tick.is_some_and(|t| self.ticks > t + WINDOW_TICKS);
         self.done = self.dda.is_idle()
-            || self.ticks >= MAX_TICKS
+            || self.ticks >= self.max_ticks
             || self.s.after_hold >= AFTER_HOLD_TICKS
             || (self.variant.is_case_a() && window_over);
         true
@@ -455,7 +500,7 @@ impl Scenario for ForceScenario {
         let s = &self.s;
         let us_per_tick = 1_000_000 / TICK_HZ as i64;
         let pos = self.dda.positions()[0];
-        r.push("fnom_mn", FNOM_MN as i64);
+        r.push("fnom_mn", self.fnom_mn as i64);
         r.push("peak_force_mn", s.peak_mn as i64);
         r.push("force_before_step_mn", s.force_before_step_mn as i64);
         r.push("contact_peak_mn", s.contact_peak_mn as i64);
@@ -471,7 +516,7 @@ impl Scenario for ForceScenario {
         }
         if s.step_tick.is_some() {
             // The force comes down from 4x Fnom: its overshoot is how far it dips below Fnom.
-            r.push("overshoot_below_fnom_mn", FNOM_MN as i64 - s.min_after_step_mn as i64);
+            r.push("overshoot_below_fnom_mn", self.fnom_mn as i64 - s.min_after_step_mn as i64);
         }
         if s.late_max_mn >= s.late_min_mn {
             r.push("late_ripple_mn", (s.late_max_mn - s.late_min_mn) as i64);

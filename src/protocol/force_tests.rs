@@ -46,8 +46,7 @@ pub(crate) fn extreme_force_params() -> ForceJobParams {
 
 pub(crate) fn extreme_sim_params() -> SimMillingParams {
     SimMillingParams {
-        k_n_per_mm3: u32::MAX,
-        a_um: u32::MAX,
+        kc_mn_per_mm2: u32::MAX,
         b_before_um: u32::MAX,
         b_after_um: u32::MAX,
         step_at_um: u32::MAX,

@@ -5,8 +5,10 @@
 //! bytes, little-endian. COBS removes every 0x00 from the frame, so 0x00 only ever delimits
 //! frames and a receiver resynchronises at the next one after any corruption.
 //!
-//! Nothing here allocates or panics; [`FrameDecoder::push`] does O(1) work per byte, plus O(N)
-//! (COBS decode and CRC) at a delimiter.
+//! COBS is the `cobs` crate's (the one postcard's COBS flavour uses); this file adds the CRC, the
+//! size limits and the stream reassembly. Nothing here allocates or panics;
+//! [`FrameDecoder::push`] does O(1) work per byte, plus O(N) (COBS decode and CRC) at a
+//! delimiter.
 
 use serde::Serialize;
 
@@ -19,9 +21,14 @@ pub const MAX_MESSAGE: usize = 320;
 /// Bytes of CRC after the message.
 pub const CRC_LEN: usize = 4;
 
-/// Longest COBS encoding of `n` bytes.
+/// Longest COBS encoding of `n` bytes (at least one byte: an empty input still encodes to one).
 pub const fn cobs_max_len(n: usize) -> usize {
-    n + n / 254 + 1
+    let len = cobs::max_encoding_length(n);
+    if len == 0 {
+        1
+    } else {
+        len
+    }
 }
 
 /// Longest frame on the wire, without the 0x00 delimiter: size receive buffers with this.
@@ -96,56 +103,10 @@ fn frame_raw<'a>(
 ) -> Result<&'a [u8], EncodeError> {
     let crc = CRC32.checksum(&raw[..n]).to_le_bytes();
     raw[n..n + CRC_LEN].copy_from_slice(&crc);
-    let len = cobs_encode(&raw[..n + CRC_LEN], out).ok_or(EncodeError::BufferTooSmall)?;
+    let len =
+        cobs::try_encode(&raw[..n + CRC_LEN], out).map_err(|_| EncodeError::BufferTooSmall)?;
     *out.get_mut(len).ok_or(EncodeError::BufferTooSmall)? = 0;
     Ok(&out[..len + 1])
-}
-
-/// COBS-encodes `src` into `dst` (no delimiter); `None` if `dst` is too small.
-pub fn cobs_encode(src: &[u8], dst: &mut [u8]) -> Option<usize> {
-    let mut code_at = 0;
-    let mut w = 1;
-    let mut code = 1u8;
-    for &b in src {
-        if b != 0 {
-            *dst.get_mut(w)? = b;
-            w += 1;
-            code += 1;
-        }
-        if b == 0 || code == 0xFF {
-            *dst.get_mut(code_at)? = code;
-            code_at = w;
-            w += 1;
-            code = 1;
-        }
-    }
-    *dst.get_mut(code_at)? = code;
-    Some(w)
-}
-
-/// Decodes COBS in place (the output never overtakes the input); returns the decoded length.
-pub fn cobs_decode_in_place(buf: &mut [u8]) -> Result<usize, FrameError> {
-    let n = buf.len();
-    let (mut r, mut w) = (0, 0);
-    while r < n {
-        let code = buf[r] as usize;
-        if code == 0 {
-            return Err(FrameError::Cobs);
-        }
-        r += 1;
-        let end = r + code - 1;
-        if end > n {
-            return Err(FrameError::Cobs);
-        }
-        buf.copy_within(r..end, w);
-        w += end - r;
-        r = end;
-        if code != 0xFF && r < n {
-            buf[w] = 0;
-            w += 1;
-        }
-    }
-    Ok(w)
 }
 
 /// Reassembles frames from a byte stream; `N` is the longest frame accepted (without the
@@ -204,7 +165,7 @@ impl<const N: usize> FrameDecoder<N> {
 
     fn finish(&mut self, len: usize) -> Result<&[u8], FrameError> {
         let frame = self.buf.get_mut(..len).ok_or(FrameError::Overflow)?;
-        let n = cobs_decode_in_place(frame)?;
+        let n = cobs::decode_in_place(frame).map_err(|_| FrameError::Cobs)?;
         if n <= CRC_LEN {
             return Err(FrameError::TooShort);
         }
@@ -234,23 +195,30 @@ mod tests {
         out
     }
 
+    /// Payloads around COBS's 254-byte run length, with and without zeros, frame and decode
+    /// back whole; the frame holds no 0x00 but its delimiter and never exceeds the size bound.
     #[test]
-    fn cobs_round_trips_edge_cases() {
+    fn payloads_round_trip_at_cobs_run_edges() {
         let mut cases: Vec<Vec<u8>> = vec![vec![], vec![0], vec![0, 0], vec![1], vec![1, 0, 2]];
-        for n in [253, 254, 255, 300, 508, 509] {
+        for n in [249, 250, 251, 253, 254, 255, 300, MAX_MESSAGE] {
             cases.push((0..n).map(|i| (i % 255 + 1) as u8).collect());
             cases.push((0..n).map(|i| if i % 7 == 0 { 0 } else { i as u8 | 1 }).collect());
+            cases.push(vec![0; n]);
         }
         for c in cases {
-            let mut enc = vec![0xAA; cobs_max_len(c.len())];
-            let n = cobs_encode(&c, &mut enc).unwrap();
-            assert!(n <= cobs_max_len(c.len()));
-            assert!(!enc[..n].contains(&0));
-            let mut buf = enc[..n].to_vec();
-            let m = cobs_decode_in_place(&mut buf).unwrap();
-            assert_eq!(&buf[..m], &c[..], "len {}", c.len());
-            assert!(cobs_encode(&c, &mut enc[..n - 1]).is_none());
+            let mut out = [0xAA; MAX_FRAME_WIRE];
+            let f = encode_payload_frame(&c, &mut out).unwrap().to_vec();
+            assert!(f.len() <= cobs_max_len(c.len() + CRC_LEN) + 1, "len {}", c.len());
+            assert_eq!(f.iter().position(|&b| b == 0), Some(f.len() - 1), "len {}", c.len());
+            let mut d = FrameDecoder::<MAX_FRAME>::new();
+            // A frame must carry a message besides its CRC.
+            let want = if c.is_empty() { Err(FrameError::TooShort) } else { Ok(c.clone()) };
+            assert_eq!(decode_all(&mut d, &f), vec![want], "len {}", c.len());
+            // One byte short of what the frame needs: refused, not truncated.
+            let mut short = vec![0; f.len() - 1];
+            assert_eq!(encode_payload_frame(&c, &mut short), Err(EncodeError::BufferTooSmall));
         }
+        assert_eq!(MAX_FRAME, MAX_MESSAGE + CRC_LEN + 2, "two COBS overhead bytes at most");
     }
 
     #[test]

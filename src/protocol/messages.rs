@@ -12,7 +12,7 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 2;
+pub const PROTOCOL_VERSION: u16 = 3;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -326,14 +326,14 @@ pub enum SimForceFault {
     SpindleStop,
 }
 
-/// The simulated milling plant (`SimMilling`): eq 4.17 `F = K a b [x(t) - x(t - tau)]` with a
-/// depth step, seen through a simulated 12-bit ADC.
+/// The simulated milling plant (`SimMilling`): eq 4.17 `F = Kc b [x(t) - x(t - tau)]`
+/// (`Kc = K a`) with a depth step, seen through a simulated 12-bit ADC.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SimMillingParams {
-    /// Force coefficient K, N/mm^3; radial depth a; axial depth b before and after its step at
-    /// `step_at_um` of penetration, um.
-    pub k_n_per_mm3: u32,
-    pub a_um: u32,
+    /// Cutting constant Kc: force per mm^2 of chip section (axial depth times the feed per
+    /// tooth), mN/mm^2 (eq 4.17's `K a`: 205 N/mm^3 x 20 mm = 4 100 000); axial depth b before
+    /// and after its step at `step_at_um` of penetration, um.
+    pub kc_mn_per_mm2: u32,
     pub b_before_um: u32,
     pub b_after_um: u32,
     pub step_at_um: u32,

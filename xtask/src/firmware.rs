@@ -33,39 +33,61 @@ impl Board {
     }
 }
 
-/// Builds the release firmware for `board` with `extra` features and returns the ELF, copied to
-/// `target/fw-<board>[-<feature>...]/firmware` so each feature set keeps its own ELF. All feature
-/// sets share one cargo target directory (`target/thumb`): cargo keys artifacts by feature set,
-/// so switching boards or features never rebuilds the dependencies, only the copied-out ELF
-/// would be overwritten.
+/// The firmware crate's package (firmware/).
+pub const PACKAGE: &str = "motion-firmware";
+/// Builds a release firmware for `board`; `extra` names the binary the way `cargo xtask build`
+/// flags do: `link` or `bench` pick that binary, nothing picks `demo`, and `tamper` is the
+/// demo's test-only feature. The ELF is copied to `target/fw-<board>-<extra...>/firmware` (the
+/// demo's to `target/fw-<board>/firmware`) so each keeps its own file.
 pub fn build(root: &Path, board: Board, extra: &[&str]) -> Result<PathBuf> {
-    build_bin(root, "firmware", board, extra)
-}
-
-/// [`build`] for any firmware binary of the package (`firmware`, `scenarios`); the ELF lands in
-/// `target/fw-<board>[-<feature>...]/<bin>`.
-pub fn build_bin(root: &Path, bin: &str, board: Board, extra: &[&str]) -> Result<PathBuf> {
+    let bin = extra.iter().copied().find(|f| matches!(*f, "link" | "bench")).unwrap_or("demo");
+    let features: Vec<&str> = extra.iter().copied().filter(|f| *f == "tamper").collect();
     let mut dir = format!("target/fw-{}", board.name());
-    let mut features = format!("board-{}", board.name());
     for f in extra {
         dir.push('-');
         dir.push_str(f);
+    }
+    build_into(root, bin, board, &features, &dir)
+}
+
+/// [`build`] for a binary picked by name (`scenarios`), copied to
+/// `target/fw-<board>-<bin>/firmware`.
+pub fn build_bin(root: &Path, bin: &str, board: Board, features: &[&str]) -> Result<PathBuf> {
+    build_into(root, bin, board, features, &format!("target/fw-{}-{bin}", board.name()))
+}
+
+/// The cargo features selecting `board` (the package's default board is switched off, so
+/// exactly one board is on), plus `extra`.
+pub fn features(board: Board, extra: &[&str]) -> String {
+    let mut features = format!("board-{}", board.name());
+    for f in extra {
         features.push(',');
         features.push_str(f);
     }
+    features
+}
+
+/// All feature sets share one cargo target directory (`target/thumb`): cargo keys artifacts by
+/// feature set, so switching boards or features never rebuilds the dependencies, only the
+/// copied-out ELF would be overwritten.
+fn build_into(root: &Path, bin: &str, board: Board, extra: &[&str], dir: &str) -> Result<PathBuf> {
+    let features = features(board, extra);
     crate::run_status(
-        &format!("firmware build ({features})"),
-        crate::cargo(root).args(["build", "--release", "--target", TARGET, "--bin", bin]).args([
-            "--features",
-            &features,
-            "--target-dir",
-            "target/thumb",
-        ]),
+        &format!("firmware build ({bin}: {features})"),
+        crate::cargo(root)
+            .args(["build", "--release", "--target", TARGET, "-p", PACKAGE, "--bin", bin])
+            .args([
+                "--no-default-features",
+                "--features",
+                &features,
+                "--target-dir",
+                "target/thumb",
+            ]),
     )?;
     let built = root.join("target/thumb").join(TARGET).join("release").join(bin);
     let dir = root.join(dir);
     std::fs::create_dir_all(&dir)?;
-    let elf = dir.join(bin);
+    let elf = dir.join("firmware");
     std::fs::copy(&built, &elf)
         .with_context(|| format!("copying {} to {}", built.display(), elf.display()))?;
     Ok(elf)

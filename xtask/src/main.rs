@@ -2,15 +2,16 @@
 //!
 //! | command | what it does |
 //! | --- | --- |
-//! | `build [--board B] [--bench] [--link]` | release firmware for a board (`netduinoplus2` default, `f405-motion`); `--link` serves the host link instead of the demo job |
+//! | `build [--board B] [--bench] [--link]` | a release firmware binary of `firmware/` (`demo`; `--link`: the host-link firmware; `--bench`) for a board (`netduinoplus2` default, `f405-motion`), copied to `target/fw-<board>[-link|-bench]/firmware` |
 //! | `demo` | runs the demo firmware in QEMU, decodes its log, summarises the report, compares with the host model |
 //! | `test` | everything CI checks, in order, failing fast |
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
 //! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
-//! | `milling-e2e` | `motionctl milling run --qemu` runs Case A as a force job on the link firmware in QEMU (simulated plant), then with a stuck force channel, and checks settling, final position and the fault hold |
+//! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
+//! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
 //! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
@@ -22,7 +23,9 @@ mod divcheck;
 mod e2e;
 mod firmware;
 mod golden;
+mod isr_profile;
 mod milling_e2e;
+mod modcycles;
 mod polar_e2e;
 mod scenarios;
 mod setup;
@@ -38,8 +41,8 @@ const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
   build [--board netduinoplus2|f405-motion] [--bench] [--link]
-                                                        build release firmware (--link: host link
-                                                        instead of the demo job; ELF in target/fw-<board>-link/)
+                                                        build a release firmware (demo; --link: the host-link
+                                                        firmware, ELF in target/fw-<board>-link/firmware)
   demo                                                  run the demo job in QEMU and compare with the host model
   test [--skip WORD]...                                 run every CI check (skip steps whose name contains WORD)
   scenarios                                             run the closed-loop scenarios in QEMU, compare with the host model, print the reports
@@ -50,6 +53,9 @@ commands:
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
+  isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
+                                                        interrupt on real jobs in QEMU; per-tick instructions
+                                                        and modelled cycles by situation
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
                                                         (f405-motion: the host-link firmware)";
 
@@ -140,6 +146,10 @@ fn run() -> Result<()> {
             setup::ensure(&root)?;
             bench::run(&root, quick)
         }
+        "isr-profile" => {
+            setup::ensure(&root)?;
+            isr_profile::run(&root, rest).map(drop)
+        }
         "flash" => {
             let [board] = rest else {
                 bail!("usage: cargo xtask flash <netduinoplus2|f405-motion>")
@@ -198,6 +208,18 @@ fn parse_build_args(rest: &[String]) -> Result<(Board, Vec<&'static str>)> {
     Ok((board, extra))
 }
 
+/// The firmware and board crates build for the thumb target only: host steps leave them out.
+const HOST_EXCLUDES: [&str; 8] = [
+    "--exclude",
+    "motion-firmware",
+    "--exclude",
+    "board-netduinoplus2",
+    "--exclude",
+    "board-f405-motion",
+    "--exclude",
+    "board-stm32f405",
+];
+
 /// `cargo` as the one running xtask, with the workspace as working directory.
 pub fn cargo(root: &Path) -> Command {
     let mut c = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
@@ -216,25 +238,20 @@ pub fn run_status(what: &str, cmd: &mut Command) -> Result<()> {
 
 fn test(root: &Path, skip: &[String]) -> Result<()> {
     type Step<'a> = (&'a str, Box<dyn Fn() -> Result<()> + 'a>);
-    let clippy_bin = |bin: &'static str, features: &'static str| -> Box<dyn Fn() -> Result<()>> {
-        Box::new(move || {
-            run_status(
-                "clippy",
-                cargo(root).args(["clippy", "--release", "--target", firmware::TARGET]).args([
-                    "--bin",
-                    bin,
-                    "--features",
-                    features,
-                    "--target-dir",
-                    "target/clippy-thumb",
-                    "--",
-                    "-D",
-                    "warnings",
-                ]),
-            )
-        })
-    };
-    let clippy_thumb = |features: &'static str| clippy_bin("firmware", features);
+    // Every firmware binary of the firmware crate at once, for one board and feature set.
+    let clippy_thumb =
+        |board: Board, extra: &'static [&'static str]| -> Box<dyn Fn() -> Result<()>> {
+            Box::new(move || {
+                run_status(
+                    "clippy",
+                    cargo(root)
+                        .args(["clippy", "--release", "--target", firmware::TARGET])
+                        .args(["-p", firmware::PACKAGE, "--bins", "--no-default-features"])
+                        .args(["--features", &firmware::features(board, extra)])
+                        .args(["--target-dir", "target/clippy-thumb", "--", "-D", "warnings"]),
+                )
+            })
+        };
     let build = |board: Board, extra: &'static [&'static str]| -> Box<dyn Fn() -> Result<()>> {
         Box::new(move || firmware::build(root, board, extra).map(drop))
     };
@@ -250,26 +267,29 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             Box::new(|| {
                 run_status(
                     "clippy",
-                    cargo(root).args([
-                        "clippy",
-                        "--workspace",
-                        "--all-targets",
-                        "--",
-                        "-D",
-                        "warnings",
-                    ]),
+                    cargo(root)
+                        .args(["clippy", "--workspace", "--all-targets"])
+                        .args(HOST_EXCLUDES)
+                        .args(["--", "-D", "warnings"]),
                 )
             }),
         ),
-        ("clippy (firmware, netduinoplus2)", clippy_thumb("board-netduinoplus2")),
-        ("clippy (firmware, netduinoplus2 bench)", clippy_thumb("board-netduinoplus2,bench")),
-        ("clippy (firmware, netduinoplus2 tamper)", clippy_thumb("board-netduinoplus2,tamper")),
-        ("clippy (firmware, f405-motion)", clippy_thumb("board-f405-motion")),
-        ("clippy (firmware, netduinoplus2 link)", clippy_thumb("board-netduinoplus2,link")),
-        ("clippy (firmware, f405-motion link)", clippy_thumb("board-f405-motion,link")),
+        ("no import cycles between modules of any crate", Box::new(|| modcycles::check(root))),
         (
-            "clippy (scenario firmware, netduinoplus2)",
-            clippy_bin("scenarios", "board-netduinoplus2"),
+            "clippy (firmware: link, demo, bench, scenarios; netduinoplus2)",
+            clippy_thumb(Board::Netduinoplus2, &[]),
+        ),
+        ("clippy (firmware, netduinoplus2 tamper)", clippy_thumb(Board::Netduinoplus2, &["tamper"])),
+        (
+            "clippy (firmware: link, demo, bench, scenarios; f405-motion)",
+            clippy_thumb(Board::F405Motion, &[]),
+        ),
+        (
+            "clippy (firmware, f405-motion with the SPI resolver, then the SPI force ADC)",
+            Box::new(|| {
+                clippy_thumb(Board::F405Motion, &["board-f405-motion/resolver-spi"])()?;
+                clippy_thumb(Board::F405Motion, &["board-f405-motion/force-spi"])()
+            }),
         ),
         (
             "host tests",
@@ -277,20 +297,27 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             Box::new(|| {
                 run_status(
                     "cargo test",
-                    cargo(root).args(["test", "--workspace", "--profile", "test-fast"]),
+                    cargo(root)
+                        .args(["test", "--workspace", "--profile", "test-fast"])
+                        .args(HOST_EXCLUDES),
                 )
             }),
         ),
         ("firmware build (netduinoplus2)", build(Board::Netduinoplus2, &[])),
         ("firmware build (f405-motion)", build(Board::F405Motion, &[])),
         ("firmware build (f405-motion link)", build(Board::F405Motion, &["link"])),
+        (
+            "firmware build (scenarios, netduinoplus2)",
+            Box::new(|| firmware::build_bin(root, "scenarios", Board::Netduinoplus2, &[]).map(drop)),
+        ),
         ("firmware build (netduinoplus2 bench)", build(Board::Netduinoplus2, &["bench"])),
         (
-            "no software divide reachable from TIM2 (demo, link, real board, scenarios)",
+            "no software divide reachable from TIM2 (demo and link on both boards, scenarios)",
             Box::new(|| {
                 for (board, features) in [
                     (Board::Netduinoplus2, &[][..]),
                     (Board::Netduinoplus2, &["link"][..]),
+                    (Board::F405Motion, &[][..]),
                     (Board::F405Motion, &["link"][..]),
                 ] {
                     let elf = firmware::build(root, board, features)?;

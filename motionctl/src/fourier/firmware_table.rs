@@ -6,6 +6,7 @@ use super::accurate::{self, AccurateOptions, AccurateTable};
 use super::fit::Harmonics;
 use super::paraboloid::OffAxisParaboloid;
 use super::table::CoefficientTable as F64Table;
+use super::table_file::{Form, ZTable};
 use super::{FourierError, Result};
 use motion::zslide::table::{CoefficientTable, TableForm, MAX_ORDER};
 use std::fmt::Write;
@@ -56,6 +57,34 @@ pub fn power_table<const ROWS: usize>(t: &F64Table) -> Result<CoefficientTable<R
         }
     }
     CoefficientTable::try_new(TableForm::Power, x0, dx, t.len(), rows).map_err(refused)
+}
+
+/// The rows of a [`ZTable`] in fixed point, `WIDTH` coefficients each (the table's form must
+/// have that width: 4 for the power form, `2 K + 1` for order `K`).
+pub fn fixed_table<const ROWS: usize, const WIDTH: usize>(
+    t: &ZTable,
+) -> Result<CoefficientTable<ROWS, WIDTH>> {
+    let form = match t.form {
+        Form::Power => TableForm::Power,
+        Form::Harmonic(order) => TableForm::Harmonic { order },
+    };
+    if form.width() != WIDTH {
+        return Err(refused(motion::zslide::TableError::Width));
+    }
+    if t.len() > ROWS {
+        return Err(refused(motion::zslide::TableError::RowCount));
+    }
+    let (x0, dx) = grid(t.x0_in, t.dx_in)?;
+    let mut rows = [[0i32; WIDTH]; ROWS];
+    for (dst, r) in rows.iter_mut().zip(&t.rows) {
+        if r.len() != WIDTH {
+            return Err(refused(motion::zslide::TableError::Width));
+        }
+        for (d, v) in dst.iter_mut().zip(r) {
+            *d = q(*v, IN_Q32, "a coefficient is above 1/16 in")?;
+        }
+    }
+    CoefficientTable::try_new(form, x0, dx, t.len(), rows).map_err(refused)
 }
 
 /// The harmonic form `[a0, a1, b1, ..., aK, bK]` (`WIDTH = 2 K + 1`, `K <= 8`) from the

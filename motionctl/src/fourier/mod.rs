@@ -20,13 +20,19 @@
 //! Units: lengths in inches (`_in`), angles in radians (`_rad`) unless a name says otherwise.
 
 pub mod accurate;
+pub mod cli;
 pub mod csmp;
+pub mod figure;
 pub mod firmware_table;
 pub mod fit;
 pub mod forex4;
 pub mod paraboloid;
+pub mod part;
+pub mod profile;
 pub mod run;
 pub mod table;
+pub mod table_file;
+pub mod units;
 
 pub use accurate::{AccurateOptions, ToolNoseModel};
 pub use fit::{CartesianGrid, Harmonics};

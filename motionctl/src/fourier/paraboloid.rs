@@ -12,8 +12,10 @@
 //! ```
 //!
 //! and the gross axial path (eq 2-14, with the `1 -` the OCR dropped) is the circular arc
-//! `Y(X) = R0 - sqrt(R0^2 - X^2)`, `R0 = S_y / sin(theta)`. The Z slide supplies
-//! `Z = Y_t - Y <= 0` (eq 2-15).
+//! `Y(X) = R0 - sqrt(R0^2 - X^2)`, `R0 = S_y / sin(theta)`, the highest point per radius while
+//! the two maxima of eq 2-11 exist (beyond the radius where they meet at phi = 270 deg, the
+//! height there: [`OffAxisParaboloid::gross_y_in`]). The Z slide supplies `Z = Y_t - Y <= 0`
+//! (eq 2-15).
 //!
 //! Eq 2-9 as printed subtracts two numbers near `A = 5304 in` to get a few mils; [`Self::z_in`]
 //! uses `1 - P = -u / (1 + P)` instead (`A a1 = 2 cot(theta)`, `A a2 = 1 / R0`):
@@ -232,11 +234,36 @@ impl OffAxisParaboloid {
         Ok(self.cot_theta * s * u / (p * (1.0 + p)) + x * cos2 / (self.r0_in * p))
     }
 
-    /// The gross axial path `Y(X) = R0 - sqrt(R0^2 - X^2)` (eq 2-14 corrected), cancellation-free.
-    pub fn gross_y_in(&self, x_in: f64) -> Result<f64> {
+    /// The gross arc `R0 - sqrt(R0^2 - X^2)` (eq 2-14 corrected), cancellation-free: the highest
+    /// point per radius while the two maxima of eq 2-11 exist ([`Self::gross_y_in`]).
+    pub fn gross_arc_y_in(&self, x_in: f64) -> Result<f64> {
         let x = self.check_radius(x_in)?;
         let q = (1.0 - (x / self.r0_in) * (x / self.r0_in)).sqrt();
         Ok(x * x / (self.r0_in * (1.0 + q)))
+    }
+
+    /// `sin(phi*)` of the maxima of `Y_t` at radius `x > 0` (eq 2-11), unclamped: below -1
+    /// the two maxima have met at phi = 270 deg.
+    fn maxima_sin(&self, x: f64) -> f64 {
+        let t = x / self.offset_in * self.sin_theta;
+        // 1 - sqrt(1 - t^2) = t^2 / (1 + sqrt(1 - t^2))
+        let one_minus = t * t / (1.0 + (1.0 - t * t).sqrt());
+        -(self.c_in / (2.0 * x * self.sin_theta)) * one_minus
+    }
+
+    /// The gross axial path `Y(X) = max over phi of Y_t(X, phi)`, the highest point of the
+    /// surface per radius, which the Z slide's command is measured from (`Z <= 0`): the arc of
+    /// eq 2-14 while the two maxima of eq 2-11 exist; beyond the radius where they meet at
+    /// phi = 270 deg (about `4 S_y^2 / (c sin(theta))`: 57 in for the thesis's part, inside the
+    /// sector of a part with a large offset for its focal length) the surface's height there,
+    /// below the arc.
+    pub fn gross_y_in(&self, x_in: f64) -> Result<f64> {
+        let x = self.check_radius(x_in)?;
+        if x == 0.0 || self.maxima_sin(x) >= -1.0 {
+            self.gross_arc_y_in(x)
+        } else {
+            self.yt_in(x, -0.5 * PI)
+        }
     }
 
     /// `Z(X, phi) = Y_t(X, phi) - Y(X)` (eq 2-15) for a sharp tool, cancellation-free.
@@ -297,8 +324,9 @@ impl OffAxisParaboloid {
         self.check_radius(x1)
     }
 
-    /// Tool-centre gross path `Y_c(X) = Y(X1) + RT cos(alpha)`: the arc of radius `R0 - RT`.
-    pub fn gross_y_tool_centre_in(&self, x_tool_in: f64) -> Result<f64> {
+    /// Tool-centre path on the gross arc, `Y_c(X) = Y(X1) + RT cos(alpha)`: the arc of radius
+    /// `R0 - RT` (FOREX4's model).
+    pub fn gross_y_tool_centre_arc_in(&self, x_tool_in: f64) -> Result<f64> {
         let x = non_negative("tool-centre radius X (in)", x_tool_in)?;
         let r = self.r0_in - self.tool_nose_radius_in;
         if x >= r {
@@ -307,6 +335,27 @@ impl OffAxisParaboloid {
         let q = (1.0 - (x / r) * (x / r)).sqrt();
         // R0 - sqrt(r^2 - x^2) = RT + r (1 - q)
         Ok(self.tool_nose_radius_in + x * x / (r * (1.0 + q)))
+    }
+
+    /// Tool-centre gross path: the nose circle's centre riding on [`Self::gross_y_in`] (the
+    /// highest centre over the contact points `u`, `Y(u) + sqrt(RT^2 - (u - X)^2)`). While the
+    /// contact lies on the arc this is [`Self::gross_y_tool_centre_arc_in`]; beyond, the
+    /// maximum is found by golden-section search.
+    pub fn gross_y_tool_centre_in(&self, x_tool_in: f64) -> Result<f64> {
+        let x = non_negative("tool-centre radius X (in)", x_tool_in)?;
+        let rt = self.tool_nose_radius_in;
+        if rt == 0.0 {
+            return self.gross_y_in(x);
+        }
+        let contact = x * self.r0_in / (self.r0_in - rt);
+        if contact == 0.0 || self.maxima_sin(contact) >= -1.0 {
+            return self.gross_y_tool_centre_arc_in(x);
+        }
+        let height = |u: f64| -> Result<f64> {
+            let d = u - x;
+            Ok(self.gross_y_in(u.abs())? + (rt * rt - d * d).max(0.0).sqrt())
+        };
+        golden_max(height, x - rt, x + rt)
     }
 
     /// Z command for the tool centre at radius `x_tool_in`, with the nose compensated on the
@@ -350,6 +399,29 @@ impl OffAxisParaboloid {
         let gross = self.gross_y_tool_centre_in(xc)? - rt;
         Ok((self.yt_in(x, phi_rad)? + nose - gross, x))
     }
+}
+
+/// Largest value of `f` on `[a, b]` (unimodal there) by golden-section search to 1e-14 of the
+/// interval.
+fn golden_max(f: impl Fn(f64) -> Result<f64>, mut a: f64, mut b: f64) -> Result<f64> {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let tol = 1e-14 * (b - a).abs().max(1.0);
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (f(c)?, f(d)?);
+    while b - a > tol {
+        if fc > fd {
+            b = d;
+            (d, fd) = (c, fc);
+            c = b - g * (b - a);
+            fc = f(c)?;
+        } else {
+            a = c;
+            (c, fc) = (d, fd);
+            d = a + g * (b - a);
+            fd = f(d)?;
+        }
+    }
+    f(0.5 * (a + b))
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@
 //! largest following error near the model's (the spindle's angle at the start is the board's:
 //! it differs from the model's, so that figure is compared with a tolerance).
 
+use crate::fourier::table_file::{Form, ZTable};
 use crate::link::{describe_rejection, LinkFailure, Session};
 use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
@@ -84,35 +85,25 @@ impl WireTable {
         Ok(WireTable { header, bytes })
     }
 
-    /// A table file: lines of five numbers `X C00 C01 C02 C03` (inches; the rows `motionctl
-    /// fourier table` prints) on a uniform X grid; other lines are skipped.
-    pub fn parse(src: &str) -> anyhow::Result<Self> {
-        let mut xs = Vec::new();
-        let mut rows = Vec::new();
-        for line in src.lines() {
-            let v: Vec<f64> = match line.split_whitespace().map(str::parse).collect() {
-                Ok(v) => v,
-                Err(_) => continue,
+    /// A table file (see [`crate::fourier::table_file`]); `name` goes into the errors.
+    pub fn parse(name: &str, src: &str) -> anyhow::Result<Self> {
+        Self::from_ztable(&ZTable::parse(name, src)?)
+    }
+
+    /// A table in the link's fixed point (power form, or harmonic of order 1..=8).
+    pub fn from_ztable(t: &ZTable) -> anyhow::Result<Self> {
+        use crate::fourier::firmware_table::fixed_table;
+        const R: usize = motion::zslide::link_job::LINK_TABLE_ROWS;
+        macro_rules! harmonic {
+            ($($k:literal => $w:literal),*) => {
+                match t.form {
+                    Form::Power => Self::from_table(&fixed_table::<R, 4>(t)?),
+                    $(Form::Harmonic($k) => Self::from_table(&fixed_table::<R, $w>(t)?),)*
+                    Form::Harmonic(k) => bail!("harmonic order {k} is outside 1..=8"),
+                }
             };
-            if let [x, c0, c1, c2, c3] = v[..] {
-                xs.push(x);
-                rows.push(crate::fourier::PowerRow::from_array([c0, c1, c2, c3]));
-            }
         }
-        if xs.len() < 2 {
-            bail!("a table needs at least two rows of `X C00 C01 C02 C03`");
-        }
-        let dx = xs[1] - xs[0];
-        for (i, x) in xs.iter().enumerate() {
-            if (x - (xs[0] + dx * i as f64)).abs() > dx.abs() * 1e-4 {
-                bail!("row {i}: X = {x} is off the uniform grid {} + {dx} i", xs[0]);
-            }
-        }
-        let t = crate::fourier::CoefficientTable::new(xs[0], dx, rows)?;
-        let fixed = crate::fourier::firmware_table::power_table::<
-            { motion::zslide::link_job::LINK_TABLE_ROWS },
-        >(&t)?;
-        Self::from_table(&fixed)
+        harmonic!(1 => 3, 2 => 5, 3 => 7, 4 => 9, 5 => 11, 6 => 13, 7 => 15, 8 => 17)
     }
 
     pub fn crc(&self) -> u32 {
@@ -547,8 +538,11 @@ pub fn run(
 }
 
 /// Reads a `--table` file.
-pub fn read_table(path: &std::path::Path) -> anyhow::Result<WireTable> {
+pub fn read_table(path: &std::path::Path) -> anyhow::Result<(ZTable, WireTable)> {
     let src =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    WireTable::parse(&src).with_context(|| format!("table {}", path.display()))
+    let name = path.display().to_string();
+    let t = ZTable::parse(&name, &src)?;
+    let wire = WireTable::from_ztable(&t).with_context(|| format!("{name}: for the board"))?;
+    Ok((t, wire))
 }

@@ -3,9 +3,13 @@
 //! tests can compare them with the printed values (digest: shared/digest/elbestawi-adaptive-force.md).
 
 pub mod case_a;
+pub mod cli;
+pub mod figure;
 pub mod job;
 pub mod pass_growth;
 pub mod rapid_feed;
 pub mod root_locus;
 pub mod run;
 pub mod simulate;
+pub mod steady;
+pub mod summary;

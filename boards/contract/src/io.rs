@@ -1,0 +1,34 @@
+//! Machine inputs and outputs read and written every tick, and the e-stop interrupt line.
+
+use motion::machine::Outputs;
+
+/// Levels read in one tick, active levels resolved and debounced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RawInputs {
+    /// The e-stop loop is open.
+    pub estop: bool,
+    /// Bit i = axis i's switch open (tripped).
+    pub limit_min: u8,
+    pub limit_max: u8,
+    /// The wire-lag switch reports a stall (the wire controller debounces it itself).
+    pub wire_stall: bool,
+    /// The touch probe is triggered (no firmware consumes it yet).
+    pub probe: bool,
+}
+
+pub trait MachineIo {
+    /// The host may drive the inputs (`SimInject`; the simulated board).
+    const SIM_INPUTS: bool;
+    /// Sets the simulated wire-stall switch; false where not honoured.
+    fn inject_wire_stall(stalled: bool) -> bool;
+    /// Every input, once per tick. Bounded, no division.
+    fn read(&mut self) -> RawInputs;
+    /// The machine's outputs (spindle enable, wire power, Z DAC), once per tick.
+    fn write(&mut self, outputs: &Outputs);
+}
+
+/// The e-stop's edge interrupt.
+pub trait EStopLine {
+    /// Acknowledges the interrupt; true if the e-stop line raised it.
+    fn clear(&mut self) -> bool;
+}

@@ -1,0 +1,99 @@
+//! The safety inputs and process outputs the machine reads and drives every tick: e-stop, the
+//! 12 limit switches, the probe and the wire-stall switch in; spindle enable, wire power and
+//! the Z-slide DAC out.
+//!
+//! Debouncing (`board_contract::debounce`): the limit switches are read as three port words
+//! (12 `InputPin` reads a tick would cost four times as much) and debounced per switch over
+//! 2 ms by a `DebouncedBank`; the e-stop and the probe are `InputPin`s through a trip-at-once
+//! `Debounced` (the trip is taken the tick it is seen, the release only after 2 ms stable).
+//! The wire-stall switch is passed raw: the wire controller debounces it with the job's own
+//! `debounce_ticks`. Outputs go through GPIOB's BSRR (atomic set/reset).
+
+use super::pins::{
+    self, GpioIn, Port, ESTOP, LIMIT_MAX, LIMIT_MIN, PROBE, SPINDLE_EN, WIRE_POWER, WIRE_STALL,
+};
+use super::z_dac::ZDac;
+use crate::pac;
+use board_contract::debounce::{ticks_for_ms, SWITCH_MS};
+use board_contract::{Debounced, DebouncedBank, Debouncer, RawInputs};
+use motion::machine::Outputs;
+
+pub struct MachineIo {
+    z_dac: ZDac,
+    /// Limits: min in bits 0..5, max in bits 8..13.
+    limits: DebouncedBank,
+    estop: Debounced<GpioIn>,
+    probe: Debounced<GpioIn>,
+}
+
+#[inline(always)]
+fn gather(pins: &[(Port, u8); 6], a: u32, b: u32, c: u32) -> u8 {
+    let mut bits = 0u8;
+    for (i, &(port, pin)) in pins.iter().enumerate() {
+        let level = match port {
+            Port::A => a,
+            Port::B => b,
+            Port::C | Port::D => c,
+        };
+        bits |= (((level >> pin) & 1) as u8) << i;
+    }
+    bits
+}
+
+impl MachineIo {
+    /// Pins are configured by `pins::init`; the debounce times are set in ticks of `tick_hz`.
+    pub fn new(z_dac: ZDac, tick_hz: u32) -> Self {
+        let ticks = ticks_for_ms(SWITCH_MS, tick_hz);
+        // Normally closed to ground: open (high) = stop / tripped.
+        let estop = Debounced::new(
+            GpioIn::new(Port::B, ESTOP as u8),
+            true,
+            Debouncer::trips_at_once(ticks, false),
+        );
+        // Normally open to ground: closed (low) = triggered.
+        let probe = Debounced::new(
+            GpioIn::new(Port::D, PROBE as u8),
+            false,
+            Debouncer::trips_at_once(ticks, false),
+        );
+        MachineIo { z_dac, limits: DebouncedBank::new(ticks, 0), estop, probe }
+    }
+}
+
+impl board_contract::MachineIo for MachineIo {
+    /// The real board reads real inputs: no `SimInject`.
+    const SIM_INPUTS: bool = false;
+
+    /// `SimInject` is not honoured here (false: refused).
+    fn inject_wire_stall(_stalled: bool) -> bool {
+        false
+    }
+
+    /// Every input, active levels resolved and debounced.
+    #[inline]
+    fn read(&mut self) -> RawInputs {
+        let (a, b, c) = (pins::idr(Port::A), pins::idr(Port::B), pins::idr(Port::C));
+        let raw_limits =
+            gather(&LIMIT_MIN, a, b, c) as u32 | (gather(&LIMIT_MAX, a, b, c) as u32) << 8;
+        let limits = self.limits.update(raw_limits);
+        RawInputs {
+            estop: self.estop.update(),
+            limit_min: limits as u8,
+            limit_max: (limits >> 8) as u8,
+            // Closed to ground (pulled up): low = stalled.
+            wire_stall: (a >> WIRE_STALL) & 1 == 0,
+            probe: self.probe.update(),
+        }
+    }
+
+    /// Spindle enable, wire power and the Z DAC to `o`'s levels. A DAC code out of range
+    /// writes mid-scale (the slide at rest); the machine only ever produces 12-bit codes.
+    #[inline]
+    fn write(&mut self, o: &Outputs) {
+        let on = |level: bool, pin: u32| if level { 1 << pin } else { 1 << (pin + 16) };
+        let bits = on(o.spindle_enable, SPINDLE_EN) | on(o.wire_power, WIRE_POWER);
+        // SAFETY: BSRR accepts any bit pattern; only these two output bits are written.
+        unsafe { (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(bits)) };
+        let _ = self.z_dac.write(o.z_dac);
+    }
+}

@@ -1,0 +1,99 @@
+//! QEMU's `netduinoplus2` machine: an STM32F405 whose timers, NVIC and SysTick are modelled but
+//! whose GPIO, RCC, DWT and DMA are not. The step port therefore records its outputs instead of
+//! driving pins, logs go out over semihosting, and `exit` ends the QEMU process.
+//!
+//! | resource | use |
+//! | --- | --- |
+//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
+//! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
+//! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
+//! | (none) | copy-mode encoders: simulated A/B levels (`SimEncoders`) decoded by `board_drivers::quadrature::SoftDecoder` (`sim_io.rs`) |
+//! | USART1 | host link (`link` firmware), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
+//! | (sim) | spindle for Z-slide jobs: `SimSpindle` sets its speed, the encoder logic reads it |
+//! | semihosting | defmt log frames on QEMU's stdout, exit status |
+
+#![no_std]
+
+mod clocks;
+mod cycles;
+mod log;
+mod sim_io;
+mod spindle;
+mod step_port;
+
+pub use board_stm32f405::{pac, HostSerial, TickRate, TickTimer, Watchdog};
+pub use cycles::CycleCounter;
+pub use sim_io::{CopyEncoders, MachineIo};
+pub use spindle::Spindle;
+pub use step_port::StepPort;
+
+use board_contract::{NoConfigStorage, NoForceAdc, Parts};
+use motion::machine::ResetCause;
+
+/// QEMU has no e-stop input: the interrupt is never raised.
+pub struct EStop;
+
+impl board_contract::EStopLine for EStop {
+    fn clear(&mut self) -> bool {
+        false
+    }
+}
+
+/// The board, for the Board contract.
+pub struct Board;
+
+impl board_contract::Board for Board {
+    const NAME: &'static str = "netduinoplus2";
+    /// QEMU moves bytes at its own pace whatever BRR says.
+    const HOST_BAUD: u32 = 115_200;
+    type Device = pac::Peripherals;
+    type Core = cortex_m::Peripherals;
+    type TickTimer = TickTimer;
+    type TickRate = TickRate;
+    type StepPort = StepPort;
+    type EStop = EStop;
+    type MachineIo = MachineIo;
+    type HostSerial = HostSerial;
+    /// QEMU ignores the IWDG; started anyway so the link firmware is the same code.
+    type Watchdog = Watchdog;
+    /// No persisted config under QEMU (its flash is read-only ROM): always missing at boot;
+    /// the store itself is tested on the host over a NOR-flash mock.
+    type ConfigStorage = NoConfigStorage;
+    type CopyEncoders = CopyEncoders;
+    /// QEMU's ADC values are fake: force jobs sample the simulated milling plant in the tick.
+    type ForceAdc = NoForceAdc;
+    type Spindle = Spindle;
+    type CycleCounter = CycleCounter;
+    type Extras = ();
+
+    fn init(dp: pac::Peripherals, _core: &mut cortex_m::Peripherals, tick_hz: u32) -> Parts<Self> {
+        // QEMU does not model RCC: this reads 0, a reset of unknown cause (never a watchdog one).
+        let reset = ResetCause::from_rcc_csr(dp.RCC.csr().read().bits());
+        let clocks = clocks::init(&dp.RCC);
+        Parts {
+            reset,
+            tick_timer: TickTimer::new(dp.TIM2, clocks.tim2_hz, tick_hz),
+            step_port: StepPort,
+            estop: EStop,
+            io: MachineIo,
+            host: HostSerial::new(dp.USART1, clocks.pclk2_hz, Self::HOST_BAUD),
+            watchdog: Watchdog::new(dp.IWDG),
+            config: NoConfigStorage,
+            copy_encoders: CopyEncoders::new(),
+            force_adc: None,
+            spindle: Spindle::new(),
+            cycles: CycleCounter::new(dp.TIM5),
+            extras: (),
+        }
+    }
+
+    /// Ends the run: QEMU exits with status 0 (`ok`) or 1.
+    fn exit(ok: bool) -> ! {
+        use cortex_m_semihosting::debug;
+        debug::exit(if ok { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+        // Only reached without a semihosting host (e.g. QEMU started without semihosting).
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+}

@@ -1,0 +1,353 @@
+//! The link firmware (the product): an RTIC 2 app that serves the host link on USART1
+//! (`src/protocol/PROTOCOL.md`) and runs what the host sends through `motion::machine::Machine`,
+//! the one state machine and fault model (`src/machine/MACHINE.md`).
+//!
+//! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
+//! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
+//! job (after reading the spindle) during a Z job -- and
+//! drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
+//! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
+//! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
+//! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
+//! sends the periodic Status, feeds the watchdog and persists an accepted config once the machine
+//! is at rest, woken by the tick every millisecond.
+
+#![no_std]
+#![no_main]
+
+use core::sync::atomic::AtomicBool;
+use motion_firmware as _;
+
+/// The feeder stopped because the DDA was full; the tick wakes it when a slot frees up.
+static FEEDER_BLOCKED: AtomicBool = AtomicBool::new(false);
+
+#[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2, SPI3])]
+mod app {
+    use super::FEEDER_BLOCKED;
+    use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
+    use board_contract::{
+        EStopLine as _, ForceAdc as _, HostSerial as _, MachineIo as _, StepPort as _,
+        TickTimer as _, Watchdog as _,
+    };
+    use core::sync::atomic::Ordering::Relaxed;
+    use motion::machine::{BoardConfig, Inputs, OverrunDetector};
+    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
+    use motion_firmware::board;
+    use motion_firmware::link::{
+        self, Link, Motion, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK, SAVING_CONFIG,
+        WAKE_TICKS, WATCHDOG,
+    };
+    use rtic_sync::make_signal;
+    use rtic_sync::signal::{SignalReader, SignalWriter};
+
+    type Wake = SignalWriter<'static, ()>;
+    type Waiter = SignalReader<'static, ()>;
+
+    #[shared]
+    struct Shared {
+        motion: Motion,
+        step_port: board::StepPort,
+        link: Link,
+        host_port: link::HostPort,
+    }
+
+    #[local]
+    struct Local {
+        tick_timer: board::TickTimer,
+        io: board::MachineIo,
+        copy_encoders: board::CopyEncoders,
+        spindle: board::Spindle,
+        tick_wakes_feeder: Wake,
+        tick_wakes_status: Wake,
+        estop: board::EStop,
+        feeder_waits: Waiter,
+        usart_wakes_feeder: Wake,
+        status_waits: Waiter,
+        watchdog: board::Watchdog,
+        config: board::ConfigStorage,
+        force_adc: Option<board::ForceAdc>,
+    }
+
+    #[init]
+    fn init(mut cx: init::Context) -> (Shared, Local) {
+        // The timer starts at the safe default's rate and is retimed to the stored config's
+        // before it runs.
+        let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
+        let board::Parts {
+            reset,
+            mut tick_timer,
+            mut step_port,
+            estop,
+            host,
+            io,
+            mut watchdog,
+            mut config,
+            copy_encoders,
+            mut force_adc,
+            mut spindle,
+            ..
+        } = board::init(cx.device, &mut cx.core, default_hz);
+        // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
+        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::force::ADC_START_HZ).ok()) {
+            link::force::ADC_SAMPLE_HZ.store(hz, Relaxed);
+        }
+        if !link::zslide::init(&mut spindle) {
+            defmt::panic!("spindle encoder config refused");
+        }
+        // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
+        // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
+        // After a watchdog reset the machine boots in Fault with WatchdogReset.
+        let (motion, preparer) = defmt::unwrap!(Motion::boot(config.load(), reset));
+        let tick_hz = motion.machine.config().wire.machine.tick_hz;
+        let mut tick_rate = tick_timer.rate_control();
+        if !tick_rate.set(tick_hz) {
+            defmt::panic!("stored tick rate {=u32} Hz not supported by this board", tick_hz);
+        }
+        defmt::println!(
+            "motion-board {=str} board={=str} tick_hz={=u32} host link on USART1 at {=u32} baud; \
+             machine {=u8} (faults {=u32:#x})",
+            env!("CARGO_PKG_VERSION"),
+            board::NAME,
+            tick_hz,
+            board::HOST_BAUD,
+            motion.machine.state() as u8,
+            motion.machine.faults().mask()
+        );
+        let mut name = heapless::String::<32>::new();
+        // Fits: both board names are short (the link cuts it to 24 bytes anyway).
+        let _ = core::fmt::write(
+            &mut name,
+            format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
+        );
+        let link = Link::new(&name, preparer, tick_rate);
+        watchdog.start(link::WATCHDOG_TIMEOUT_MS);
+
+        let (feeder_wake, feeder_waits) = make_signal!(());
+        let (status_wake, status_waits) = make_signal!(());
+        defmt::unwrap!(feeder::spawn().ok());
+        defmt::unwrap!(link_status::spawn().ok());
+        step_port.enable();
+        tick_timer.start();
+
+        (
+            Shared { motion, step_port, link, host_port: link::HostPort::new(host) },
+            Local {
+                tick_timer,
+                io,
+                copy_encoders,
+                spindle,
+                tick_wakes_feeder: feeder_wake.clone(),
+                tick_wakes_status: status_wake,
+                estop,
+                feeder_waits,
+                usart_wakes_feeder: feeder_wake,
+                status_waits,
+                watchdog,
+                config,
+                force_adc,
+            },
+        )
+    }
+
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// One machine tick at `tick_hz`: read the inputs, tick the machine (and through it the
+    /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
+    /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
+    #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
+        local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status,
+            wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
+            overran: bool = false, drivers_on: bool = true])]
+    fn tick(cx: tick::Context) {
+        let l = cx.local;
+        l.tick_timer.clear_update();
+        let raw = l.io.read();
+        let copy_counts = l.copy_encoders.read();
+        let inputs = Inputs {
+            estop: raw.estop || ESTOP_EDGE.swap(false, Relaxed),
+            limit_min: raw.limit_min,
+            limit_max: raw.limit_max,
+            sensor_faults: 0,
+            link_ok: LINK_OK.load(Relaxed),
+            tick_overrun: *l.overran,
+        };
+        (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
+            link::zslide::sense(l.spindle, &mut m.z);
+            // The copy tick first: it also records the encoder counts for Status.
+            let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
+                out
+            } else if let Some(out) = link::force::tick(m, &inputs) {
+                out
+            } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
+                out
+            } else if let Some(out) = link::zslide::tick(m, &inputs) {
+                out
+            } else if m.machine.event_job() {
+                m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
+            } else {
+                m.machine.tick(&mut m.dda, &inputs)
+            };
+            port.write(&out.step);
+            l.io.write(&out.outputs);
+            // The drivers stay off from an e-stop until its fault is cleared.
+            let drivers_on = !m.machine.faults().has(FaultCode::EStop);
+            if drivers_on != *l.drivers_on {
+                *l.drivers_on = drivers_on;
+                if drivers_on {
+                    port.enable();
+                } else {
+                    port.disable();
+                }
+            }
+            let room = FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0;
+            let events = EVENTS_WAITING.load(Relaxed)
+                && m.machine.event_job()
+                && m.playback.free() >= EVENT_REFILL;
+            let wire = link::wire::wants_feed(m);
+            if room || events || wire || m.machine.wants_background() {
+                FEEDER_BLOCKED.store(false, Relaxed);
+                l.tick_wakes_feeder.write(());
+            }
+        });
+        if *l.wake <= 1 {
+            *l.wake = WAKE_TICKS.load(Relaxed);
+            l.tick_wakes_status.write(());
+        } else {
+            *l.wake -= 1;
+        }
+        WATCHDOG.tick_alive();
+        // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
+        let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
+        *l.overran = l.overrun.after_tick(late);
+    }
+
+    /// Force ADC half buffer (real board; never raised under QEMU): the force job's chain per
+    /// frame, its control law once per half, the override into the DDA (`link_force`). The
+    /// tick's priority: they never preempt each other.
+    #[task(binds = DMA2_STREAM0, priority = 3, shared = [motion], local = [force_adc])]
+    fn force_dma(mut cx: force_dma::Context) {
+        let Some(adc) = cx.local.force_adc.as_mut() else { return };
+        match adc.on_dma_irq() {
+            Some(frames) => {
+                cx.shared.motion.lock(|m| link::force::on_adc_frames(m, Some(frames), false))
+            }
+            None => {
+                let overrun = adc.overrun();
+                cx.shared.motion.lock(|m| link::force::on_adc_frames::<4>(m, None, overrun))
+            }
+        }
+    }
+
+    /// E-stop edge: drivers off at once; the tick latches the fault (even if the loop closed
+    /// again meanwhile) and stops the machine.
+    #[task(binds = EXTI15_10, priority = 3, shared = [step_port], local = [estop])]
+    fn estop(mut cx: estop::Context) {
+        if cx.local.estop.clear() {
+            ESTOP_EDGE.store(true, Relaxed);
+            cx.shared.step_port.lock(|port| port.disable());
+        }
+    }
+
+    /// The machine's background work, then queued segments prepared into the DDA while it has
+    /// room and the machine lets it feed.
+    #[task(priority = 2, shared = [motion, link], local = [feeder_waits])]
+    async fn feeder(cx: feeder::Context) {
+        let feeder::SharedResources { mut motion, mut link, .. } = cx.shared;
+        loop {
+            cx.local.feeder_waits.wait().await;
+            link.lock(|l| l.feed_events(&mut motion));
+            link.lock(|l| l.feed_wire(&mut motion));
+            loop {
+                let full = motion.lock(|m| {
+                    let full = m.dda.ready_free() == 0;
+                    FEEDER_BLOCKED.store(full, Relaxed);
+                    full
+                });
+                if full {
+                    break;
+                }
+                let Some(next) = link.lock(|l| l.next_prepared(&mut motion)) else {
+                    break;
+                };
+                // Segments were checked against this config when queued: a refusal is a bug.
+                let prepared = match next {
+                    Ok(p) => p,
+                    Err((id, e)) => {
+                        defmt::panic!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e))
+                    }
+                };
+                // Only this task pushes, and there was room.
+                defmt::unwrap!(motion.lock(|m| m.dda.push(&prepared)).ok());
+            }
+        }
+    }
+
+    /// Host link: received bytes into frames, frames through `BoardLink`, answers into the
+    /// transmit queue (dropped if it cannot hold them whole: the host retransmits); transmit
+    /// bytes out while the USART takes them.
+    #[task(binds = USART1, priority = 2, shared = [motion, link, host_port],
+        local = [usart_wakes_feeder, decoder: FrameDecoder<MAX_FRAME> = FrameDecoder::new()])]
+    fn usart1(cx: usart1::Context) {
+        let l = cx.local;
+        let usart1::SharedResources { mut motion, link, host_port, .. } = cx.shared;
+        (link, host_port).lock(|link, port| {
+            while let Some(byte) = port.serial.read_byte() {
+                let Some(frame) = l.decoder.push(byte) else {
+                    continue;
+                };
+                let (response, wake_feeder) = link.on_frame(frame, &mut motion);
+                if wake_feeder {
+                    l.usart_wakes_feeder.write(());
+                }
+                port.send(&response);
+            }
+            port.pump();
+        });
+    }
+
+    /// Every millisecond of machine time: judge the link, announce faults, send the periodic
+    /// Status, and feed the watchdog when the tick and this task both ran.
+    #[task(priority = 1, shared = [motion, link, host_port],
+        local = [status_waits, watchdog, config])]
+    async fn link_status(cx: link_status::Context) {
+        let link_status::SharedResources { mut motion, mut link, mut host_port, .. } = cx.shared;
+        let mut overruns_seen = 0;
+        loop {
+            cx.local.status_waits.wait().await;
+            let overruns = host_port.lock(|p| p.serial.overruns());
+            if overruns != overruns_seen {
+                // Lost bytes fail a frame's CRC; the host retransmits. Worth a line in the log.
+                defmt::warn!("USART1 receive overruns: {=u32}", overruns);
+                overruns_seen = overruns;
+            }
+            WATCHDOG.control_alive();
+            let (responses, feed) = link.lock(|l| l.poll(&mut motion));
+            link.lock(|l| l.drain_teach(&mut motion));
+            if feed && WATCHDOG.poll() {
+                cx.local.watchdog.feed();
+            }
+            if let Some(cfg) = link.lock(|l| l.take_save(&mut motion)) {
+                let (watchdog, config) = (&mut *cx.local.watchdog, &mut *cx.local.config);
+                SAVING_CONFIG.store(true, Relaxed);
+                let saved = watchdog.stretch(|| config.save(&cfg));
+                SAVING_CONFIG.store(false, Relaxed);
+                match saved {
+                    Ok(()) => defmt::info!("config saved to flash"),
+                    Err(e) => defmt::error!("config not saved: {}", defmt::Debug2Format(&e)),
+                }
+            }
+            for response in responses.iter().flatten() {
+                // Encoded outside the locks: the USART task keeps running meanwhile.
+                let mut buf = [0u8; MAX_FRAME_WIRE];
+                if let Some(frame) = link::encode(response, &mut buf) {
+                    host_port.lock(|port| port.queue_frame(frame));
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,48 @@
+//! The board this build runs on, picked by a cargo feature (`board-netduinoplus2`, the
+//! default; `board-f405-motion`, which wins when both are on), seen through the Board
+//! contract: the apps name these aliases, never a board crate.
+
+use board_contract::Board as Contract;
+
+#[cfg(feature = "board-f405-motion")]
+pub use board_f405_motion::Board as Selected;
+#[cfg(all(feature = "board-netduinoplus2", not(feature = "board-f405-motion")))]
+pub use board_netduinoplus2::Board as Selected;
+
+#[cfg(not(any(feature = "board-netduinoplus2", feature = "board-f405-motion")))]
+compile_error!("select a board: --features board-netduinoplus2 or --features board-f405-motion");
+
+pub type Parts = board_contract::Parts<Selected>;
+pub type TickTimer = <Selected as Contract>::TickTimer;
+pub type TickRate = <Selected as Contract>::TickRate;
+pub type StepPort = <Selected as Contract>::StepPort;
+pub type EStop = <Selected as Contract>::EStop;
+pub type MachineIo = <Selected as Contract>::MachineIo;
+pub type HostSerial = <Selected as Contract>::HostSerial;
+pub type Watchdog = <Selected as Contract>::Watchdog;
+pub type ConfigStorage = <Selected as Contract>::ConfigStorage;
+pub type CopyEncoders = <Selected as Contract>::CopyEncoders;
+pub type ForceAdc = <Selected as Contract>::ForceAdc;
+pub type Spindle = <Selected as Contract>::Spindle;
+pub type CycleCounter = <Selected as Contract>::CycleCounter;
+
+pub const NAME: &str = <Selected as Contract>::NAME;
+pub const HOST_BAUD: u32 = <Selected as Contract>::HOST_BAUD;
+/// QEMU's board, whose sensors are simulated (force jobs sample a plant in the tick; its timer
+/// does not pace the scenario firmware: see `bin/scenarios.rs`).
+pub const SIMULATED: bool =
+    cfg!(all(feature = "board-netduinoplus2", not(feature = "board-f405-motion")));
+
+/// Brings the board up (see `board_contract::Board::init`).
+pub fn init(
+    device: <Selected as Contract>::Device,
+    core: &mut <Selected as Contract>::Core,
+    tick_hz: u32,
+) -> Parts {
+    <Selected as Contract>::init(device, core, tick_hz)
+}
+
+/// Ends the run with the outputs safe.
+pub fn exit(ok: bool) -> ! {
+    <Selected as Contract>::exit(ok)
+}

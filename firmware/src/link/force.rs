@@ -1,0 +1,166 @@
+//! Constant-force milling jobs on the link firmware (`motion::force::link_job`, issue 4):
+//! `ArmForce` makes a [`ForceJob`] in [`Motion`] for the next plain segment job; `Start` starts
+//! the machine's job and the force loop in the same critical section; the tick runs the
+//! machine through `motion::force::link_job::link_tick` (the job's latched force faults among
+//! the sensor inputs, the controller's override into the DDA like `SetOverride`).
+//!
+//! Sample source: the simulator board (netduinoplus2 under QEMU, whose ADC values are fake)
+//! samples the milling plant of the last `SimMilling` from the feed axis's position every
+//! `tick_hz / sample_hz` ticks inside the tick. The real board (f405-motion) samples its force
+//! sensors with the TIM3-triggered ADC1 scan into the DMA2 stream 0 double buffer at
+//! [`ADC_SAMPLE_HZ`]; the `DMA2_STREAM0` interrupt (priority 3, the tick's: they never preempt
+//! each other) hands each half buffer (`DECIMATION` frames = one control update) to
+//! [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
+
+use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use motion::dda::Command;
+use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
+use motion::machine::{Inputs, MachineState, TickOut};
+use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
+
+use super::Motion;
+
+/// The board has a force sample source the link can run a force job from: the simulator's
+/// plant, or the real board's force ADC (a job is refused while [`ADC_SAMPLE_HZ`] is 0).
+pub const HAS_FORCE_SOURCE: bool = true;
+/// The simulator board samples its plant from the tick; the real board's ADC interrupt samples.
+pub const TICK_SAMPLED: bool = crate::board::SIMULATED;
+/// Rate the real board's force ADC was started at (0: not running); a job's `sample_hz` must be
+/// this. Written once at init.
+pub static ADC_SAMPLE_HZ: AtomicU32 = AtomicU32::new(0);
+/// Rate the real board starts its force ADC at: the chain's 10 kHz (2 kHz control).
+pub const ADC_START_HZ: u32 = 10_000;
+
+/// The force job (the last one, for its telemetry, until the next `ArmForce`) and the
+/// simulated plant the next one samples.
+#[derive(Default)]
+pub struct ForceSlot {
+    pub job: Option<ForceJob>,
+    pub sim: Option<SimMillingParams>,
+}
+
+/// The force job is armed or running.
+pub fn live(m: &Motion) -> bool {
+    m.force.job.as_ref().is_some_and(|j| j.is_live())
+}
+
+/// One tick with a running force job (`None`: none, the caller ticks as usual). Interrupt
+/// rate: the machine's tick plus one plant sample, ADC conversion and chain sample every
+/// `tick_hz / sample_hz` ticks and one control update every fifth of those; division-free.
+#[inline]
+pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
+    let Motion { dda, machine, force, .. } = m;
+    let job = force.job.as_mut().filter(|j| j.is_running())?;
+    Some(link_job::link_tick(machine, dda, inputs, job))
+}
+
+/// `ArmForce`: in `Ready` with nothing queued, no event or wire job and no live force job.
+/// A sample rate the tick cannot pace -> `OutOfRange` (the session names `sample_hz`).
+pub fn arm(
+    m: &mut Motion,
+    plain_queue_empty: bool,
+    wire_live: bool,
+    p: &ForceJobParams,
+) -> Result<(), ErrorCode> {
+    if !HAS_FORCE_SOURCE {
+        return Err(ErrorCode::Unsupported);
+    }
+    let busy = !plain_queue_empty
+        || m.machine.events_queued()
+        || m.machine.event_job()
+        || wire_live
+        || live(m)
+        || !m.dda.is_idle();
+    if m.machine.state() != MachineState::Ready || busy {
+        return Err(ErrorCode::OutOfState);
+    }
+    if !TICK_SAMPLED {
+        match ADC_SAMPLE_HZ.load(Relaxed) {
+            0 => return Err(ErrorCode::Unsupported),
+            hz if hz != p.sample_hz => return Err(ErrorCode::OutOfRange),
+            _ => {}
+        }
+    }
+    let tick_hz = m.machine.config().wire.machine.tick_hz;
+    let job = ForceJob::new(p, tick_hz, TICK_SAMPLED, m.force.sim.as_ref())
+        .map_err(|_| ErrorCode::OutOfRange)?;
+    m.force.job = Some(job);
+    Ok(())
+}
+
+/// `SimMilling`: the plant the next armed job samples (checked by the session).
+pub fn set_sim(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
+    if !TICK_SAMPLED {
+        return Err(ErrorCode::Unsupported);
+    }
+    m.force.sim = Some(*p);
+    Ok(())
+}
+
+/// An armed (not yet started) force job waits for this `Start`.
+pub fn armed(m: &Motion) -> bool {
+    m.force.job.as_ref().is_some_and(|j| j.is_armed())
+}
+
+/// After the machine accepted `Start`: the loop runs from the next tick, positions counted
+/// from the feed axis's position now (same critical section as the start).
+pub fn start(m: &mut Motion) {
+    let Motion { machine, force, .. } = m;
+    if let Some(j) = force.job.as_mut() {
+        let pos = machine.positions().get(j.axis()).copied().unwrap_or(0);
+        j.start(pos);
+    }
+}
+
+/// The link dropped the job (Abort, ClearFault, SetConfig, Home).
+pub fn drop_job(m: &mut Motion) {
+    if let Some(j) = m.force.job.as_mut() {
+        j.end();
+    }
+}
+
+/// The force job's telemetry, into `s`.
+pub fn status(m: &Motion, s: &mut Status) {
+    if let Some(j) = m.force.job.as_ref() {
+        let t = j.telemetry();
+        s.force_mn = t.force_mn;
+        s.force_peak_mn = t.peak_mn;
+        s.force_override_bits = t.override_bits;
+        s.force_phase = t.phase as u8;
+        s.force_updates = t.updates;
+    }
+}
+
+/// The real board's `DMA2_STREAM0` interrupt: one half buffer of force frames (`None`: a
+/// spurious interrupt, or the ADC/DMA overran: `overrun`), through the running job's chain per
+/// frame and control law per `DECIMATION` frames; the override goes to the DDA like
+/// `SetOverride`, an overrun latches `SensorFault`. Interrupt rate: `DECIMATION` chain samples
+/// and one control update; division-free, bounded (the frames slice is one half buffer).
+#[inline]
+pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>, overrun: bool) {
+    let Motion { dda, machine, force, z, .. } = m;
+    let Some(job) = force.job.as_mut().filter(|j| j.is_running()) else { return };
+    if overrun {
+        job.source_fault(FaultCode::SensorFault);
+        return;
+    }
+    // The spindle encoder, read every tick (`zslide::sense`), gives the speed: a stopped
+    // spindle holds the feed with `SpindleStopped`.
+    let tick_hz = machine.config().wire.machine.tick_hz;
+    job.set_spindle_mrev_s(mrev_s_from_turn_q32_per_tick(
+        z.sensed_speed_turn_q32_per_tick(),
+        tick_hz,
+    ));
+    let pos = machine.positions().get(job.axis()).copied().unwrap_or(0);
+    for f in frames.unwrap_or(&[]) {
+        // Fx, Fy, Fz: the first three force channels.
+        let counts = [
+            f.first().copied().unwrap_or(0),
+            f.get(1).copied().unwrap_or(0),
+            f.get(2).copied().unwrap_or(0),
+        ];
+        if let Some(rate) = job.sample(&counts, pos).set_override {
+            dda.apply(Command::SetOverride(rate));
+        }
+    }
+}

@@ -1,0 +1,414 @@
+//! [`Target`]: [`LinkTarget`] for one request, every machine command through
+//! `Machine::command`.
+
+use core::cell::RefCell;
+use core::sync::atomic::Ordering::Relaxed;
+
+use motion::config::MAX_AXES;
+use motion::dda::{Command, Preparer};
+use motion::machine::{BoardConfig, MachineCommand, MachineState, Refusal};
+use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
+use motion::polar::StepEvent;
+use motion::protocol::{
+    ErrorCode, ForceJobParams, HomingConfig, LinkTarget, SimMillingParams, Status, TeachChunk,
+    WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+};
+use motion::segment::{Rate, Segment};
+use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
+use motion::zslide::link_requests::ZNak;
+use motion::Dda;
+use rtic::Mutex;
+
+use crate::board;
+use board_contract::{ConfigStorage as _, CopyEncoders as _, MachineIo as _, TickRate as _};
+
+use super::feed::Feed;
+use super::*;
+
+/// [`LinkTarget`] for one request: the link plus the `Motion` resource. `LinkTarget` reads
+/// through `&self`, and an RTIC lock needs `&mut`, hence the `RefCell` (never borrowed twice: no
+/// method calls another while it holds the lock).
+pub struct Target<'a, M: Mutex<T = Motion>> {
+    link: &'a mut Feed,
+    motion: RefCell<&'a mut M>,
+    /// The feeder has work.
+    pub wake_feeder: bool,
+}
+
+impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
+    pub(super) fn new(link: &'a mut Feed, motion: &'a mut M) -> Self {
+        Target { link, motion: RefCell::new(motion), wake_feeder: false }
+    }
+
+    fn with<R>(&self, f: impl FnOnce(&mut Motion) -> R) -> R {
+        self.motion.borrow_mut().lock(f)
+    }
+
+    /// One machine command; a refusal changes nothing and becomes the NAK code.
+    fn command(&mut self, cmd: MachineCommand<'_>) -> Result<MachineState, ErrorCode> {
+        let r = self.motion.get_mut().lock(|m| m.machine.command(cmd, &mut m.dda));
+        r.map_err(|e: Refusal| e.error_code())
+    }
+
+    /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
+    /// machine's background (the abort of the frozen DDA).
+    fn drop_job(&mut self) {
+        self.motion.get_mut().lock(|m| {
+            wire::drop_job(m);
+            copy::drop_job(m);
+            force::drop_job(m);
+            m.z.drop_run();
+        });
+        self.link.queue.clear();
+        self.link.events.clear();
+        EVENTS_WAITING.store(false, Relaxed);
+        self.wake_feeder = true;
+    }
+
+    /// Installs `cfg` (a validated board config): the machine first (it refuses out of state),
+    /// then a DDA and preparer for a changed machine config, retimed in one critical section.
+    fn install(&mut self, cfg: &BoardConfig) -> Result<(), ErrorCode> {
+        let preparer = Preparer::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?;
+        let old = self.with(|m| m.machine.config().wire.machine);
+        let tick_hz = cfg.wire.machine.tick_hz;
+        let fresh = if cfg.wire.machine == old {
+            None
+        } else {
+            if !self.link.tick_rate.supports(tick_hz) {
+                return Err(ErrorCode::InvalidConfig);
+            }
+            Some(Dda::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?)
+        };
+        self.command(MachineCommand::SetConfig(cfg))?;
+        self.drop_job();
+        if board::ConfigStorage::PERSISTS {
+            self.link.save_pending = Some(*cfg);
+        }
+        let Some(mut fresh) = fresh else { return Ok(()) };
+        let tick_rate = &mut self.link.tick_rate;
+        // The swap and the retiming in one critical section: no tick sees a half-done change.
+        // The machine froze the DDA (SetConfig stops at once); the background aborts the new one.
+        self.motion.get_mut().lock(|m| {
+            core::mem::swap(&mut m.dda, &mut fresh);
+            tick_rate.set(tick_hz)
+        });
+        // `fresh` now holds the old DDA.
+        self.link.clock_base_ms += fresh.now() * 1_000 / old.tick_hz.max(1) as u64;
+        self.link.preparer = preparer;
+        WAKE_TICKS.store(wake_ticks(tick_hz), Relaxed);
+        Ok(())
+    }
+}
+
+impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
+    fn state(&self) -> WireState {
+        self.with(|m| m.wire_state())
+    }
+
+    fn machine_state(&self) -> MachineState {
+        self.with(|m| m.machine.state())
+    }
+
+    fn credits(&self) -> u16 {
+        self.with(|m| wire::credits(m)).unwrap_or((SEGMENT_QUEUE - self.link.queue.len()) as u16)
+    }
+
+    fn queue_capacity(&self) -> u16 {
+        SEGMENT_QUEUE as u16
+    }
+
+    fn config(&self) -> WireConfig {
+        self.with(|m| m.machine.config().wire)
+    }
+
+    fn planned_position(&self) -> [i64; MAX_AXES] {
+        self.with(|m| m.machine.planned_end())
+    }
+
+    fn status(&self) -> Status {
+        // One lock: positions, tick, state and counters are one consistent snapshot.
+        self.with(|m| {
+            let (d, mc) = (&m.dda, &m.machine);
+            let mut s = Status {
+                tick: d.now(),
+                positions: mc.positions(),
+                state: m.wire_state(),
+                override_bits: d.feed_override().to_bits(),
+                queue_depth: mc.in_flight(d).min(u16::MAX as u32) as u16,
+                segments_done: d.segments_done(),
+                last_done_id: d.last_done_id(),
+                done_hash: d.done_hash(),
+                faults: mc.faults().mask(),
+                sensors: [0; SENSOR_CHANNELS],
+                machine: mc.state(),
+                causes: mc.active_causes(),
+                homed: mc.is_homed(),
+                events_fired: m.playback.fired(),
+                event_blocks: self.link.events.blocks() as u16,
+                ..Status::default()
+            };
+            wire::status(m, &mut s);
+            zslide::status(m, &mut s);
+            copy::status(m, &self.link.teach, &mut s);
+            force::status(m, &mut s);
+            s
+        })
+    }
+
+    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+        let homing = self.with(|m| m.machine.config().homing());
+        self.install(&BoardConfig::with_homing(*cfg, &homing))
+    }
+
+    fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode> {
+        let wire = self.with(|m| m.machine.config().wire);
+        self.install(&BoardConfig::with_homing(wire, homing))
+    }
+
+    fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
+        if self.with(|m| wire::live(m)) {
+            let state = self.motion.get_mut().lock(|m| wire::queue(m, seg))?;
+            self.wake_feeder |= state != MachineState::Ready;
+            return Ok(());
+        }
+        if self.link.queue.is_full() {
+            return Err(ErrorCode::QueueFull);
+        }
+        let state = self.command(MachineCommand::Queue(seg))?;
+        // Cannot fail: checked for room above.
+        let _ = self.link.queue.push_back(*seg);
+        self.wake_feeder |= state != MachineState::Ready;
+        Ok(())
+    }
+
+    fn start(&mut self) -> Result<(), ErrorCode> {
+        if self.with(|m| wire::live(m)) {
+            self.motion.get_mut().lock(wire::start)?;
+            self.wake_feeder = true;
+            return Ok(());
+        }
+        if self.with(|m| force::armed(m)) {
+            // The machine's start and the force loop's in one critical section.
+            let r = self.motion.get_mut().lock(|m| {
+                m.machine.command(MachineCommand::Start, &mut m.dda)?;
+                force::start(m);
+                Ok(())
+            });
+            r.map_err(|e: Refusal| e.error_code())?;
+            self.wake_feeder = true;
+            return Ok(());
+        }
+        self.command(MachineCommand::Start)?;
+        self.wake_feeder = true;
+        Ok(())
+    }
+
+    fn hold(&mut self) -> Result<(), ErrorCode> {
+        // A hold must not outlive the job it was meant for: nothing moving and nothing to feed
+        // means there is nothing to hold.
+        let idle = self.with(|m| m.dda.is_idle() && !m.machine.event_job());
+        if idle && self.link.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.command(MachineCommand::Hold).map(|_| ())
+    }
+
+    fn resume(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::Resume)?;
+        self.wake_feeder = true;
+        Ok(())
+    }
+
+    fn abort(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::Abort)?;
+        self.drop_job();
+        Ok(())
+    }
+
+    fn set_override(&mut self, rate: Rate) -> Result<(), ErrorCode> {
+        self.with(|m| m.dda.apply(Command::SetOverride(rate)));
+        Ok(())
+    }
+
+    fn clear_fault(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::ClearFault)?;
+        self.link.announced = 0;
+        self.drop_job();
+        Ok(())
+    }
+
+    fn home(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::Home)?;
+        self.drop_job();
+        Ok(())
+    }
+
+    fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
+        self.command(MachineCommand::JogOff)?;
+        // The feeder plans the jog move (the machine's background).
+        self.wake_feeder = true;
+        Ok(())
+    }
+
+    fn event_credits(&self) -> u16 {
+        if self.with(|m| m.machine.events_queued()) {
+            self.link.events.credits()
+        } else {
+            // A new stream starts with an empty feed (see `queue_events`).
+            self.link.events.capacity()
+        }
+    }
+
+    fn next_event_block(&self) -> Option<u16> {
+        if self.with(|m| m.machine.events_queued()) {
+            self.link.events.expected()
+        } else {
+            Some(0)
+        }
+    }
+
+    fn events_pending(&self) -> bool {
+        // A wire job is a source job too, but its segments come through QueueSegments.
+        self.with(|m| (m.machine.events_queued() || m.machine.event_job()) && !wire::live(m))
+    }
+
+    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
+        if self.with(|m| wire::live(m) || copy::live(m)) {
+            return Err(ErrorCode::OutOfState);
+        }
+        let fresh = !self.with(|m| m.machine.events_queued());
+        let state = self.command(MachineCommand::QueueEvents)?;
+        if fresh {
+            // The machine had no events: whatever the feed holds is a finished job's.
+            self.link.events.clear();
+        }
+        // Checked by BoardLink against `next_event_block` and `event_credits`: a refusal here
+        // is a link bug. (The machine's flag stays set: the job has nothing new to play.)
+        self.link.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
+        EVENTS_WAITING.store(true, Relaxed);
+        self.wake_feeder |= state != MachineState::Ready;
+        Ok(())
+    }
+
+    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
+        if self.with(|m| wire::live(m)) {
+            return Err(ErrorCode::OutOfState);
+        }
+        // Decode the first events outside the lock, from a copy (a refused start changes
+        // nothing), then start the job and fill its playback in one critical section: the
+        // first tick of the job already has events.
+        let mut feed = self.link.events.clone();
+        let mut first = [StepEvent::default(); QUEUE_DEPTH];
+        let (n, finished) = feed.take(&mut first);
+        let (head, _) = first.split_at(n);
+        let r = self.motion.get_mut().lock(|m| {
+            m.machine.command(MachineCommand::StartEvents, &mut m.dda)?;
+            m.playback = Playback::new(scale);
+            for &ev in head {
+                // Cannot fail: a fresh playback holds QUEUE_DEPTH events.
+                let _ = m.playback.push(ev);
+            }
+            if finished {
+                m.playback.finish();
+            }
+            Ok(())
+        });
+        r.map_err(|e: Refusal| e.error_code())?;
+        self.link.events = feed;
+        self.wake_feeder = true;
+        Ok(())
+    }
+
+    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        // An armed force job owns the next segment job (issue 4).
+        let empty = empty && !self.with(|m| force::live(m));
+        self.motion.get_mut().lock(|m| wire::arm(m, empty, params))
+    }
+
+    fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.begin(h, active)
+    }
+
+    fn z_table_chunk(&mut self, index: u16, bytes: &[u8]) -> Result<(), ZNak> {
+        let active = self.with(|m| m.machine.z_job());
+        self.link.z.chunk(index, bytes, active)
+    }
+
+    fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
+        // Checked outside the lock; the install (a copy) inside it.
+        let active = self.with(|m| m.machine.z_job());
+        let table = self.link.z.end(crc, active)?;
+        let copy = table.clone();
+        self.motion.get_mut().lock(|m| zslide::install(m, table))?;
+        self.link.z.installed(copy);
+        Ok(())
+    }
+
+    fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        let (tick_hz, speed, active) = self.with(|m| {
+            let tick_hz = m.machine.config().wire.machine.tick_hz;
+            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
+        });
+        // The generator is built here, outside the lock (see `zslide`).
+        let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
+        self.motion.get_mut().lock(|m| zslide::start(m, empty, prepared))
+    }
+
+    fn sim_spindle(&mut self, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
+        let tick_hz = self.with(|m| m.machine.config().wire.machine.tick_hz);
+        zslide::sim_spindle(tick_hz, rpm_milli, index)
+    }
+
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        self.motion.get_mut().lock(|m| {
+            let wire_live = wire::live(m);
+            force::arm(m, empty, wire_live, params)
+        })
+    }
+
+    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
+        self.motion.get_mut().lock(|m| force::set_sim(m, params))
+    }
+
+    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
+        if board::MachineIo::inject_wire_stall(wire_stall) {
+            Ok(())
+        } else {
+            Err(ErrorCode::Unsupported)
+        }
+    }
+
+    fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
+        if !board::CopyEncoders::ROUTED {
+            return Err(ErrorCode::Unsupported);
+        }
+        if !self.link.queue.is_empty() || self.link.events.blocks() != 0 {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.motion.get_mut().lock(|m| copy::start(m, scale, teach))?;
+        // A new recording (the last one's unread blocks go).
+        self.link.teach.reset(teach);
+        Ok(())
+    }
+
+    fn read_teach(&mut self, block: u16) -> Result<TeachChunk, ErrorCode> {
+        let rec = &mut self.link.teach;
+        Ok(self.motion.get_mut().lock(|m| copy::read(rec, m, block)))
+    }
+
+    fn teach_resend(&self) -> Option<TeachChunk> {
+        Some(self.with(|m| copy::resend(&self.link.teach, m)))
+    }
+
+    fn sim_encoders(&mut self, counts: [i32; 2]) -> Result<(), ErrorCode> {
+        if board::CopyEncoders::set_sim_target(counts) {
+            Ok(())
+        } else {
+            Err(ErrorCode::Unsupported)
+        }
+    }
+}

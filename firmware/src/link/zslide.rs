@@ -1,0 +1,99 @@
+//! Z-slide jobs on the link firmware (`motion::zslide::link_job`): the table upload goes through
+//! the link's [`ZRequests`] (staging buffer, never touched by the tick) into the [`ZJob`] in
+//! [`Motion`] at `ZTableEnd`; `StartZ` engages the job and starts the machine's Z job
+//! (`MachineCommand::StartZ`, the Start column) in one critical section; every tick the board's
+//! spindle is read ([`sense`]: the sim spindle under QEMU, TIM4's encoder on the F405) and, while
+//! the machine's Z job runs, the tick runs the job through `Machine::tick_with` ([`tick`]) with
+//! the job's latched faults as sensor inputs, and drives the DAC with the job's code.
+//!
+//! Interrupt rate ([`sense`], [`tick`]): integer only, no division, bounded (see
+//! `motion::zslide::link_job`). `StartZ` builds its generator (`ZGen::new`: divides and scans
+//! the table, milliseconds on the F405) in the USART task on the link's copy of the active
+//! table, outside the `Motion` lock; the lock only begins the prepared run.
+
+use motion::machine::{Inputs, MachineCommand, TickOut};
+use motion::protocol::{ErrorCode, NakDetail, Status};
+use motion::spindle::encoder::EncoderConfig;
+use motion::spindle::SpindleSource;
+use motion::zslide::link_job::{ZJob, ZPrepared};
+use motion::zslide::link_requests::{self as zr, ZNak};
+
+use super::Motion;
+use crate::board;
+use board_contract::SpindleEncoder as _;
+
+/// The spindle encoder both boards read (40 000 counts per revolution, the scenario's: the
+/// board's fitted encoder), a 256-tick speed window, no index tolerance.
+pub const ENCODER: EncoderConfig = motion::zslide::scenario::encoder_config();
+
+/// Configures the board's spindle encoder logic (init).
+pub fn init(spindle: &mut board::Spindle) -> bool {
+    spindle.configure(ENCODER).is_ok()
+}
+
+/// Once per tick, before the machine ticks: the spindle reading into the job. Interrupt rate.
+#[inline]
+pub fn sense(spindle: &mut board::Spindle, job: &mut ZJob) {
+    spindle.update();
+    job.sense(spindle.angle_turn_q32(), spindle.speed_turn_q32_per_tick(), spindle.fault());
+}
+
+/// One tick with the machine's Z job (`None`: no Z job, the caller ticks as usual). The job's
+/// fresh faults join the sensor inputs; a DAC job's code goes to `Outputs::z_dac`.
+#[inline]
+pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
+    if !m.machine.z_job() {
+        return None;
+    }
+    let Motion { dda, machine, z, .. } = m;
+    let inputs = Inputs { sensor_faults: inputs.sensor_faults | z.take_sensor_faults(), ..*inputs };
+    let mut out = machine.tick_with(dda, &inputs, z);
+    if let Some(code) = z.dac_code() {
+        out.outputs.z_dac = code;
+    }
+    Some(out)
+}
+
+/// `ZTableEnd`'s install (inside the `Motion` lock).
+pub fn install(m: &mut Motion, table: motion::zslide::link_job::LinkTable) -> Result<(), ZNak> {
+    let active = m.machine.z_job();
+    zr::install(&mut m.z, table, active)
+}
+
+/// `StartZ`'s lock half: nothing else queued or armed, the prepared run begun (a few stores),
+/// then the machine's job; a machine refusal drops the run again.
+pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<(), ZNak> {
+    if !plain_queue_empty || super::wire::live(m) {
+        return Err((ErrorCode::OutOfState, NakDetail::None));
+    }
+    zr::begin(&mut m.z, p, m.machine.z_job())?;
+    let Motion { dda, machine, z, .. } = m;
+    if let Err(e) = machine.command(MachineCommand::StartZ, dda) {
+        z.drop_run();
+        return Err((e.error_code(), NakDetail::None));
+    }
+    Ok(())
+}
+
+/// The Z fields of `Status`.
+pub fn status(m: &Motion, s: &mut Status) {
+    zr::status(&m.z, m.machine.config().wire.machine.tick_hz, s);
+}
+
+/// `SimSpindle`: the rpm as a speed at the current tick rate (divides: USART task).
+pub fn sim_spindle(tick_hz: u32, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
+    if !board::Spindle::SIM {
+        return Err(ErrorCode::Unsupported);
+    }
+    // rpm / 60 turns per second / tick_hz, times 2^32 (as `spindle::speed_turn_q32_per_tick`,
+    // range-checked here).
+    let speed = ((rpm_milli as u64) << 32) / (60_000 * tick_hz.max(1) as u64);
+    let Ok(speed) = i32::try_from(speed) else {
+        return Err(ErrorCode::OutOfRange);
+    };
+    if board::Spindle::set_sim(speed as u32, index) {
+        Ok(())
+    } else {
+        Err(ErrorCode::Unsupported)
+    }
+}

@@ -1,0 +1,509 @@
+//! `cargo xtask isr-profile`: the whole tick interrupt of the shipped link firmware, entry to
+//! exception return with every callee, on every tick of real jobs streamed to it in QEMU.
+//!
+//! Each job runs `motionctl ... --qemu` against the link ELF with a `qemu-system-arm` wrapper
+//! first on PATH that adds `-singlestep -d exec,nochain -D FIFO` (one trace line per executed
+//! instruction); [`trace::Analyzer`] reads the FIFO as QEMU writes it and cuts it into handler
+//! instances. The jobs: a 4-axis TOML job streamed as segments, and one job of each capability
+//! (force, Z slide, polar playback, wire). Ticks are told apart by the functions that ran in
+//! them (see [`SITUATIONS`]); the cycle model is [`disasm`]'s.
+
+mod disasm;
+mod trace;
+
+use crate::e2e::build_motionctl;
+use crate::firmware::{self, Board};
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// TIM2's interrupt number (vector 16 + 28): the DDA tick.
+const TICK_IRQ: usize = 28;
+/// The default configuration's tick and the F405's core clock.
+const DEFAULT_TICK_HZ: f64 = 100_000.0;
+const CORE_HZ: f64 = 168_000_000.0;
+/// A traced job that takes longer than this has hung.
+const JOB_TIMEOUT: Duration = Duration::from_secs(20 * 60);
+
+/// How a tick is classified: the first situation whose functions ran in it (in this order);
+/// a tick where none ran is "idle". A function counts when its name, or the name of a function
+/// inlined into the instruction, contains one of the patterns.
+const SITUATIONS: [(&str, &[&str]); 5] = [
+    ("segment change", &["Dda::load_next", "Dda::finish_segment"]),
+    ("command", &["Dda::run_due_commands"]),
+    (
+        "capability update",
+        &[
+            "force::control::",
+            "force::chain::",
+            "ForceJob::tick_sim",
+            "zslide::command::",
+            "zslide::table::",
+            "polar::playback::Playback::tick",
+            "polar::copy::",
+            "wire::controller::",
+            "wire::link_job::",
+        ],
+    ),
+    ("ramp", &["Dda::full_tick"]),
+    ("cruise", &["Dda::cruise_tick"]),
+];
+const IDLE: &str = "idle";
+
+/// One profiled job.
+struct Job {
+    name: &'static str,
+    args: Vec<String>,
+    /// Trace only the first this many ticks, then stop the job: for a job whose whole length
+    /// would take an hour of single-stepped QEMU.
+    max_ticks: Option<usize>,
+}
+
+/// What one job's handler did, per situation.
+pub struct JobProfile {
+    pub name: &'static str,
+    pub instances: Vec<trace::Instance>,
+    pub wall: Duration,
+    /// Function name -> instructions inside the handler, largest first.
+    pub top: Vec<(String, u64)>,
+    pub unknown_pcs: u64,
+    pub nested: u64,
+}
+
+impl JobProfile {
+    fn situation(i: &trace::Instance) -> &'static str {
+        (0..SITUATIONS.len()).find(|&k| i.marks & (1 << k) != 0).map_or(IDLE, |k| SITUATIONS[k].0)
+    }
+
+    fn select(&self, situation: Option<&str>) -> Vec<&trace::Instance> {
+        self.instances
+            .iter()
+            .filter(|i| situation.is_none_or(|s| Self::situation(i) == s))
+            .collect()
+    }
+}
+
+/// Distribution of one quantity.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Stats {
+    pub n: usize,
+    pub min: u32,
+    pub median: u32,
+    pub p99: u32,
+    pub max: u32,
+    pub mean: f64,
+}
+
+impl Stats {
+    fn of(mut v: Vec<u32>) -> Stats {
+        if v.is_empty() {
+            return Stats::default();
+        }
+        v.sort_unstable();
+        let at = |p: f64| v[((p * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)];
+        Stats {
+            n: v.len(),
+            min: v[0],
+            median: at(0.5),
+            p99: at(0.99),
+            max: v[v.len() - 1],
+            mean: v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64,
+        }
+    }
+}
+
+/// The figures `cargo xtask bench` records.
+pub struct Figures {
+    pub keys: Vec<(&'static str, f64)>,
+    pub markdown: String,
+}
+
+/// Profiles every job (or those whose name contains one of `only`) and prints the report.
+pub fn run(root: &Path, only: &[String]) -> Result<Figures> {
+    let elf = firmware::build(root, Board::Netduinoplus2, &["link"])?;
+    let bin = build_motionctl(root)?;
+    let prog = disasm::Program::load(root, &elf)?;
+    let entry = prog.irq_handler(TICK_IRQ)?;
+    let work = root.join("target/isr-profile");
+    std::fs::create_dir_all(&work)?;
+    let wrapper_dir = write_wrapper(&work)?;
+    let mut profiles = Vec::new();
+    for job in jobs(root, &work, &elf)? {
+        if !only.is_empty() && !only.iter().any(|o| job.name.contains(o.as_str())) {
+            continue;
+        }
+        println!("\n== {}: motionctl {}", job.name, job.args.join(" "));
+        let p = profile_job(root, &prog, entry, &bin, &job, &work, &wrapper_dir)?;
+        println!("{}", job_table(&p));
+        profiles.push(p);
+    }
+    if profiles.is_empty() {
+        bail!("no job matched {only:?}");
+    }
+    let figures = figures(&profiles)?;
+    println!("\n{}", figures.markdown);
+    Ok(figures)
+}
+
+/// A `qemu-system-arm` first on PATH that traces every instruction into `work/trace.fifo`.
+fn write_wrapper(work: &Path) -> Result<PathBuf> {
+    let real =
+        crate::setup::which("qemu-system-arm").context("qemu-system-arm is not installed")?;
+    // QEMU >= 8.1 spells one instruction per block `-accel tcg,one-insn-per-tb=on`; 7.2 has
+    // only `-singlestep`.
+    let probe = Command::new(&real)
+        .args(["-M", "none", "-display", "none", "-accel", "tcg,one-insn-per-tb=on", "-S"])
+        .args(["-monitor", "none"])
+        .stdin(Stdio::null())
+        .output();
+    let one_insn = match probe {
+        Ok(o) if String::from_utf8_lossy(&o.stderr).contains("one-insn-per-tb") => "-singlestep",
+        _ => "-accel tcg,one-insn-per-tb=on",
+    };
+    let dir = work.join("bin");
+    std::fs::create_dir_all(&dir)?;
+    let fifo = work.join("trace.fifo");
+    let script = format!(
+        "#!/bin/sh\n# QEMU with one trace line per executed instruction (cargo xtask isr-profile)\n\
+         exec \"{}\" \"$@\" {one_insn} -d exec,nochain -D \"{}\"\n",
+        real.display(),
+        fifo.display()
+    );
+    let path = dir.join("qemu-system-arm");
+    std::fs::write(&path, script)?;
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))?;
+    Ok(dir)
+}
+
+fn profile_job(
+    root: &Path,
+    prog: &disasm::Program,
+    entry: u32,
+    bin: &Path,
+    job: &Job,
+    work: &Path,
+    wrapper_dir: &Path,
+) -> Result<JobProfile> {
+    let fifo = work.join("trace.fifo");
+    let _ = std::fs::remove_file(&fifo);
+    crate::run_status("mkfifo", Command::new("mkfifo").arg(&fifo))?;
+    let markers: Vec<&[&str]> = SITUATIONS.iter().map(|s| s.1).collect();
+    let path = format!("{}:{}", wrapper_dir.display(), std::env::var("PATH").unwrap_or_default());
+    let start = Instant::now();
+    let capped = AtomicBool::new(false);
+    let (analyzer, ok) = std::thread::scope(|scope| -> Result<(trace::Analyzer<'_>, bool)> {
+        let reader = scope.spawn(|| -> Result<trace::Analyzer<'_>> {
+            let mut a = trace::Analyzer::new(prog, entry, &markers);
+            let f = std::fs::File::open(&fifo).context("opening the trace FIFO")?;
+            a.read(BufReader::with_capacity(1 << 20, f), job.max_ticks, &capped)?;
+            Ok(a)
+        });
+        let mut child = Command::new(bin)
+            .args(&job.args)
+            .current_dir(root)
+            .env("PATH", &path)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("could not start {}", bin.display()))?;
+        let status = loop {
+            if let Some(s) = child.try_wait()? {
+                break s;
+            }
+            if capped.load(Ordering::Relaxed) {
+                // Enough ticks: stop motionctl and the QEMU it started (the one writing this
+                // FIFO).
+                let _ = child.kill();
+                let _ = Command::new("pkill").arg("-f").arg(&fifo).status();
+                break child.wait()?;
+            }
+            if start.elapsed() > JOB_TIMEOUT {
+                let _ = child.kill();
+                break child.wait()?;
+            }
+            std::thread::sleep(Duration::from_millis(200));
+        };
+        let out = child.wait_with_output()?;
+        let capped = capped.load(Ordering::Relaxed);
+        if capped {
+            println!(
+                "  traced the first {} ticks, then stopped the job",
+                job.max_ticks.unwrap_or(0)
+            );
+        } else if !status.success() {
+            println!("{}", String::from_utf8_lossy(&out.stdout));
+            println!("{}", String::from_utf8_lossy(&out.stderr));
+        }
+        // QEMU never opened the FIFO if motionctl failed early: unblock the reader.
+        if !reader.is_finished() {
+            let _ = std::fs::OpenOptions::new().write(true).open(&fifo);
+        }
+        let a = reader.join().map_err(|_| anyhow::anyhow!("trace reader panicked"))??;
+        Ok((a, capped || status.success()))
+    })?;
+    let _ = std::fs::remove_file(&fifo);
+    if !ok {
+        bail!("{}: motionctl failed (output above)", job.name);
+    }
+    for (k, (name, _)) in SITUATIONS.iter().enumerate() {
+        if !analyzer.marker_found(k as u32) {
+            println!("  note: no function of situation `{name}` is in the ELF");
+        }
+    }
+    if analyzer.instances.is_empty() {
+        bail!("{}: no tick interrupt in {} trace lines", job.name, analyzer.lines);
+    }
+    let mut top: Vec<(String, u64)> = analyzer
+        .per_function
+        .iter()
+        .map(|(&a, &n)| {
+            (prog.symbol_at(a).map_or_else(|| format!("{a:#010x}"), |s| s.name.clone()), n)
+        })
+        .collect();
+    top.sort_by(|a, b| b.1.cmp(&a.1));
+    top.truncate(12);
+    Ok(JobProfile {
+        name: job.name,
+        instances: analyzer.instances,
+        wall: start.elapsed(),
+        top,
+        unknown_pcs: analyzer.unknown,
+        nested: analyzer.nested,
+    })
+}
+
+fn situations() -> impl Iterator<Item = &'static str> {
+    SITUATIONS.iter().map(|s| s.0).chain([IDLE])
+}
+
+fn job_table(p: &JobProfile) -> String {
+    let mut s = format!(
+        "{}: {} ticks traced in {:.0} s wall ({} unknown PCs, {} nested entries)\n\n\
+         | situation | ticks | instr min / median / p99 / max | cycles min / median / p99 / max | cycles, ART misses (median / max) |\n|---|---|---|---|---|\n",
+        p.name,
+        p.instances.len(),
+        p.wall.as_secs_f64(),
+        p.unknown_pcs,
+        p.nested
+    );
+    let rows = situations().map(Some).chain([None]);
+    for sit in rows {
+        let sel = p.select(sit);
+        if sel.is_empty() {
+            continue;
+        }
+        let i = Stats::of(sel.iter().map(|x| x.instructions).collect());
+        let c = Stats::of(sel.iter().map(|x| x.cycles).collect());
+        let w = Stats::of(sel.iter().map(|x| x.cycles_pessimistic).collect());
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} / {} / {} / {} | {} / {} / {} / {} | {} / {} |",
+            sit.unwrap_or("all"),
+            i.n,
+            i.min,
+            i.median,
+            i.p99,
+            i.max,
+            c.min,
+            c.median,
+            c.p99,
+            c.max,
+            w.median,
+            w.max
+        );
+    }
+    let total: u64 = p.instances.iter().map(|i| i.instructions as u64).sum();
+    s.push_str("\nwhere the instructions go:\n");
+    for (name, n) in &p.top {
+        let _ = writeln!(s, "  {:5.1} %  {name}", 100.0 * *n as f64 / total.max(1) as f64);
+    }
+    if p.instances.iter().any(|i| i.fp) {
+        s.push_str("  note: the handler ran VFP instructions (lazy FP stacking not modelled)\n");
+    }
+    s
+}
+
+fn figures(profiles: &[JobProfile]) -> Result<Figures> {
+    let all = || profiles.iter().flat_map(|p| p.instances.iter());
+    let cycles = Stats::of(all().map(|i| i.cycles).collect());
+    let idle = Stats::of(
+        all().filter(|i| JobProfile::situation(i) == IDLE).map(|i| i.instructions).collect(),
+    );
+    let four = profiles.iter().find(|p| p.name.starts_with("4-axis"));
+    let cruise4 = four
+        .map(|p| Stats::of(p.select(Some("cruise")).iter().map(|i| i.cycles).collect()))
+        .unwrap_or_default();
+    let cpu = profiles
+        .iter()
+        .map(|p| {
+            let mean = Stats::of(p.instances.iter().map(|i| i.cycles).collect()).mean;
+            100.0 * mean * DEFAULT_TICK_HZ / CORE_HZ
+        })
+        .fold(0.0, f64::max);
+    let keys = vec![
+        ("isr_cycles_cruise_4axes", cruise4.median as f64),
+        ("isr_cycles_p99", cycles.p99 as f64),
+        ("isr_cycles_max", cycles.max as f64),
+        ("isr_instr_idle", idle.median as f64),
+        ("isr_cpu_percent_default_tick", (cpu * 100.0).round() / 100.0),
+    ];
+    let mut md = String::from(
+        "| job | ticks | cycles median | cycles p99 | cycles max | mean CPU at 100 kHz |\n|---|---|---|---|---|---|\n",
+    );
+    for p in profiles {
+        let c = Stats::of(p.instances.iter().map(|i| i.cycles).collect());
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {:.1} % |",
+            p.name,
+            c.n,
+            c.median,
+            c.p99,
+            c.max,
+            100.0 * c.mean * DEFAULT_TICK_HZ / CORE_HZ
+        );
+    }
+    md.push('\n');
+    for p in profiles {
+        md.push_str(&job_table(p));
+        md.push('\n');
+    }
+    Ok(Figures { keys, markdown: md })
+}
+
+/// A wire segment of the thesis die takes ~6 s at its area rate; 0.3 s of it is the same
+/// handler, tick after tick.
+const WIRE_TICKS: usize = 30_000;
+
+/// The jobs: what a user runs, short enough to trace every instruction (~0.2-0.5 s of
+/// machine time each).
+fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
+    let s = |x: &str| x.to_string();
+    let fw = [s("--qemu"), s("--firmware"), elf.display().to_string()];
+    let job4 = work.join("job4.toml");
+    std::fs::write(&job4, FOUR_AXIS_JOB)?;
+    let stream = work.join("limacon-arc.bin");
+    let blocks = motionctl::polar::run::blocks(motion::polar::limacon_stream::BYTES)?;
+    std::fs::write(&stream, blocks.get(..6).context("the limacon stream is short")?.concat())?;
+    let with_fw = |mut a: Vec<String>, extra: &[&str]| {
+        a.extend(fw.iter().cloned());
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    Ok(vec![
+        Job {
+            name: "4-axis segments",
+            args: with_fw(vec![s("run"), job4.display().to_string()], &["--yes"]),
+            max_ticks: None,
+        },
+        Job {
+            name: "milling (force loop)",
+            args: with_fw(
+                vec![
+                    s("milling"),
+                    s("run"),
+                    root.join("motionctl/examples/case_a_milling.toml").display().to_string(),
+                ],
+                &[],
+            ),
+            max_ticks: None,
+        },
+        Job {
+            name: "turning (Z slide)",
+            args: with_fw(
+                vec![s("fourier"), s("run")],
+                &["--rpm", "360", "--x-end", "0.02", "--feed", "0.1", "--output", "steps"],
+            ),
+            max_ticks: None,
+        },
+        Job {
+            name: "polar playback",
+            args: with_fw(
+                vec![s("polar"), s("run"), stream.display().to_string()],
+                &["--speed", "2"],
+            ),
+            max_ticks: None,
+        },
+        Job {
+            name: "wire",
+            args: with_fw(vec![s("wire"), s("run")], &["--segments", "1..3"]),
+            max_ticks: Some(WIRE_TICKS),
+        },
+    ])
+}
+
+/// Four axes moving in every move: long moves cruise, short ones change segments, and the
+/// direction reverses on every axis.
+const FOUR_AXIS_JOB: &str = r#"# cargo xtask isr-profile: X, Y, Z, A all moving, 100 kHz tick
+format = "motion-job"
+version = 1
+
+[machine]
+tick_hz = 100_000
+
+[machine.timing]
+pulse_ns = 2_500
+dir_setup_ns = 5_000
+dir_hold_ns = 5_000
+
+[[machine.axes]]
+name = "X"
+steps_per_mm = 100.0
+max_rate_mm_s = 200.0
+accel_mm_s2 = 3_000.0
+junction_jerk_mm_s = 8.0
+min_mm = -200.0
+max_mm = 200.0
+
+[[machine.axes]]
+name = "Y"
+steps_per_mm = 100.0
+max_rate_mm_s = 200.0
+accel_mm_s2 = 3_000.0
+junction_jerk_mm_s = 8.0
+min_mm = -200.0
+max_mm = 200.0
+
+[[machine.axes]]
+name = "Z"
+steps_per_mm = 320.0
+max_rate_mm_s = 40.0
+accel_mm_s2 = 800.0
+junction_jerk_mm_s = 2.0
+min_mm = -40.0
+max_mm = 40.0
+
+[[machine.axes]]
+name = "A"
+steps_per_mm = 80.0
+max_rate_mm_s = 150.0
+accel_mm_s2 = 2_000.0
+junction_jerk_mm_s = 5.0
+min_mm = -720.0
+max_mm = 720.0
+
+[[moves]]
+to = { X = 8.0, Y = 5.0, Z = -1.0, A = 4.0 }
+feed_mm_min = 5_400.0
+
+[[moves]]
+to = { X = 12.0, Y = 10.0, Z = -1.5, A = 8.0 }
+
+[[moves]]
+to = { X = 12.3, Y = 10.2, Z = -1.55, A = 8.2 }
+
+[[moves]]
+to = { X = 12.5, Y = 10.5, Z = -1.6, A = 8.4 }
+
+[[moves]]
+to = { X = 6.0, Y = 7.0, Z = -0.8, A = 3.0 }
+
+[[moves]]
+to = { X = 1.0, Y = 1.5, Z = -0.1, A = 0.5 }
+"#;
