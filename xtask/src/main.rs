@@ -27,6 +27,7 @@ mod isr_profile;
 mod milling_e2e;
 mod modcycles;
 mod polar_e2e;
+mod rs274;
 mod scenarios;
 mod setup;
 mod wire_e2e;
@@ -56,6 +57,8 @@ commands:
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
                                                         and modelled cycles by situation
+  rs274-oracle                                          compare motion-gcode with LinuxCNC's rs274, call for call,
+                                                        on the G-code corpus and test programs
   qemu ELF SECONDS                                       run a firmware ELF in QEMU for at most SECONDS, print its
                                                         decoded defmt log
   flash <netduinoplus2|f405-motion>                     build and run on a board with probe-rs
@@ -156,6 +159,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
+        "rs274-oracle" => rs274::check(&root),
         "qemu" => {
             let [elf, secs] = rest else { bail!("usage: cargo xtask qemu ELF SECONDS") };
             let run = firmware::run_qemu_for(
@@ -290,6 +294,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             }),
         ),
         ("no import cycles between modules of any crate", Box::new(|| modcycles::check(root))),
+        (
+            "G-code: motion-gcode == LinuxCNC's rs274 on the corpus and the test programs",
+            Box::new(|| rs274::check(root)),
+        ),
         (
             "clippy (firmware: link, demo, bench, scenarios; netduinoplus2)",
             clippy_thumb(Board::Netduinoplus2, &[]),

@@ -315,7 +315,11 @@ impl Core {
             }
             67 | 68 => {
                 let what = if m == 67 { "motion" } else { "auxiliary" };
-                check(comp, format!("Cannot set {what} analog output with cutter radius compensation on"), at)?;
+                check(
+                    comp,
+                    format!("Cannot set {what} analog output with cutter radius compensation on"),
+                    at,
+                )?;
                 let e = b.e.map(|e| e.round_ties_even() as i32);
                 check(e.is_none_or(|e| e < 0), format!("Invalid analog index with M{m}"), at)?;
                 let (i, v) = (e.unwrap_or(0), b.q_number);
