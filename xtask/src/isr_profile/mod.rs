@@ -26,6 +26,11 @@ const TICK_IRQ: usize = 28;
 /// The default configuration's tick and the F405's core clock.
 const DEFAULT_TICK_HZ: f64 = 100_000.0;
 const CORE_HZ: f64 = 168_000_000.0;
+/// The DDA steps an axis at most every other tick: a STEP pulse is high for at least one tick
+/// and the rate cap keeps an axis's pulses at least twice that apart.
+const STEPS_PER_TICK_PER_AXIS: f64 = 0.5;
+/// Axes stepping together in the 4-axis job, the largest case profiled.
+const PROFILED_AXES: f64 = 4.0;
 /// A traced job that takes longer than this has hung.
 const JOB_TIMEOUT: Duration = Duration::from_secs(20 * 60);
 
@@ -346,8 +351,14 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
             100.0 * mean * DEFAULT_TICK_HZ / CORE_HZ
         })
         .fold(0.0, f64::max);
+    // The fastest tick the handler's worst case allows on a 168 MHz core, capped by the
+    // default tick; the step rates follow from the DDA's one step per two ticks per axis.
+    let tick_hz = DEFAULT_TICK_HZ.min(CORE_HZ / (cycles.max.max(1) as f64));
+    let per_axis = (tick_hz * STEPS_PER_TICK_PER_AXIS).floor();
     let keys = vec![
         ("isr_cycles_cruise_4axes", cruise4.median as f64),
+        ("step_rate_max_hz_per_axis", per_axis),
+        ("step_rate_max_hz_aggregate", per_axis * PROFILED_AXES),
         ("isr_cycles_p99", cycles.p99 as f64),
         ("isr_cycles_max", cycles.max as f64),
         ("isr_instr_idle", idle.median as f64),
