@@ -52,6 +52,11 @@ pub enum Cmd {
     /// 4-axis wire manipulator (Bhatti): continuous constant area-rate jobs.
     #[command(subcommand)]
     Wire(crate::cli_capabilities::WireCmd),
+    /// List every error and warning of a G-code program, file:line:column (exit 1 on an error).
+    Check(crate::gcode::cli::CheckArgs),
+    /// G-code tools: `moves` prints the canonical machining calls.
+    #[command(subcommand)]
+    Gcode(crate::gcode::cli::GcodeCmd),
     /// Parse and plan a job offline and run it through the host model of the firmware.
     Plan {
         #[command(flatten)]
@@ -152,10 +157,9 @@ pub fn load_job(path: &Path, format: Option<JobFormat>, machine: Option<&Path>) 
         Some(f) => f,
         None => format_of(path)?,
     };
-    let src = read(path)?;
     let name = path.display();
     match format {
-        JobFormat::Toml => job::parse_toml(&src).with_context(|| name.to_string()),
+        JobFormat::Toml => job::parse_toml(&read(path)?).with_context(|| name.to_string()),
         JobFormat::Gcode => {
             let machine_path = match machine {
                 Some(m) => m.to_path_buf(),
@@ -172,8 +176,11 @@ pub fn load_job(path: &Path, format: Option<JobFormat>, machine: Option<&Path>) 
             };
             let machine = job::parse_machine_toml(&read(&machine_path)?)
                 .with_context(|| machine_path.display().to_string())?;
-            let items = gcode::parse(&src, &machine).with_context(|| name.to_string())?;
-            Ok(Job { machine, items, feed_commands: Vec::new() })
+            let loaded = gcode::load(path, &machine)?;
+            for w in &loaded.warnings {
+                eprintln!("motionctl: {w}");
+            }
+            Ok(Job { machine, items: loaded.items, feed_commands: Vec::new() })
         }
     }
 }
@@ -284,6 +291,8 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Run { job, link, log_csv, yes, status_ms } => {
             run_job(&job, &link, log_csv.as_deref(), yes, status_ms)
         }
+        Cmd::Check(args) => crate::gcode::cli::check(args),
+        Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
         Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
         Cmd::Fourier(cmd) => crate::cli_capabilities::run_fourier(cmd),
         Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),

@@ -1,7 +1,7 @@
 //! Host side of the motion board: job files (TOML and G-code) to planner moves, offline planning
 //! through the host model of the firmware, and the command-line tool's pieces.
 //!
-//! Pipeline: [`job::parse_toml`] or [`gcode::parse`] -> [`job::Job`] -> [`convert::convert`] ->
+//! Pipeline: [`job::parse_toml`] or [`gcode::load`] (G-code through `motion-gcode`) -> [`job::Job`] -> [`convert::convert`] ->
 //! [`convert::Program`] -> [`plan::Stream`] (segments and events) -> a link ([`transport`],
 //! [`link`], [`runner`]) or the host model ([`plan::simulate`]).
 

@@ -1,0 +1,246 @@
+//! G-code jobs through `motion-gcode` (an rs274ngc-grade front end checked against LinuxCNC's
+//! `rs274`): its canonical calls become job [`Item`]s in machine millimetres, with arcs and
+//! splines cut into segments within [`CHORD_TOLERANCE_MM`].
+//!
+//! A program with any error is refused as a whole, before anything moves; every error is listed.
+//! What the board cannot do yet (probe moves, spindle direction, spindle-synchronised motion) is
+//! refused with a message saying so; what it cannot switch yet (coolant, dwell, outputs) is
+//! reported as a warning and not executed.
+
+pub mod cli;
+
+use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};
+use motion_gcode::canon::{Canon, Pos};
+use motion_gcode::frame::{Frame, Motion};
+use motion_gcode::source::{LineSource, SeekSource};
+use motion_gcode::{curves, Diagnostic, Event, Interpreter, Options};
+use std::fmt;
+use std::io::Cursor;
+use std::path::Path;
+
+/// Chord tolerance for arcs and splines, mm (grbl's default arc tolerance).
+pub const CHORD_TOLERANCE_MM: f64 = curves::DEFAULT_CHORD_TOLERANCE_MM;
+
+/// The G-code axis letters, in canonical order.
+const AXES: [&str; 6] = ["X", "Y", "Z", "A", "B", "C"];
+
+/// A refused G-code program: every error, with file, line, column and word.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GcodeError {
+    pub file: String,
+    pub errors: Vec<Diagnostic>,
+}
+
+impl fmt::Display for GcodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.errors.len();
+        write!(f, "{n} error{} in the G-code: ", if n == 1 { "" } else { "s" })?;
+        for (i, d) in self.errors.iter().enumerate() {
+            if i > 0 {
+                write!(f, "; ")?;
+            }
+            write!(f, "{}", d.display_with_file(&self.file))?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for GcodeError {}
+
+/// A G-code program as job items, with what was accepted but not executed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Loaded {
+    pub items: Vec<Item>,
+    /// Warnings, one line each (`FILE:LINE:COL: warning: ...`).
+    pub warnings: Vec<String>,
+}
+
+/// Reads a G-code file for `machine`.
+pub fn load(path: &Path, machine: &Machine) -> Result<Loaded, GcodeError> {
+    let name = path.display().to_string();
+    let interp = Interpreter::open(path, Options::default())
+        .map_err(|e| GcodeError { file: name.clone(), errors: vec![io_diag(&e.to_string())] })?;
+    to_items(interp, &name, machine)
+}
+
+/// Parses G-code held in memory (`source` names it in messages).
+pub fn parse(src: &str, machine: &Machine) -> Result<Vec<Item>, GcodeError> {
+    let interp =
+        Interpreter::new(SeekSource::new(Cursor::new(src.as_bytes())), "gcode", Options::default());
+    to_items(interp, "gcode", machine).map(|l| l.items)
+}
+
+fn io_diag(m: &str) -> Diagnostic {
+    Diagnostic {
+        severity: motion_gcode::Severity::Error,
+        kind: motion_gcode::Kind::Limit,
+        line: 0,
+        column: 0,
+        span: None,
+        word: None,
+        message: m.to_string(),
+        text: String::new(),
+    }
+}
+
+/// Which G-code axis (0..6) drives each machine axis.
+fn axis_map(machine: &Machine) -> Vec<Option<usize>> {
+    machine.axes.iter().map(|a| AXES.iter().position(|n| a.name.eq_ignore_ascii_case(n))).collect()
+}
+
+/// Turns the interpreter's calls into items; collects every error.
+fn to_items<S: LineSource>(
+    interp: Interpreter<S>,
+    file: &str,
+    machine: &Machine,
+) -> Result<Loaded, GcodeError> {
+    let mut conv = Converter::new(machine);
+    let mut errors = Vec::new();
+    let mut loaded = Loaded::default();
+    for e in interp.keep_going(true) {
+        match e {
+            Event::Diagnostic(d) if d.is_error() => errors.push(d),
+            Event::Diagnostic(d) => loaded.warnings.push(d.display_with_file(file).to_string()),
+            Event::Call(c) => {
+                if let Err(m) = conv.call(c.line, &c.canon, &mut loaded) {
+                    errors.push(machine_diag(c.line, m));
+                }
+            }
+        }
+    }
+    for (line, m) in conv.notes {
+        loaded.warnings.push(format!("{file}:{line}: warning: {m}"));
+    }
+    if errors.is_empty() {
+        Ok(loaded)
+    } else {
+        Err(GcodeError { file: file.to_string(), errors })
+    }
+}
+
+pub(crate) fn machine_diag(line: u32, message: String) -> Diagnostic {
+    Diagnostic { line, ..io_diag(&message) }
+}
+
+/// Canonical calls to job items for one machine.
+pub(crate) struct Converter<'a> {
+    machine: &'a Machine,
+    map: Vec<Option<usize>>,
+    pub frame: Frame,
+    /// (line, message) of what runs without being executed.
+    pub notes: Vec<(u32, String)>,
+    ended: bool,
+    /// The last `F` and its line: rs274 sets the feed before the block's G20/G21, but a feed is
+    /// in the units of its own block (as grbl reads it: `G20 G1 X1 F10` is 10 in/min).
+    last_feed: Option<(u32, f64)>,
+}
+
+impl<'a> Converter<'a> {
+    pub fn new(machine: &'a Machine) -> Self {
+        Converter {
+            machine,
+            map: axis_map(machine),
+            frame: Frame::default(),
+            notes: Vec::new(),
+            ended: false,
+            last_feed: None,
+        }
+    }
+
+    fn note(&mut self, line: u32, m: impl Into<String>) {
+        self.notes.push((line, m.into()));
+    }
+
+    /// One call; an error names what the board cannot do.
+    pub fn call(&mut self, line: u32, c: &Canon, out: &mut Loaded) -> Result<(), String> {
+        if self.ended {
+            return Ok(());
+        }
+        match c {
+            Canon::StartSpindleClockwise(_) => out.items.push(Item::Spindle(true)),
+            Canon::StopSpindleTurning(_) => out.items.push(Item::Spindle(false)),
+            Canon::StartSpindleCounterclockwise(_) => {
+                return Err("M4 (spindle counterclockwise): the board has no spindle direction output yet".into())
+            }
+            Canon::ProgramStop | Canon::OptionalProgramStop => out.items.push(Item::Pause),
+            Canon::ChangeTool(t) => {
+                self.note(line, format!("tool change (pocket {t}): the job pauses for the operator"));
+                out.items.push(Item::Pause);
+            }
+            Canon::ProgramEnd => self.ended = true,
+            Canon::Dwell(s) => self.note(line, format!("G4 dwell {s} s not executed: the job pipeline has no dwell yet")),
+            Canon::FloodOn | Canon::MistOn => self.note(line, "coolant on: the board has no coolant output yet; not switched"),
+            Canon::SetFeedMode { mode: 1, .. } => {
+                return Err("G95 (feed per revolution) needs spindle feedback the board does not have".into())
+            }
+            Canon::SetSpindleMode { mode, .. } if *mode != 0.0 => {
+                return Err("G96 (constant surface speed) needs spindle control the board does not have".into())
+            }
+            Canon::StartSpeedFeedSynch { .. } => {
+                return Err("G33/G33.1 (spindle-synchronised motion) needs spindle feedback the board does not have".into())
+            }
+            Canon::SetMotionOutputBit(_)
+            | Canon::ClearMotionOutputBit(_)
+            | Canon::SetAuxOutputBit(_)
+            | Canon::ClearAuxOutputBit(_)
+            | Canon::SetMotionOutputValue(..)
+            | Canon::SetAuxOutputValue(..) => self.note(line, "M62..M68 output: the board has no such output; not switched"),
+            Canon::Message(m) => self.note(line, format!("message: {m}")),
+            _ => {}
+        }
+        if let Some(m) = self.frame.apply(c) {
+            self.motion(line, &m, out)?;
+        }
+        match c {
+            Canon::SetFeedRate(f) => self.last_feed = Some((line, *f)),
+            Canon::UseLengthUnits(_) => {
+                if let Some((at, f)) = self.last_feed.filter(|(at, _)| *at == line) {
+                    self.frame.apply(&Canon::SetFeedRate(f));
+                    self.last_feed = Some((at, f));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn motion(&mut self, line: u32, m: &Motion, out: &mut Loaded) -> Result<(), String> {
+        let source = Source::Gcode { line: line as usize };
+        let (points, feed) = match m {
+            Motion::Rapid { to, .. } => (vec![*to], Feed::Rapid),
+            Motion::Feed { to, feed_mm_min, .. } => (vec![*to], Feed::MmPerMin(*feed_mm_min)),
+            Motion::Arc { feed_mm_min, .. } | Motion::Nurbs { feed_mm_min, .. } => {
+                (curves::flatten(m, CHORD_TOLERANCE_MM), Feed::MmPerMin(*feed_mm_min))
+            }
+            Motion::Probe { .. } => {
+                return Err(
+                    "G38.x probe move: the board has no probe input yet; `run` refuses probing"
+                        .into(),
+                )
+            }
+            Motion::RigidTap { .. } => {
+                return Err("G33.1 rigid tapping needs spindle synchronisation".into())
+            }
+        };
+        for p in points {
+            let target = self.target(&p)?;
+            out.items.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
+        }
+        Ok(())
+    }
+
+    /// Machine-axis targets for a G-code position; an axis the machine lacks must stay at 0.
+    fn target(&self, p: &Pos) -> Result<Vec<Option<f64>>, String> {
+        for (i, v) in p.iter().enumerate() {
+            if !self.map.contains(&Some(i)) && v.abs() > 1e-9 {
+                return Err(format!(
+                    "moves {} to {v:.4} but the machine has no {} axis (it has {})",
+                    AXES[i],
+                    AXES[i],
+                    self.machine.axis_names()
+                ));
+            }
+        }
+        Ok(self.map.iter().map(|g| g.map(|i| p[i])).collect())
+    }
+}
