@@ -22,6 +22,7 @@ mod copy_e2e;
 mod divcheck;
 mod e2e;
 mod firmware;
+mod gcode_e2e;
 mod golden;
 mod isr_profile;
 mod milling_e2e;
@@ -57,6 +58,7 @@ commands:
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
                                                         and modelled cycles by situation
+  gcode-e2e                                             run real G-code files on the simulated board and in QEMU
   rs274-oracle                                          compare motion-gcode with LinuxCNC's rs274, call for call,
                                                         on the G-code corpus and test programs
   qemu ELF SECONDS                                       run a firmware ELF in QEMU for at most SECONDS, print its
@@ -160,6 +162,7 @@ fn run() -> Result<()> {
             Ok(())
         }
         "rs274-oracle" => rs274::check(&root),
+        "gcode-e2e" => gcode_e2e::test(&root),
         "qemu" => {
             let [elf, secs] = rest else { bail!("usage: cargo xtask qemu ELF SECONDS") };
             let run = firmware::run_qemu_for(
@@ -377,6 +380,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl copies a template on QEMU with teach (3:2), replays it at speed 2",
             Box::new(|| copy_e2e::test(root)),
+        ),
+        (
+            "end to end: real G-code files on the simulated board and in QEMU",
+            Box::new(|| gcode_e2e::test(root)),
         ),
     ];
     let total = steps.len();
