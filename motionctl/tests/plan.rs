@@ -141,7 +141,8 @@ fn binary_plans_examples_and_reports_errors_in_one_line() {
 
     let (code, out, _) = motionctl(&["plan", "examples/part.gcode"]);
     assert_eq!(code, 0);
-    assert!(out.contains("events     2 spindle, 1 pause"), "{out}");
+    // M3, M5, and M30's own spindle stop (rs274 stops the spindle at the program end).
+    assert!(out.contains("events     3 spindle, 1 pause"), "{out}");
 
     for (args, code_want, want) in [
         (&["plan", "examples/missing.toml"][..], 1, "reading examples/missing.toml"),

@@ -193,3 +193,39 @@ fn open_witch_and_tangency_are_digitized() {
         d.events.iter().filter(|e| e.axis == 1).map(|e| if e.negative { -1 } else { 1 }).sum();
     assert_eq!(pos.last().unwrap()[1], net);
 }
+
+/// Inputs that used to digitize into nothing (exit 0, an empty stream) or allocate without
+/// bound are refused before any event is made, naming what is wrong.
+#[test]
+fn degenerate_and_unbounded_inputs_are_refused() {
+    use motionctl::polar::cli::parse_contour;
+    use motionctl::polar::digitize::{digitize, DigitizeError, Setup, MAX_EVENTS};
+    use motionctl::polar::Resolution;
+    let setup = |pole_r_in: f64, dr_in: f64| Setup {
+        pole_r_in,
+        pole_angle_rad: 0.4,
+        tool_radius_in: 0.0,
+        vt_in_per_s: 0.5,
+        res: Resolution { dr_in, dtheta_rad: std::f64::consts::TAU / 16_000.0 },
+        tick_hz: 100_000,
+        cap_speed: true,
+    };
+    let limacon = parse_contour("limacon:3,2").unwrap();
+    match digitize(limacon.as_ref(), &setup(6.5, 1e-12)) {
+        Err(DigitizeError::TooManyEvents { estimated, max, .. }) => {
+            assert!(estimated > 1e12 && max == MAX_EVENTS, "{estimated}")
+        }
+        other => panic!("dR 1e-12: {:?}", other.map(|d| d.events.len())),
+    }
+    assert!(matches!(
+        digitize(limacon.as_ref(), &setup(f64::NAN, 0.001)),
+        Err(DigitizeError::Setup(_))
+    ));
+    for spec in ["circle:0", "witch:1,0,0"] {
+        let c = parse_contour(spec).unwrap();
+        assert!(
+            matches!(digitize(c.as_ref(), &setup(6.5, 0.001)), Err(DigitizeError::Degenerate(_))),
+            "{spec}"
+        );
+    }
+}

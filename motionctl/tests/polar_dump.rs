@@ -68,3 +68,29 @@ fn dump_lines_carry_cumulative_time() {
     assert!(dump(&bad, 100_000, &mut text).is_err());
     assert!(text.lines().last().unwrap().starts_with("error: Crc"), "{text}");
 }
+
+/// A stream file with a block dropped or repeated (a bad copy, a concatenation) is refused by
+/// the dump at the block where the sequence breaks, not printed as if whole.
+#[test]
+fn a_dropped_or_duplicated_block_is_named() {
+    use motion::polar::stream::{parse_block, StreamError};
+    let evs: Vec<StepEvent> =
+        (0..600u32).map(|i| ev(i * 7919 % 3000, (i % 2) as u8, false)).collect();
+    let bytes = encode(&evs);
+    let (_, rest) = parse_block(&bytes).unwrap();
+    let first = &bytes[..bytes.len() - rest.len()];
+    let (_, rest2) = parse_block(rest).unwrap();
+    let second = &rest[..rest.len() - rest2.len()];
+    assert!(!rest2.is_empty(), "at least three blocks");
+    let cases: [(Vec<u8>, u16, u16); 2] = [
+        ([first, rest2].concat(), 1, 2),                 // block 1 dropped
+        ([first, second, second, rest2].concat(), 2, 1), // block 1 twice
+    ];
+    for (file, expected, found) in cases {
+        let mut text = String::new();
+        let e = dump(&file, 100_000, &mut text).unwrap_err();
+        assert_eq!(e, StreamError::Sequence { expected, found });
+        let want = format!("has seq {found}, expected {expected}: a block was dropped");
+        assert!(text.lines().last().unwrap().contains(&want), "{text}");
+    }
+}

@@ -48,6 +48,12 @@ pub enum StreamError {
     Count,
     /// dt above MAX_DT_TICKS (encoder side).
     DtRange,
+    /// A block whose sequence number is not the next one: a block was dropped, duplicated or
+    /// reordered.
+    Sequence {
+        expected: u16,
+        found: u16,
+    },
 }
 
 impl StreamError {
@@ -62,6 +68,7 @@ impl StreamError {
             StreamError::BadRun => 6,
             StreamError::Count => 7,
             StreamError::DtRange => 8,
+            StreamError::Sequence { .. } => 9,
         }
     }
 }
@@ -449,7 +456,7 @@ pub fn decode_all(mut bytes: &[u8], mut out: impl FnMut(StepEvent)) -> Result<u3
     while !bytes.is_empty() {
         let (block, rest) = parse_block(bytes)?;
         if block.seq != expect_seq {
-            return Err(StreamError::Count);
+            return Err(StreamError::Sequence { expected: expect_seq, found: block.seq });
         }
         for ev in block.iter() {
             out(ev?);
@@ -510,7 +517,17 @@ mod tests {
         bytes[k] ^= 0x10;
         assert_eq!(decode(&bytes), Err(StreamError::Crc));
         bytes[k] ^= 0x10;
-        assert_eq!(decode(&bytes[first_len..]), Err(StreamError::Count), "block 0 missing");
+        assert_eq!(
+            decode(&bytes[first_len..]),
+            Err(StreamError::Sequence { expected: 0, found: 1 }),
+            "block 0 missing"
+        );
+        let doubled = [&bytes[..first_len], &bytes[..]].concat();
+        assert_eq!(
+            decode(&doubled),
+            Err(StreamError::Sequence { expected: 1, found: 0 }),
+            "block 0 twice"
+        );
         assert_eq!(decode(&bytes[..first_len - 1]), Err(StreamError::Truncated));
         let mut v2 = bytes.clone();
         v2[1] = 2;

@@ -46,7 +46,19 @@ pub enum DigitizeError {
     ToolTooLarge(f64, f64),
     #[error("bad setup: {0}")]
     Setup(&'static str),
+    #[error("the contour is degenerate: its tool path is {0} in long (a zero radius, or a curve from X0 to the same X1?)")]
+    Degenerate(f64),
+    #[error("the contour needs about {estimated:.0} events at dR {dr_in} in and dTheta {dtheta_rad} rad; at most {max} (a coarser --dr or --dtheta)")]
+    TooManyEvents { estimated: f64, dr_in: f64, dtheta_rad: f64, max: usize },
 }
+
+/// Most events one stream may hold: 1 600 s of machine time at 100 kHz, about 240 MB in memory
+/// while digitizing; any resolution a user asks for is checked against it before allocating.
+pub const MAX_EVENTS: usize = 20_000_000;
+/// Samples of the path for the winding number and the event estimate.
+const PATH_SAMPLES: usize = 4096;
+/// Shortest tool path that is a contour, inches.
+const MIN_PATH_IN: f64 = 1e-9;
 
 /// The digitizer's output.
 #[derive(Clone, Debug, Default)]
@@ -129,8 +141,16 @@ pub fn digitize<C: Contour + ?Sized>(
     if !(setup.vt_in_per_s > 0.0 && res.dr_in > 0.0 && res.dtheta_rad > 0.0 && setup.tick_hz > 0) {
         return Err(DigitizeError::Setup("Vt, resolutions and tick rate must be > 0"));
     }
-    if setup.tool_radius_in < 0.0 {
-        return Err(DigitizeError::Setup("tool radius must be >= 0"));
+    if !(setup.tool_radius_in >= 0.0 && setup.tool_radius_in.is_finite()) {
+        return Err(DigitizeError::Setup("tool radius must be finite and >= 0"));
+    }
+    if !(setup.pole_r_in.is_finite()
+        && setup.pole_angle_rad.is_finite()
+        && setup.vt_in_per_s.is_finite()
+        && res.dr_in.is_finite()
+        && res.dtheta_rad.is_finite())
+    {
+        return Err(DigitizeError::Setup("the pole, Vt and resolutions must be finite numbers"));
     }
     let path = ToolPath::new(contour, setup);
     let (u0, u1) = contour.range();
@@ -152,17 +172,35 @@ pub fn digitize<C: Contour + ?Sized>(
             Ok(())
         }
     };
+    // One pass over the path: its length and the radial and angular travel (for the event
+    // estimate, so no resolution can make the digitizer allocate without bound), and the winding
+    // number about the machine pole.
+    let (mut turn, mut length, mut r_travel, mut th_travel) = (0.0, 0.0, 0.0, 0.0);
+    let (mut prev_r, mut prev_th, mut prev_x) = (r_start, th_start, polar(u0).2);
+    for i in 1..=PATH_SAMPLES {
+        let (r, th, x, ..) = polar(u0 + (u1 - u0) * i as f64 / PATH_SAMPLES as f64);
+        let dth = (th - prev_th + PI).rem_euclid(2.0 * PI) - PI;
+        turn += dth;
+        th_travel += dth.abs();
+        r_travel += (r - prev_r).abs();
+        length += (x[0] - prev_x[0]).hypot(x[1] - prev_x[1]);
+        (prev_r, prev_th, prev_x) = (r, th, x);
+    }
+    if !(length.is_finite() && length > MIN_PATH_IN) {
+        return Err(DigitizeError::Degenerate(length));
+    }
+    let estimated = r_travel / res.dr_in + th_travel / res.dtheta_rad;
+    if estimated.is_nan() || estimated > MAX_EVENTS as f64 {
+        return Err(DigitizeError::TooManyEvents {
+            estimated,
+            dr_in: res.dr_in,
+            dtheta_rad: res.dtheta_rad,
+            max: MAX_EVENTS,
+        });
+    }
     if contour.closed() {
-        // Winding number of the tool path about the machine pole, before the work-area check
-        // (a path round the pole always leaves the 2.8 rad sector, and this is the clearer error).
-        let n = 4096;
-        let mut turn = 0.0;
-        let mut prev = th_start;
-        for i in 1..=n {
-            let (_, th, ..) = polar(u0 + (u1 - u0) * i as f64 / n as f64);
-            turn += (th - prev + PI).rem_euclid(2.0 * PI) - PI;
-            prev = th;
-        }
+        // The winding number before the work-area check (a path round the pole always leaves
+        // the 2.8 rad sector, and this is the clearer error).
         let winding = (turn / (2.0 * PI)).round() as i32;
         if winding != 0 {
             return Err(DigitizeError::PoleInside(winding));

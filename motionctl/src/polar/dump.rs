@@ -38,6 +38,7 @@ pub fn dump(bytes: &[u8], tick_hz: u32, out: &mut String) -> Result<DumpSummary,
     let secs = |t: u64| t as f64 / tick_hz.max(1) as f64;
     let mut rest = bytes;
     let mut t: u64 = 0;
+    let mut expect_seq: u16 = 0;
     let fail = |out: &mut String, e: StreamError, at: usize| {
         let _ = writeln!(out, "error: {e:?} at byte {at}");
         Err(e)
@@ -48,6 +49,16 @@ pub fn dump(bytes: &[u8], tick_hz: u32, out: &mut String) -> Result<DumpSummary,
             Ok(b) => b,
             Err(e) => return fail(out, e, at),
         };
+        if block.seq != expect_seq {
+            let _ = writeln!(
+                out,
+                "error: block {} has seq {}, expected {expect_seq}: a block was dropped, \
+                 duplicated or reordered (at byte {at})",
+                sum.blocks, block.seq
+            );
+            return Err(StreamError::Sequence { expected: expect_seq, found: block.seq });
+        }
+        expect_seq = expect_seq.wrapping_add(1);
         let _ = writeln!(
             out,
             "block {}: seq {}, {} events, {} payload bytes, crc ok",

@@ -77,6 +77,25 @@ pub enum WireError {
 
 pub type Result<T> = std::result::Result<T, WireError>;
 
+/// Shortest wire travel over both faces that makes a cut, mm.
+pub(crate) const MIN_PATH_TRAVEL_MM: f64 = 1e-9;
+
+/// Refuses a point sequence along which the wire never moves (every point of both faces the
+/// same): it would plan no segment and a time error of 0 / 0.
+pub(crate) fn check_moves(top: &[Point2], bottom: &[Point2]) -> Result<()> {
+    let travel = |v: &[Point2]| {
+        v.windows(2).map(|w| (w[1].x_mm - w[0].x_mm).hypot(w[1].y_mm - w[0].y_mm)).sum::<f64>()
+    };
+    if travel(top) + travel(bottom) > MIN_PATH_TRAVEL_MM {
+        Ok(())
+    } else {
+        Err(WireError::Degenerate {
+            index: 0,
+            reason: "every point of both faces coincides with the start: the die cuts nothing",
+        })
+    }
+}
+
 /// Checks that `value` is a finite number greater than zero.
 pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
     if value.is_finite() && value > 0.0 {

@@ -17,6 +17,7 @@ pub struct Path {
 impl Path {
     pub fn new(zt_mm: f64, top: Vec<Point2>, bottom: Vec<Point2>) -> Result<Self> {
         let d = super::Die::new(zt_mm, top, bottom)?;
+        super::check_moves(&d.top, &d.bottom)?;
         Ok(Self { zt_mm: d.zt_mm, top: d.top, bottom: d.bottom })
     }
 
