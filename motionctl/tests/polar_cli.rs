@@ -98,3 +98,26 @@ fn csv_contour_and_pole_search() {
     ]))
     .is_err());
 }
+
+/// `digitize --json` says where the machine starts (r, theta of the tool centre about the
+/// machine pole), the path, the events and the cut time; the start is the contour's first point
+/// seen from the pole, computed here from the pole's position in the contour frame.
+#[test]
+fn digitize_reports_the_start_point_path_and_time_as_json() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_motionctl"))
+        .args(["polar", "digitize", "circle:2", "--pole-c", "8", "--pole-beta=-1.5707963267949"])
+        .args(["--vt", "0.5", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"));
+    // The circle r = 2 starts at (2, 0) in its own frame; the machine pole is 8 in away at
+    // beta = -90 deg, (0, -8): the start is hypot(2, 8) in from it (to the dR grid).
+    assert!((f("start_r_in") - 2f64.hypot(8.0)).abs() <= 0.001, "{v}");
+    assert!(f("start_theta_deg") > 0.0 && f("start_theta_deg") < 160.0, "{v}");
+    let length = 2.0 * std::f64::consts::PI * 2.0;
+    assert!((f("path_in") - length).abs() < 1e-3, "{v}");
+    assert!((f("duration_s") - length / 0.5).abs() / (length / 0.5) < 1e-3, "{v}");
+    assert_eq!(f("events") as u64, f("radial_events") as u64 + f("angular_events") as u64);
+}

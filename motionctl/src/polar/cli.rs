@@ -120,6 +120,9 @@ pub enum PolarCmd {
         /// Stream file to write.
         #[arg(long, short)]
         out: Option<std::path::PathBuf>,
+        /// The summary as one JSON object on stdout instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Print a stream file: block headers, one line per event or run with cumulative time.
     Dump {
@@ -348,6 +351,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             tick_hz,
             no_cap,
             out,
+            json,
         } => {
             let c = parse_contour(&contour)?;
             let (pole_r_in, pole_angle_rad) =
@@ -364,7 +368,33 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             let d = digitize(c.as_ref(), &setup)?;
             let ticks: u64 = d.events.iter().map(|e| e.dt_ticks as u64).sum();
             let radial = d.events.iter().filter(|e| e.axis == 1).count();
-            crate::outln!(
+            // Where the machine starts: the tool centre's (r, theta) about the machine pole,
+            // on the digitizer's grids.
+            let start_r_in = d.start_r_steps as f64 * setup.res.dr_in;
+            let start_theta_deg = d.theta0_rad.to_degrees();
+            let duration_s = ticks as f64 / tick_hz as f64;
+            if json {
+                crate::outln!(
+                    "{{\"events\":{},\"radial_events\":{radial},\"angular_events\":{},\
+                     \"path_in\":{:.6},\"duration_s\":{duration_s:.6},\"vt_in_per_s\":{:.6},\
+                     \"start_r_in\":{start_r_in:.6},\"start_theta_deg\":{start_theta_deg:.6},\
+                     \"min_radius_of_curvature_in\":{:.6},\"warnings\":{}}}",
+                    d.events.len(),
+                    d.events.len() - radial,
+                    d.length_in,
+                    d.vt_in_per_s,
+                    d.min_rho_in,
+                    d.warnings.len()
+                );
+            } else {
+                crate::outln!(
+                    "start      r {start_r_in:.4} in, theta {start_theta_deg:.3} deg (tool centre \
+                     about the machine pole)"
+                );
+            }
+            let text = !json;
+            if text {
+                crate::outln!(
                 "{} events ({radial} radial, {} angular), path {:.4} in, duration {:.4} s at Vt {:.4} in/s, min radius of curvature {:.4} in",
                 d.events.len(),
                 d.events.len() - radial,
@@ -373,8 +403,9 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 d.vt_in_per_s,
                 d.min_rho_in
             );
+            }
             for w in &d.warnings {
-                crate::outln!("warning: {w}");
+                eprintln!("motionctl: warning: {w}");
             }
             if let Some(path) = out {
                 let mut bytes = Vec::new();
@@ -386,8 +417,8 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 enc.finish(&mut |b: &[u8]| bytes.extend_from_slice(b));
                 std::fs::write(&path, &bytes)
                     .with_context(|| format!("writing {}", path.display()))?;
-                crate::outln!(
-                    "wrote {} ({} bytes, {} blocks)",
+                eprintln!(
+                    "motionctl: wrote {} ({} bytes, {} blocks)",
                     path.display(),
                     bytes.len(),
                     enc.blocks()
