@@ -616,8 +616,13 @@ pub fn run(
                     if r.code == ErrorCode::QueueFull {
                         report.queue_full_naks += 1;
                     }
+                    // In Fault, say which: the operator's next step depends on it.
+                    let faults = match latest.faults {
+                        0 => String::new(),
+                        bits => format!("; latched faults: {}", fault_names(bits)),
+                    };
                     return Err(err(format!(
-                        "the board refused segments after {} acknowledged: {}",
+                        "the board refused segments after {} acknowledged: {}{faults}",
                         report.acked,
                         describe_rejection(&r)
                     )));
