@@ -400,12 +400,13 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
             let c = &st.counters;
             crate::outln!(
                 "counters   {} USART overruns, {} bad frames, {} answers dropped, {} tick \
-                 overruns, {} steps deferred (since boot)",
+                 overruns, {} steps deferred, {} holds for a late host (since boot)",
                 c.usart_overruns,
                 c.frames_bad,
                 c.responses_dropped,
                 c.tick_overruns,
-                c.steps_deferred
+                c.steps_deferred,
+                c.starve_holds
             );
             if st.faults != 0 {
                 let names: Vec<&str> = motion::protocol::FaultCode::ALL

@@ -29,7 +29,7 @@ impl CsvLog {
         head.push_str(",override,queue_depth,credits,job_segments_done");
         head.push_str(
             ",usart_overruns,frames_bad,responses_dropped,tick_overruns,steps_deferred,\
-             host_retransmits,host_bad_frames_in",
+             starve_holds,host_retransmits,host_bad_frames_in",
         );
         writeln!(log.out, "{head}")?;
         Ok(log)
@@ -55,12 +55,13 @@ impl CsvLog {
         line.push_str(&format!(",{ovr:.4},{},{},{job_done}", s.queue_depth, s.credits));
         let c = &s.counters;
         line.push_str(&format!(
-            ",{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{}",
             c.usart_overruns,
             c.frames_bad,
             c.responses_dropped,
             c.tick_overruns,
             c.steps_deferred,
+            c.starve_holds,
             host.0,
             host.1
         ));

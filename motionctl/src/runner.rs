@@ -188,8 +188,13 @@ impl RunReport {
         let _ = writeln!(
             t,
             "board      {} USART overruns, {} bad frames, {} answers dropped, {} tick overruns, \
-             {} steps deferred",
-            c.usart_overruns, c.frames_bad, c.responses_dropped, c.tick_overruns, c.steps_deferred
+             {} steps deferred, {} holds for a late host",
+            c.usart_overruns,
+            c.frames_bad,
+            c.responses_dropped,
+            c.tick_overruns,
+            c.steps_deferred,
+            c.starve_holds
         );
         if let Some((to, from)) = self.noise {
             let _ = writeln!(

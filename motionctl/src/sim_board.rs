@@ -5,11 +5,11 @@
 
 use crate::transport::Transport;
 use motion::protocol::LinkTarget as _;
+use motion::protocol::Response;
 use motion::protocol::{
     encode_frame, BoardLink, FrameDecoder, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME,
     CAP_OVERRIDE, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME, MAX_FRAME_WIRE,
 };
-use motion::protocol::{FaultCode, Response};
 use motion::Rate;
 use std::io;
 use std::time::{Duration, Instant};
@@ -43,7 +43,8 @@ pub struct SimBoard {
     /// Frames received, and reconnects asked for.
     pub frames_in: u64,
     pub reconnects: u64,
-    pub underruns: u64,
+    /// Times the queue ran dry under a segment at speed (the firmware holds then).
+    pub starve_holds: u64,
 }
 
 impl SimBoard {
@@ -63,7 +64,7 @@ impl SimBoard {
             silent_until: None,
             frames_in: 0,
             reconnects: 0,
-            underruns: 0,
+            starve_holds: 0,
         }
     }
 
@@ -109,13 +110,11 @@ impl SimBoard {
             match self.target.complete_one() {
                 Some(seg) => {
                     self.budget_ticks -= seg.duration_ticks as f64;
-                    // As the firmware: a segment that ends at speed with nothing behind it is
-                    // an underrun, latched as a fault.
+                    // As the firmware: a segment that ends at speed with nothing behind it
+                    // holds the job until the host sends more (a pause, counted, not a fault).
                     if seg.exit_rate != Rate::ZERO && self.target.queue_len() == 0 {
-                        self.target.raise_fault(FaultCode::QueueUnderrun);
-                        let tick = self.target.tick;
-                        self.emit(&Response::Fault { code: FaultCode::QueueUnderrun, tick });
-                        self.underruns += 1;
+                        self.target.starve_holds = self.target.starve_holds.wrapping_add(1);
+                        self.starve_holds += 1;
                     }
                 }
                 None => {

@@ -82,7 +82,7 @@ fn two_thousand_segments_through_one_percent_noise_arrive_once_in_order() {
     assert!(r.retransmissions > 0 && r.link_naks > 0, "the noise did something");
     assert_eq!(r.queue_full_naks, 0);
     assert!(r.max_credits <= SIM_CAPACITY && r.max_queue_depth <= SIM_CAPACITY);
-    assert_eq!(t.inner.underruns, 0);
+    assert_eq!(t.inner.starve_holds, 0);
     let (to, from) = (t.to_board.stats, t.from_board.stats);
     assert!(to.corrupted + to.dropped > 0 && from.corrupted + from.dropped > 0);
 }

@@ -272,6 +272,13 @@ pub struct Machine {
     /// A Z-slide job runs (or holds): like an event job, the tick's source is the caller's and
     /// the job ends when the source is idle.
     z_job: bool,
+    /// The host was late: the machine holds on the path until the next segment is admitted,
+    /// then resumes by itself (a sender's pause is not a fault).
+    starved: bool,
+    /// The starved job's successor arrived: resume on this tick.
+    resume_pending: bool,
+    /// Times a late host made the machine hold (modular, compare with `wrapping_sub`).
+    starve_holds: u32,
     /// Commanded (the step counters) against measured, for axes with feedback.
     following: FollowingMonitor,
     tick_overruns: u32,
@@ -315,6 +322,9 @@ impl Machine {
             event_job: false,
             paused: false,
             z_job: false,
+            starved: false,
+            resume_pending: false,
+            starve_holds: 0,
             following: FollowingMonitor::new(),
             tick_overruns: 0,
         }
@@ -464,6 +474,17 @@ impl Machine {
         self.ticks
     }
 
+    /// Times a late host made a segment job hold on the path until its next segment came
+    /// (modular).
+    pub fn starve_holds(&self) -> u32 {
+        self.starve_holds
+    }
+
+    /// A segment job holds because the host has not sent the next segment yet.
+    pub fn is_starved(&self) -> bool {
+        self.starved
+    }
+
     /// Runs `cmd` if the table allows it in the current state; else refuses and changes
     /// nothing. Control-task priority (with the DDA locked: Hold and Resume act on it).
     /// After an accepted `Abort`, `ClearFault` or `SetConfig` the caller drops the segments it
@@ -547,6 +568,9 @@ impl Machine {
                 dda.apply(Command::Hold);
             }
             MachineCommand::Resume => {
+                // Still starved, the next tick holds again.
+                self.starved = false;
+                self.resume_pending = false;
                 self.paused = false;
                 dda.apply(Command::Resume);
             }
@@ -811,13 +835,30 @@ impl Machine {
         // The DDA runs the last admitted segment, which expects a successor (exit speed > 0),
         // nothing is queued behind it, and the segment is about to end: the host is late. Hold
         // now, so the stop is a ramp on the path instead of the DDA's abrupt stop at the
-        // segment end. (Until then the host may still deliver the successor in time.)
+        // segment end (until then the host may still deliver the successor in time). Like a
+        // grbl planner that runs out of blocks, this is a pause, not a fault: the next admitted
+        // segment resumes the job. Only an abrupt stop at a segment end is a fault.
+        if dda.underruns() != self.underruns_base {
+            self.raise(FaultCode::QueueUnderrun);
+            return;
+        }
+        if self.starved {
+            // The successor reached the DDA: carry on from where the hold got to (the DDA
+            // ramps back up on the path).
+            if dda.ready_free() != READY_DEPTH {
+                self.starved = false;
+                self.resume_pending = true;
+            }
+            return;
+        }
         let starving = in_flight == 1
             && self.last_exit_nonzero
             && dda.ready_free() == READY_DEPTH
             && dda.stop_due(STARVE_MARGIN_VTICKS);
-        if starving || dda.underruns() != self.underruns_base {
-            self.raise(FaultCode::QueueUnderrun);
+        if starving && !self.paused {
+            self.starved = true;
+            self.starve_holds = self.starve_holds.wrapping_add(1);
+            self.hold_pending = true;
         }
     }
 
@@ -869,6 +910,7 @@ impl Machine {
             Reaction::Stop => self.freeze(),
             Reaction::Hold => self.hold_pending = true,
         }
+        self.starved = false;
         self.homing.cancel();
         self.enter(MachineState::Fault);
     }
@@ -876,9 +918,15 @@ impl Machine {
     #[inline]
     fn apply_hold(&mut self, dda: &mut Dda) {
         if self.hold_pending {
+            // A hold (a fault's reaction) wins over a starved job's resume.
             self.hold_pending = false;
+            self.resume_pending = false;
             self.paused = true;
             dda.apply(Command::Hold);
+        } else if self.resume_pending {
+            self.resume_pending = false;
+            self.paused = false;
+            dda.apply(Command::Resume);
         }
     }
 
@@ -921,6 +969,8 @@ impl Machine {
             self.events_queued = false;
             self.event_job = false;
             self.paused = false;
+            self.starved = false;
+            self.resume_pending = false;
             self.z_job = false;
         }
         let mv = match (self.state, &mut self.jog) {

@@ -138,7 +138,7 @@ coded_enum! {
         EStop = 1 => ("EStop", "Emergency stop input asserted."),
         LimitSwitch = 2 => ("LimitSwitch", "A hardware limit switch tripped."),
         SoftLimit = 3 => ("SoftLimit", "An axis reached its soft limit."),
-        QueueUnderrun = 4 => ("QueueUnderrun", "The segment queue ran dry while moving."),
+        QueueUnderrun = 4 => ("QueueUnderrun", "The queue ran dry while moving: a segment ended with no successor, or event blocks came late."),
         TickOverrun = 5 => ("TickOverrun", "The DDA tick interrupt missed its deadline."),
         LinkLost = 6 => ("LinkLost", "No valid frame from the host within the link timeout."),
         ConfigMissing = 7 => ("ConfigMissing", "Motion requested before a valid configuration was set."),

@@ -12,7 +12,7 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 4;
+pub const PROTOCOL_VERSION: u16 = 5;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -499,6 +499,9 @@ pub struct BoardCounters {
     pub tick_overruns: u32,
     /// Steps the DDA held back a tick (direction setup or a step pulse still high).
     pub steps_deferred: u32,
+    /// Times a segment job held on the path because the host had not sent the next segment
+    /// in time (it resumed when the segment came).
+    pub starve_holds: u32,
 }
 
 impl BoardCounters {
@@ -510,6 +513,7 @@ impl BoardCounters {
             responses_dropped: self.responses_dropped.wrapping_sub(earlier.responses_dropped),
             tick_overruns: self.tick_overruns.wrapping_sub(earlier.tick_overruns),
             steps_deferred: self.steps_deferred.wrapping_sub(earlier.steps_deferred),
+            starve_holds: self.starve_holds.wrapping_sub(earlier.starve_holds),
         }
     }
 }

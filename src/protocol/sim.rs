@@ -13,7 +13,8 @@ use heapless::Deque;
 
 use super::errors::{ErrorCode, FaultCode};
 use super::messages::{
-    ForceJobParams, HomingConfig, SimMillingParams, Status, WireConfig, WireJobParams, WireState,
+    BoardCounters, ForceJobParams, HomingConfig, SimMillingParams, Status, WireConfig,
+    WireJobParams, WireState,
 };
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
@@ -69,6 +70,9 @@ pub struct SimTarget {
     pub force_armed: Option<ForceJobParams>,
     /// The simulated milling plant (`SimMilling`).
     pub sim_milling: Option<SimMillingParams>,
+    /// Pauses for a late host (`BoardCounters::starve_holds`), counted by whoever runs the
+    /// queue.
+    pub starve_holds: u32,
 }
 
 impl PartialEq for SimTarget {
@@ -122,6 +126,7 @@ impl SimTarget {
             sim_wire_stall: false,
             force_armed: None,
             sim_milling: None,
+            starve_holds: 0,
         }
     }
 
@@ -274,6 +279,7 @@ impl LinkTarget for SimTarget {
             event_credits: self.events.credits(),
             events_fired: self.playback.fired(),
             event_blocks: self.events.blocks() as u16,
+            counters: BoardCounters { starve_holds: self.starve_holds, ..BoardCounters::default() },
             ..Status::default()
         }
     }

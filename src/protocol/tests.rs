@@ -109,6 +109,7 @@ fn extreme_status() -> Status {
             responses_dropped: u32::MAX,
             tick_overruns: u32::MAX,
             steps_deferred: u32::MAX,
+            starve_holds: u32::MAX,
         },
     }
 }
@@ -782,6 +783,7 @@ fn board_counters_since_is_right_across_a_wrap() {
         responses_dropped: u32::MAX,
         tick_overruns: 0,
         steps_deferred: 7,
+        starve_holds: u32::MAX,
     };
     let now = BoardCounters {
         usart_overruns: 2,
@@ -789,10 +791,18 @@ fn board_counters_since_is_right_across_a_wrap() {
         responses_dropped: 0,
         tick_overruns: 3,
         steps_deferred: 7,
+        starve_holds: 1,
     };
     let d = now.since(&earlier);
     assert_eq!(
-        (d.usart_overruns, d.frames_bad, d.responses_dropped, d.tick_overruns, d.steps_deferred),
-        (4, 4, 1, 3, 0)
+        (
+            d.usart_overruns,
+            d.frames_bad,
+            d.responses_dropped,
+            d.tick_overruns,
+            d.steps_deferred,
+            d.starve_holds
+        ),
+        (4, 4, 1, 3, 0, 2)
     );
 }

@@ -48,7 +48,9 @@ pub enum Case {
     HomingNotFound,
     SoftLimitQueue,
     SoftLimitRun,
-    QueueUnderrun,
+    /// The host stops feeding after two segments of a stream at speed: the machine holds on
+    /// the path (no fault), and resumes by itself when the host feeds again.
+    QueueStarved,
     LinkLoss,
     TickOverrun,
     ConfigMissing,
@@ -73,7 +75,7 @@ pub const CASES: [Case; 22] = [
     Case::HomingNotFound,
     Case::SoftLimitQueue,
     Case::SoftLimitRun,
-    Case::QueueUnderrun,
+    Case::QueueStarved,
     Case::LinkLoss,
     Case::TickOverrun,
     Case::ConfigMissing,
@@ -100,7 +102,7 @@ impl Case {
             Case::HomingNotFound => "fault_homing_not_found",
             Case::SoftLimitQueue => "fault_soft_limit_queue",
             Case::SoftLimitRun => "fault_soft_limit_run",
-            Case::QueueUnderrun => "fault_queue_underrun",
+            Case::QueueStarved => "queue_starved",
             Case::LinkLoss => "fault_link_loss",
             Case::TickOverrun => "fault_tick_overrun",
             Case::ConfigMissing => "fault_config_missing",
@@ -123,12 +125,11 @@ impl Case {
             Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
             // Jogged off and cleared: the fault it recovered from.
             Case::LimitJogOff => (Ready, FaultCode::LimitSwitch),
-            Case::HomingOk | Case::HomingPolar => return (Ready, None),
+            Case::HomingOk | Case::HomingPolar | Case::QueueStarved => return (Ready, None),
             Case::HomingNotFound => (Fault, FaultCode::HomingFailed),
             // Refused at the queue: nothing changes, the refusal names the soft limit.
             Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
             Case::SoftLimitRun => (Fault, FaultCode::SoftLimit),
-            Case::QueueUnderrun => (Fault, FaultCode::QueueUnderrun),
             Case::LinkLoss => (Fault, FaultCode::LinkLost),
             Case::TickOverrun => (Fault, FaultCode::TickOverrun),
             Case::ConfigMissing => (Fault, FaultCode::ConfigMissing),
@@ -217,8 +218,11 @@ const TO_X_MAX: [Move; 1] = [mv(5_000, 0, 12_000)];
 const TO_Y_MIN: [Move; 1] = [mv(0, -5_000, 12_000)];
 const TO_Y_MAX: [Move; 1] = [mv(0, 5_000, 12_000)];
 const INSIDE: [Move; 1] = [mv(1_500, 500, 10_000)];
-/// Eighteen short collinear moves: the planner emits the first ones at speed (exit rate > 0).
-const STREAM: [Move; 18] = [mv(300, 0, 10_000); 18];
+/// Eight short collinear moves: the planner emits the first ones at speed (exit rate > 0); the
+/// stream ends (2400 steps) short of the X limit switch.
+const STREAM: [Move; 8] = [mv(300, 0, 10_000); 8];
+/// How long the starved case's host stays away once the machine stands still, ticks.
+const STARVED_TICKS: u32 = 2_000;
 /// The move the soft-limit-at-queue case tries after `INSIDE`: it would end at x = 2500.
 const BEYOND: Move = mv(1_000, 0, 10_000);
 /// The segment the run-time case pushes past the admission check (a stand-in for any path
@@ -248,8 +252,12 @@ pub struct FaultScenario {
     moves: &'static [Move],
     next_move: usize,
     planning_done: bool,
-    /// Segments the feeder hands over before it stalls (the underrun case).
+    /// Segments the feeder hands over before it stalls (the starved case).
     feed_limit: u32,
+    /// Ticks the starved case has stood held; the feeder carries on after `STARVED_TICKS`.
+    held_ticks: u32,
+    /// Net X steps when the starved case first stood still.
+    held_at0_steps: i64,
     fed: u32,
     home_sent: bool,
     started: bool,
@@ -302,7 +310,7 @@ impl FaultScenario {
             Case::LimitMin(_) => &TO_Y_MIN,
             Case::LimitMax(_) => &TO_Y_MAX,
             Case::SoftLimitQueue | Case::SoftLimitRun => &INSIDE,
-            Case::QueueUnderrun => &STREAM,
+            Case::QueueStarved => &STREAM,
             Case::HomingOk | Case::HomingNotFound | Case::ConfigMissing | Case::HomingPolar => &[],
         };
         let start_phys = match case {
@@ -320,8 +328,10 @@ impl FaultScenario {
             moves,
             next_move: 0,
             planning_done: moves.is_empty(),
-            feed_limit: if case == Case::QueueUnderrun { 2 } else { u32::MAX },
+            feed_limit: if case == Case::QueueStarved { 2 } else { u32::MAX },
             fed: 0,
+            held_ticks: 0,
+            held_at0_steps: 0,
             home_sent: false,
             started: false,
             rogue_pushed: false,
@@ -543,6 +553,7 @@ impl FaultScenario {
             }
             Case::LimitJogOff => state == MachineState::Ready && self.cleared.is_some(),
             Case::SoftLimitQueue => self.beyond_tried,
+            Case::QueueStarved => state == MachineState::Ready && self.fed > 2,
             _ => state == MachineState::Fault,
         };
         final_state && at_rest && !self.machine.wants_background() && !self.wants_feed()
@@ -628,6 +639,18 @@ impl Scenario for FaultScenario {
         if !was_fault && self.machine.state() == MachineState::Fault {
             self.fault_tick = self.t;
         }
+        if self.case == Case::QueueStarved
+            && self.machine.state() == MachineState::Running
+            && self.dda.state() == crate::dda::MotionState::Held
+        {
+            if self.held_ticks == 0 {
+                self.held_at0_steps = self.rec.net[0];
+            }
+            self.held_ticks += 1;
+            if self.held_ticks >= STARVED_TICKS {
+                self.feed_limit = u32::MAX;
+            }
+        }
         if self.fault_tick != 0 && self.fault_tick != self.t {
             self.steps_after_fault += out.step.rise().count_ones() as u64;
         }
@@ -681,6 +704,11 @@ impl Scenario for FaultScenario {
         if self.case == Case::EStop {
             let exact = (0..MAX_AXES).all(|a| raw[a] == dda[a] && raw[a] == self.rec.net[a]);
             r.push("counters_exact", exact as i64);
+        }
+        if self.case == Case::QueueStarved {
+            r.push("starve_holds", self.machine.starve_holds() as i64);
+            r.push("held_at0_steps", self.held_at0_steps);
+            r.push("held_ticks", self.held_ticks as i64);
         }
         if self.case == Case::FollowingError {
             r.push("measured0_steps", self.measured[0]);
@@ -842,12 +870,21 @@ mod tests {
     }
 
     #[test]
-    fn underrun_is_a_controlled_stop() {
-        let r = run(Case::QueueUnderrun);
-        // Two 300-step segments fed; the hold ramps down inside the second, no abrupt stop.
-        assert_eq!(r.figure("dda_underruns"), Some(0));
-        assert!(r.figure("net0_steps").unwrap() <= 600);
-        assert!(r.figure("steps_after_fault").unwrap() > 0, "decelerated, not aborted");
+    fn a_late_host_pauses_the_job_on_the_path_and_it_resumes() {
+        let r = run(Case::QueueStarved);
+        let f = |n: &str| r.figure(n).unwrap();
+        // Two 300-step segments fed at speed, then nothing: the hold ramps down inside the
+        // second (no abrupt stop at its end, no fault), stands still for the host's absence,
+        // and the rest of the stream runs to its end once the host feeds again.
+        assert_eq!(f("dda_underruns"), 0);
+        assert_eq!(f("starve_holds"), 1);
+        let held = f("held_at0_steps");
+        assert!(held > 300 && held <= 600, "held at {held} steps, inside the second segment");
+        assert_eq!(f("held_ticks"), STARVED_TICKS as i64);
+        assert_eq!(r.fault, 0);
+        assert_eq!(f("state"), MachineState::Ready as i64);
+        let total: i64 = STREAM.iter().map(|m| m.steps[0] as i64).sum();
+        assert_eq!(f("net0_steps"), total, "every step of the stream, none twice");
     }
 
     #[test]

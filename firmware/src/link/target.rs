@@ -148,6 +148,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 counters: BoardCounters {
                     tick_overruns: mc.tick_overruns(),
                     steps_deferred: d.deferred_steps(),
+                    starve_holds: mc.starve_holds(),
                     ..BoardCounters::default()
                 },
                 ..Status::default()
