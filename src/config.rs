@@ -179,3 +179,50 @@ mod tests {
         assert!(c.validate().is_ok());
     }
 }
+
+// ---- switch inputs (machine::debounce filters them) ----
+
+/// Default switch debounce, microseconds (grbl's `DEBOUNCE_PERIOD` is 32 ms of a watchdog;
+/// grblHAL's default is 40 ms; 2 ms covers a microswitch's bounce without delaying a trip much).
+pub const DEFAULT_SWITCH_DEBOUNCE_US: u32 = 2_000;
+/// Longest debounce accepted, microseconds: a limit trip later than this is not a limit.
+pub const MAX_SWITCH_DEBOUNCE_US: u32 = 50_000;
+
+/// The switch inputs' filter settings (part of the stored board config).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct InputFilterConfig {
+    /// How long a limit switch must hold a new level, and the e-stop stay released, before the
+    /// machine believes it, microseconds (0: raw inputs).
+    pub switch_debounce_us: u32,
+}
+
+impl InputFilterConfig {
+    pub const DEFAULT: InputFilterConfig =
+        InputFilterConfig { switch_debounce_us: DEFAULT_SWITCH_DEBOUNCE_US };
+
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if self.switch_debounce_us > MAX_SWITCH_DEBOUNCE_US {
+            return Err(ConfigError {
+                field: "switch_debounce_us",
+                axis: None,
+                reason: "must be within 0..=50000 (50 ms)",
+            });
+        }
+        Ok(())
+    }
+
+    /// The debounce in ticks at `tick_hz`, rounded up (setup time: divides), at least 1 tick
+    /// unless the debounce is off.
+    pub fn debounce_ticks(&self, tick_hz: u32) -> u16 {
+        let us = self.switch_debounce_us as u64;
+        let ticks = (us * tick_hz as u64).div_ceil(1_000_000);
+        ticks.min(u16::MAX as u64) as u16
+    }
+}
+
+impl Default for InputFilterConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

@@ -5,6 +5,7 @@
 #![deny(unsafe_code)]
 
 pub mod config;
+pub mod cycle_histogram;
 pub mod dda;
 pub mod demo_job;
 pub mod fixed_math;
@@ -24,6 +25,6 @@ pub mod trig;
 pub mod wire;
 pub mod zslide;
 
-pub use config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
+pub use config::{AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, MAX_AXES};
 pub use dda::{Command, Dda, StepOutput};
 pub use segment::{Rate, Segment};

@@ -9,11 +9,13 @@
 //! * `scenarios`: every closed-loop scenario of `motion::scenarios` in the TIM2 tick.
 //!
 //! The board comes from a cargo feature ([`board`]); the panic and HardFault handlers are
-//! here ([`panic`]).
+//! here ([`panic`]). The `isr-cycles` feature measures the link firmware's tick handler on the
+//! board itself ([`isr_cycles`]).
 #![no_std]
 
 pub mod bench;
 pub mod board;
+pub mod isr_cycles;
 pub mod link;
 pub mod panic;
 pub mod step;

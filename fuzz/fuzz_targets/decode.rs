@@ -29,6 +29,7 @@ fn config() -> WireConfig {
             soft_min: -1_000_000,
             soft_max: 1_000_000,
         }; MAX_AXES],
+        inputs: motion::InputFilterConfig::DEFAULT,
     }
 }
 

@@ -38,6 +38,14 @@ impl Rig {
         self.settle();
     }
 
+    /// `inp` for as long as the machine's switch debounce takes to believe a new level.
+    fn hold(&mut self, inp: &Inputs) {
+        let c = self.m.config().wire;
+        for _ in 0..c.inputs.debounce_ticks(c.machine.tick_hz).max(1) {
+            self.tick(inp);
+        }
+    }
+
     fn cmd(&mut self, c: MachineCommand<'_>) -> Result<MachineState, Refusal> {
         self.m.command(c, &mut self.dda)
     }
@@ -94,8 +102,9 @@ fn rig_in(s: MachineState) -> Rig {
         }
         MachineState::Fault => {
             r.tick(&Inputs { estop: true, ..Inputs::QUIET });
-            // E-stop released again: the cause is gone, the fault stays latched.
-            r.tick(&Inputs::QUIET);
+            // E-stop released again (for the debounce): the cause is gone, the fault stays
+            // latched.
+            r.hold(&Inputs::QUIET);
         }
         _ => unreachable!(),
     }
@@ -160,7 +169,8 @@ fn clear_fault_is_refused_while_the_cause_is_active_and_changes_nothing() {
     r.cmd(MachineCommand::Queue(&seg)).unwrap();
     r.dda.push(&r.prep.prepare(&seg).unwrap()).unwrap();
     r.cmd(MachineCommand::Start).unwrap();
-    r.tick(&pressed);
+    // Believed once it has held for the debounce.
+    r.hold(&pressed);
     assert_eq!(r.m.state(), MachineState::Fault);
     assert_eq!(r.m.faults().first(), Some(FaultCode::LimitSwitch));
     let before = r.snapshot();
@@ -169,8 +179,8 @@ fn clear_fault_is_refused_while_the_cause_is_active_and_changes_nothing() {
         Err(Refusal::CauseActive(FaultCode::LimitSwitch))
     );
     assert_eq!(r.snapshot(), before);
-    // Released: the limit kept the homing, so ClearFault goes to Ready.
-    r.tick(&Inputs::QUIET);
+    // Released (for the debounce): the limit kept the homing, so ClearFault goes to Ready.
+    r.hold(&Inputs::QUIET);
     assert_eq!(r.cmd(MachineCommand::ClearFault), Ok(MachineState::Ready));
     assert!(r.m.faults().is_clear());
 }

@@ -52,6 +52,7 @@ fn config() -> WireConfig {
             soft_min: -10_000_000,
             soft_max: 10_000_000,
         }; MAX_AXES],
+        inputs: motion::InputFilterConfig::DEFAULT,
     }
 }
 

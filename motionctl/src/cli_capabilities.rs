@@ -203,6 +203,8 @@ fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) -> crate::job
                 axis("B", STEPS_PER_DEG_BETA, -65.0 - origin[2], 65.0 - origin[2]),
                 axis("A", STEPS_PER_DEG_ALPHA, -70.0 - origin[3], 70.0 - origin[3]),
             ],
+            switch_debounce_ms: crate::job::DEFAULT_SWITCH_DEBOUNCE_MS,
+            arc_tolerance_mm: crate::job::DEFAULT_ARC_TOLERANCE_MM,
         },
         items: Vec::new(),
         feed_commands: Vec::new(),

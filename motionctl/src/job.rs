@@ -41,6 +41,27 @@ pub struct Machine {
     pub timing: StepTiming,
     /// Axes in DDA order (axis 0 first); 1..=6.
     pub axes: Vec<Axis>,
+    /// How long a limit switch must hold a new level (and the e-stop stay released) before the
+    /// board believes it, ms (`switch_debounce_ms`, default 2; 0 = raw inputs).
+    pub switch_debounce_ms: f64,
+    /// Largest distance between an arc (or spline) and the chords it is cut into, mm
+    /// (`arc_tolerance_mm`, default 0.002 as grbl's `$12`).
+    pub arc_tolerance_mm: f64,
+}
+
+/// Default chord tolerance of arcs and splines, mm (grbl's default `$12`).
+pub const DEFAULT_ARC_TOLERANCE_MM: f64 = motion_gcode::curves::DEFAULT_CHORD_TOLERANCE_MM;
+
+/// The board's default switch debounce, ms.
+pub const DEFAULT_SWITCH_DEBOUNCE_MS: f64 = motion::config::DEFAULT_SWITCH_DEBOUNCE_US as f64 / 1e3;
+
+impl Machine {
+    /// The switch debounce as the board's config carries it.
+    pub fn input_filter(&self) -> motion::InputFilterConfig {
+        motion::InputFilterConfig {
+            switch_debounce_us: (self.switch_debounce_ms * 1e3).round() as u32,
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -284,6 +305,12 @@ struct RawMachine {
     tick_hz: u32,
     timing: RawTiming,
     axes: Vec<RawAxis>,
+    /// At most `motion::config::MAX_SWITCH_DEBOUNCE_US` (50 ms).
+    #[serde(default)]
+    switch_debounce_ms: Option<NonNegative<50>>,
+    /// At most 1 mm: a coarser chord is not an arc.
+    #[serde(default)]
+    arc_tolerance_mm: Option<Positive<1>>,
 }
 
 #[derive(Deserialize)]
@@ -439,6 +466,8 @@ impl RawMachine {
                 dir_hold_ns: self.timing.dir_hold_ns,
             },
             axes,
+            switch_debounce_ms: self.switch_debounce_ms.map_or(DEFAULT_SWITCH_DEBOUNCE_MS, |d| d.0),
+            arc_tolerance_mm: self.arc_tolerance_mm.map_or(DEFAULT_ARC_TOLERANCE_MM, |t| t.0),
         })
     }
 }

@@ -239,7 +239,7 @@ pub fn wire_config(job: &Job, program: &Program) -> WireConfig {
             soft_max: (a.max_mm * a.steps_per_mm).round() as i64,
         };
     }
-    WireConfig { machine: program.config, scale }
+    WireConfig { machine: program.config, scale, inputs: job.machine.input_filter() }
 }
 
 /// (name, steps per mm) of the job's axes.

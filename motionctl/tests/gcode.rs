@@ -181,3 +181,49 @@ fn soft_limit_error_names_the_line_and_axis() {
     .to_string()
     .starts_with("line 2: axis X target -0.0010 mm is below"));
 }
+
+/// The chords of a full circle of radius 10 mm (G17, centre at X10 Y0), cut with the machine's
+/// `arc_tolerance_mm`: how many, and how far each chord's midpoint strays inside the circle.
+fn circle_chords(tolerance_mm: Option<f64>) -> (usize, f64) {
+    let mut m = machine();
+    if let Some(t) = tolerance_mm {
+        m.arc_tolerance_mm = t;
+    }
+    let src = "G21 G90 G17 G1 X0 Y0 F600\nG2 X0 Y0 I10 J0\n";
+    let items = gcode::parse(src, &m).unwrap();
+    let pts: Vec<(f64, f64)> = items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Move(mv) => match &mv.target {
+                Target::Absolute(t) => Some((t[0]?, t[1]?)),
+                _ => None,
+            },
+            _ => None,
+        })
+        .collect();
+    let mut worst: f64 = 0.0;
+    for w in pts.windows(2) {
+        let mid = ((w[0].0 + w[1].0) / 2.0, (w[0].1 + w[1].1) / 2.0);
+        worst = worst.max(10.0 - ((mid.0 - 10.0).powi(2) + mid.1.powi(2)).sqrt());
+    }
+    (pts.len() - 1, worst)
+}
+
+#[test]
+fn arcs_are_cut_within_the_machines_arc_tolerance() {
+    assert_eq!(machine().arc_tolerance_mm, job::DEFAULT_ARC_TOLERANCE_MM);
+    let (fine_n, fine_err) = circle_chords(None);
+    let (coarse_n, coarse_err) = circle_chords(Some(0.05));
+    assert!(fine_err <= 0.002 + 1e-9 && coarse_err <= 0.05 + 1e-9, "{fine_err} {coarse_err}");
+    // The sagitta of a chord grows with its square: 25 times the tolerance, 5 times fewer chords.
+    let ratio = fine_n as f64 / coarse_n as f64;
+    assert!((4.5..=5.5).contains(&ratio), "{fine_n} chords vs {coarse_n}");
+    let e = job::parse_machine_toml(&include_str!("../examples/machine.toml").replacen(
+        "tick_hz",
+        "arc_tolerance_mm = 2\ntick_hz",
+        1,
+    ))
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("machine.arc_tolerance_mm") && e.contains("<= 1"), "{e}");
+}

@@ -241,3 +241,21 @@ fn machine_only_file_and_empty_program() {
     let e = job::parse_machine_toml(&m.replace("tick_hz = 100_000", "")).unwrap_err();
     assert!(e.to_string().starts_with("machine: missing field `tick_hz`"), "{e}");
 }
+
+#[test]
+fn switch_debounce_is_the_machine_files_or_the_default() {
+    let job = job::parse_toml(SQUARE).unwrap();
+    assert_eq!(job.machine.switch_debounce_ms, job::DEFAULT_SWITCH_DEBOUNCE_MS);
+    assert_eq!(job.machine.input_filter(), motion::InputFilterConfig::DEFAULT);
+    let src =
+        SQUARE.replacen("tick_hz = 100_000", "tick_hz = 100_000\nswitch_debounce_ms = 5.5", 1);
+    let job = job::parse_toml(&src).unwrap();
+    assert_eq!(job.machine.input_filter().switch_debounce_us, 5_500);
+    // Through the config the board gets: 5.5 ms at 100 kHz.
+    let program = convert::convert(&job).unwrap();
+    let wire = motionctl::runner::wire_config(&job, &program);
+    assert_eq!(wire.inputs.debounce_ticks(wire.machine.tick_hz), 550);
+    assert!(wire.validate().is_ok());
+    let e = error_after("tick_hz = 100_000", "tick_hz = 100_000\nswitch_debounce_ms = 60");
+    assert!(e.contains("machine.switch_debounce_ms") && e.contains("<= 50"), "{e}");
+}

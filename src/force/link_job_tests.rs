@@ -9,7 +9,11 @@ use crate::scenario::run_to_end;
 fn board() -> BoardConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    let wire = WireConfig { machine: sc::machine(), scale: [scale; crate::config::MAX_AXES] };
+    let wire = WireConfig {
+        machine: sc::machine(),
+        scale: [scale; crate::config::MAX_AXES],
+        inputs: crate::config::InputFilterConfig::DEFAULT,
+    };
     BoardConfig::with_homing(wire, &HomingConfig::NONE)
 }
 

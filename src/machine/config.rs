@@ -72,6 +72,7 @@ impl BoardConfig {
                     axes: [AXIS; MAX_AXES],
                 },
                 scale: [SCALE; MAX_AXES],
+                inputs: crate::config::InputFilterConfig::DEFAULT,
             },
             home_order: [0; MAX_AXES],
             home_count: 0,

@@ -10,6 +10,7 @@
 //! so the positions are exactly what was stepped.
 
 use super::config::BoardConfig;
+use super::debounce::SwitchFilter;
 use super::faults::{reaction, FaultLatch, Reaction};
 use super::following::FollowingMonitor;
 use super::homing::{HomeEvent, Homing};
@@ -282,6 +283,8 @@ pub struct Machine {
     /// Commanded (the step counters) against measured, for axes with feedback.
     following: FollowingMonitor,
     tick_overruns: u32,
+    /// Debounces the limit switches and the e-stop for the fault checks and jog-off.
+    switch_filter: SwitchFilter,
 }
 
 impl Default for Machine {
@@ -327,6 +330,9 @@ impl Machine {
             starve_holds: 0,
             following: FollowingMonitor::new(),
             tick_overruns: 0,
+            switch_filter: SwitchFilter::new(
+                cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz),
+            ),
         }
     }
 
@@ -372,6 +378,7 @@ impl Machine {
 
     fn install(&mut self, cfg: BoardConfig) {
         self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
+        self.switch_filter.set_ticks(cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz));
         self.cfg = cfg;
         self.config_set = true;
         self.active &= !CONFIG_FAULTS;
@@ -624,6 +631,9 @@ impl Machine {
         source: &mut impl StepSource,
     ) -> TickOut {
         self.ticks += 1;
+        // Faults and jog-off see debounced switches; homing latches on the raw edge.
+        let raw = inp;
+        let inp = &self.switch_filter.filter(raw);
         self.watch_inputs(dda, inp);
         self.apply_hold(dda);
         if self.frozen {
@@ -640,7 +650,7 @@ impl Machine {
             self.count(step);
         }
         match self.state {
-            MachineState::Homing => self.watch_homing(dda, inp),
+            MachineState::Homing => self.watch_homing(dda, raw),
             MachineState::Running if self.event_job => self.watch_events(dda, source),
             MachineState::Running if self.z_job => self.watch_z_job(dda, source),
             MachineState::Running => self.watch_job(dda),

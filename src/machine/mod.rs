@@ -5,6 +5,7 @@
 //! * [`faults`]: the fault latch and the reaction per fault class.
 //! * [`machine`]: [`Machine`], which the tick and control tasks drive.
 //! * [`homing`], [`limits`], [`outputs`]: homing sequencer, soft limits, safe outputs.
+//! * [`debounce`]: limit switches and e-stop filtered before the machine acts on them.
 //! * [`following`]: the following-error monitor (commanded vs measured, axes with feedback).
 //! * [`watchdog`]: watchdog feeding gate and tick-overrun detector.
 //! * [`reset_cause`]: why the MCU reset (RCC_CSR), so a watchdog reset boots into a fault.
@@ -12,6 +13,7 @@
 //!   a RAM NOR-flash with real NOR rules for tests and the QEMU scenarios.
 
 pub mod config;
+pub mod debounce;
 pub mod faults;
 pub mod following;
 pub mod homing;
@@ -27,6 +29,7 @@ pub mod state;
 pub mod watchdog;
 
 pub use config::{BoardConfig, HomeAxis, MAX_HOME_POS_STEPS};
+pub use debounce::SwitchFilter;
 pub use faults::{reaction, FaultLatch, Reaction};
 pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{

@@ -24,7 +24,7 @@ use embedded_storage::nor_flash::NorFlash;
 pub const MAGIC: [u8; 4] = *b"MBCF";
 /// Bump when the meaning of the payload changes; older records then load as corrupt.
 /// (2: `BoardConfig::following` added.)
-pub const RECORD_VERSION: u16 = 2;
+pub const RECORD_VERSION: u16 = 3;
 /// Bytes a record may use in its slot (the commit word at its end).
 pub const RECORD_AREA: usize = 512;
 const HEADER: usize = 12;

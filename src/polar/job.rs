@@ -45,6 +45,7 @@ pub fn wire_config() -> WireConfig {
             axes,
         },
         scale,
+        inputs: crate::config::InputFilterConfig::DEFAULT,
     }
 }
 

@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 
 use super::bounded::{BlockBytes, EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
-use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, TickTiming, MAX_AXES};
+use crate::config::{
+    AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, TickTiming, MAX_AXES,
+};
 use crate::dda::MotionState;
 use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
@@ -708,6 +710,9 @@ impl AxisScale {
 pub struct WireConfig {
     pub machine: MachineConfig,
     pub scale: [AxisScale; MAX_AXES],
+    /// How long a limit switch must hold a new level, and the e-stop stay released, before the
+    /// machine believes it.
+    pub inputs: InputFilterConfig,
 }
 
 impl WireConfig {
@@ -720,9 +725,10 @@ impl WireConfig {
             axes: [AxisLimits::UNUSED; MAX_AXES],
         },
         scale: [AxisScale::UNUSED; MAX_AXES],
+        inputs: InputFilterConfig::DEFAULT,
     };
 
-    /// `MachineConfig::validate` plus the scale checks; the same code runs on both ends, so the
+    /// `MachineConfig::validate` plus the scale and input-filter checks; the same code runs on both ends, so the
     /// host can call it for the full reason behind an `InvalidConfig` NAK.
     pub fn validate(&self) -> Result<TickTiming, ConfigError> {
         let timing = self.machine.validate()?;
@@ -736,6 +742,7 @@ impl WireConfig {
                 return bad("soft_min", "must be <= soft_max");
             }
         }
+        self.inputs.validate()?;
         Ok(timing)
     }
 }

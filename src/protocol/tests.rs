@@ -21,6 +21,7 @@ pub(crate) fn config() -> WireConfig {
             soft_min: -1_000_000,
             soft_max: 1_000_000,
         }; MAX_AXES],
+        inputs: crate::config::InputFilterConfig::DEFAULT,
     }
 }
 
@@ -56,6 +57,7 @@ fn extreme_config() -> WireConfig {
             soft_min: i64::MIN,
             soft_max: i64::MIN,
         }; MAX_AXES],
+        inputs: crate::config::InputFilterConfig::DEFAULT,
     }
 }
 

@@ -51,6 +51,9 @@ pub enum Case {
     /// The host stops feeding after two segments of a stream at speed: the machine holds on
     /// the path (no fault), and resumes by itself when the host feeds again.
     QueueStarved,
+    /// While X moves, its max switch input chatters (noise on the cable, a bouncing contact)
+    /// in bursts shorter than the debounce: no fault, the move ends where it was planned.
+    LimitNoise,
     LinkLoss,
     TickOverrun,
     ConfigMissing,
@@ -64,7 +67,7 @@ pub enum Case {
 }
 
 /// Every case, in the order the scenario list runs them.
-pub const CASES: [Case; 22] = [
+pub const CASES: [Case; 23] = [
     Case::EStop,
     Case::LimitMin(0),
     Case::LimitMax(0),
@@ -76,6 +79,7 @@ pub const CASES: [Case; 22] = [
     Case::SoftLimitQueue,
     Case::SoftLimitRun,
     Case::QueueStarved,
+    Case::LimitNoise,
     Case::LinkLoss,
     Case::TickOverrun,
     Case::ConfigMissing,
@@ -103,6 +107,7 @@ impl Case {
             Case::SoftLimitQueue => "fault_soft_limit_queue",
             Case::SoftLimitRun => "fault_soft_limit_run",
             Case::QueueStarved => "queue_starved",
+            Case::LimitNoise => "limit_noise",
             Case::LinkLoss => "fault_link_loss",
             Case::TickOverrun => "fault_tick_overrun",
             Case::ConfigMissing => "fault_config_missing",
@@ -125,7 +130,9 @@ impl Case {
             Case::LimitMin(_) | Case::LimitMax(_) => (Fault, FaultCode::LimitSwitch),
             // Jogged off and cleared: the fault it recovered from.
             Case::LimitJogOff => (Ready, FaultCode::LimitSwitch),
-            Case::HomingOk | Case::HomingPolar | Case::QueueStarved => return (Ready, None),
+            Case::HomingOk | Case::HomingPolar | Case::QueueStarved | Case::LimitNoise => {
+                return (Ready, None)
+            }
             Case::HomingNotFound => (Fault, FaultCode::HomingFailed),
             // Refused at the queue: nothing changes, the refusal names the soft limit.
             Case::SoftLimitQueue => (Ready, FaultCode::SoftLimit),
@@ -181,6 +188,7 @@ pub fn config(case: Case) -> BoardConfig {
                 AxisScale::UNUSED,
                 AxisScale::UNUSED,
             ],
+            inputs: crate::config::InputFilterConfig::DEFAULT,
         },
         home_order: [0, 1, 0, 0, 0, 0],
         home_count: 0,
@@ -221,6 +229,11 @@ const INSIDE: [Move; 1] = [mv(1_500, 500, 10_000)];
 /// Eight short collinear moves: the planner emits the first ones at speed (exit rate > 0); the
 /// stream ends (2400 steps) short of the X limit switch.
 const STREAM: [Move; 8] = [mv(300, 0, 10_000); 8];
+/// The noise case's chatter on the X max switch input: bursts of `NOISE_ON_TICKS` closed (under
+/// the 100-tick debounce) and `NOISE_OFF_TICKS` open, `NOISE_BURSTS` times from `INJECT_TICK`.
+const NOISE_ON_TICKS: u64 = 90;
+const NOISE_OFF_TICKS: u64 = 5;
+const NOISE_BURSTS: u64 = 6;
 /// How long the starved case's host stays away once the machine stands still, ticks.
 const STARVED_TICKS: u32 = 2_000;
 /// The move the soft-limit-at-queue case tries after `INSIDE`: it would end at x = 2500.
@@ -304,7 +317,8 @@ impl FaultScenario {
             | Case::LinkLoss
             | Case::TickOverrun
             | Case::Sensor(_)
-            | Case::FollowingError => &LONG_X,
+            | Case::FollowingError
+            | Case::LimitNoise => &LONG_X,
             Case::LimitMin(0) | Case::LimitJogOff => &TO_X_MIN,
             Case::LimitMax(0) => &TO_X_MAX,
             Case::LimitMin(_) => &TO_Y_MIN,
@@ -394,6 +408,13 @@ impl FaultScenario {
             }
         }
         let injected = self.t >= INJECT_TICK;
+        if self.case == Case::LimitNoise && injected {
+            let since = self.t - INJECT_TICK;
+            let period = NOISE_ON_TICKS + NOISE_OFF_TICKS;
+            if since < NOISE_BURSTS * period && since % period < NOISE_ON_TICKS {
+                inp.limit_max |= 1;
+            }
+        }
         match self.case {
             Case::EStop => inp.estop = injected,
             Case::LinkLoss => inp.link_ok = !injected,
@@ -554,6 +575,7 @@ impl FaultScenario {
             Case::LimitJogOff => state == MachineState::Ready && self.cleared.is_some(),
             Case::SoftLimitQueue => self.beyond_tried,
             Case::QueueStarved => state == MachineState::Ready && self.fed > 2,
+            Case::LimitNoise => state == MachineState::Ready && self.started,
             _ => state == MachineState::Fault,
         };
         final_state && at_rest && !self.machine.wants_background() && !self.wants_feed()
@@ -773,8 +795,20 @@ mod tests {
         assert!(reaction(FaultCode::EStop).name().contains("the counters are exact"));
     }
 
+    /// The switch debounce of the cases, ticks.
+    fn debounce_ticks() -> u64 {
+        config(Case::LimitMin(0)).wire.inputs.debounce_ticks(TICK_HZ) as u64
+    }
+
     #[test]
-    fn limits_stop_on_the_switch() {
+    fn limits_stop_one_debounce_past_the_switch() {
+        // The switch closes on the step onto it; the machine believes it `debounce` ticks later
+        // and stops at once: the axis, cruising at 12 kHz, goes on for debounce - 1 ticks.
+        let d = debounce_ticks();
+        assert_eq!(d, 100, "2 ms at 50 kHz");
+        let feed_hz = TO_X_MIN[0].feed_hz as u64;
+        let least = (d - 1) * feed_hz / TICK_HZ as u64;
+        let most = ((d - 1) * feed_hz).div_ceil(TICK_HZ as u64);
         for (c, axis, at) in [
             (Case::LimitMin(0), 0, SWITCH_MIN),
             (Case::LimitMax(0), 0, SWITCH_MAX),
@@ -782,9 +816,26 @@ mod tests {
             (Case::LimitMax(1), 1, SWITCH_MAX),
         ] {
             let r = run(c);
-            assert_eq!(r.figure(["phys0_steps", "phys1_steps"][axis]), Some(at), "{}", r.name);
-            assert_eq!(r.figure(["pos0_steps", "pos1_steps"][axis]), Some(at), "{}", r.name);
+            let phys = r.figure(["phys0_steps", "phys1_steps"][axis]).unwrap();
+            let over = (phys - at).unsigned_abs();
+            assert!((least..=most).contains(&over), "{}: {over} steps past the switch", r.name);
+            assert_eq!(r.figure(["pos0_steps", "pos1_steps"][axis]), Some(phys), "{}", r.name);
             assert_eq!(r.figure("clear_refused_nak"), Some(10), "{}", r.name);
+        }
+    }
+
+    #[test]
+    fn without_a_debounce_limits_stop_on_the_switch() {
+        for (c, axis, at) in
+            [(Case::LimitMin(0), 0, SWITCH_MIN), (Case::LimitMax(1), 1, SWITCH_MAX)]
+        {
+            let mut s = FaultScenario::new(c).unwrap();
+            let mut cfg = *s.machine.config();
+            cfg.wire.inputs.switch_debounce_us = 0;
+            s.machine = Machine::new();
+            s.machine.boot(Ok(cfg));
+            let r = run_to_end(&mut s, MAX_TICKS + 1);
+            assert_eq!(r.figure(["phys0_steps", "phys1_steps"][axis]), Some(at), "{}", r.name);
         }
     }
 
@@ -795,8 +846,13 @@ mod tests {
         assert_eq!(r.figure("clear_refused_nak"), Some(10));
         assert_eq!(r.figure("jog_sent"), Some(1));
         assert_eq!(r.figure("refusal_nak"), Some(0), "JogOff and the second ClearFault accepted");
-        // ... the jog stopped on the first step off the switch (min switch closed at <= -3000),
-        assert_eq!(r.figure("phys0_steps"), Some(SWITCH_MIN + 1));
+        // ... the jog stopped once the switch had stayed open for the debounce: after the
+        // first step off it (min switch closed at <= -3000), at most debounce ticks at the jog
+        // rate (an eighth of the max rate, still accelerating),
+        let jog_hz = AXIS.max_rate_hz as u64 / crate::machine::jog_off::JOG_RATE_DIVISOR as u64;
+        let past = r.figure("phys0_steps").unwrap() - (SWITCH_MIN + 1);
+        let most = (debounce_ticks() * jog_hz).div_ceil(TICK_HZ as u64) as i64;
+        assert!((0..=most).contains(&past), "{past} steps past the first step off the switch");
         assert_eq!(r.figure("pos0_steps"), r.figure("phys0_steps"), "position kept exactly");
         // ... and the machine is back in Ready with nothing latched, homing still trusted.
         assert_eq!(r.figure("fault_mask"), Some(0));
@@ -867,6 +923,22 @@ mod tests {
             Some(SOFT_LIMIT + 1),
             "stopped on the first step outside"
         );
+    }
+
+    #[test]
+    fn switch_chatter_shorter_than_the_debounce_is_not_a_limit() {
+        let r = run(Case::LimitNoise);
+        assert_eq!(r.fault, 0);
+        assert_eq!(r.figure("state"), Some(MachineState::Ready as i64));
+        assert_eq!(r.figure("phys0_steps"), Some(LONG_X[0].steps[0] as i64), "the whole move");
+        // Raw, the same chatter trips the limit.
+        let mut s = FaultScenario::new(Case::LimitNoise).unwrap();
+        let mut cfg = *s.machine.config();
+        cfg.wire.inputs.switch_debounce_us = 0;
+        s.machine = Machine::new();
+        s.machine.boot(Ok(cfg));
+        let r = run_to_end(&mut s, MAX_TICKS + 1);
+        assert_eq!(r.fault, FaultCode::LimitSwitch.code());
     }
 
     #[test]

@@ -304,7 +304,11 @@ mod tests {
     fn board() -> BoardConfig {
         let scale =
             AxisScale { steps_per_unit_milli: 1_000, soft_min: i64::MIN, soft_max: i64::MAX };
-        let wire = WireConfig { machine: machine::config(), scale: [scale; MAX_AXES] };
+        let wire = WireConfig {
+            machine: machine::config(),
+            scale: [scale; MAX_AXES],
+            inputs: crate::config::InputFilterConfig::DEFAULT,
+        };
         BoardConfig::with_homing(wire, &HomingConfig::NONE)
     }
 

@@ -70,7 +70,13 @@ pub fn features(board: Board, extra: &[&str]) -> String {
 /// All feature sets share one cargo target directory (`target/thumb`): cargo keys artifacts by
 /// feature set, so switching boards or features never rebuilds the dependencies, only the
 /// copied-out ELF would be overwritten.
-fn build_into(root: &Path, bin: &str, board: Board, extra: &[&str], dir: &str) -> Result<PathBuf> {
+pub fn build_into(
+    root: &Path,
+    bin: &str,
+    board: Board,
+    extra: &[&str],
+    dir: &str,
+) -> Result<PathBuf> {
     let features = features(board, extra);
     crate::run_status(
         &format!("firmware build ({bin}: {features})"),
@@ -201,6 +207,11 @@ impl Clone for LogLine {
     fn clone(&self) -> Self {
         LogLine { level: self.level.clone(), text: self.text.clone() }
     }
+}
+
+/// The text of every defmt frame in `bytes` (a firmware's raw log), decoded with `elf`'s table.
+pub fn decode_text(elf: &Path, bytes: &[u8]) -> Result<Vec<String>> {
+    Ok(decode(elf, bytes)?.lines.into_iter().map(|l| l.text).collect())
 }
 
 fn decode(elf: &Path, bytes: &[u8]) -> Result<Decoded> {

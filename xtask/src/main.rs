@@ -12,6 +12,7 @@
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
+//! | `isr-cycles [JOB]...` | the isr-profile jobs on the link firmware built with `isr-cycles`: the board's own count of its tick handler (instructions under QEMU, DWT cycles on an F405) |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
 //!
 //! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
@@ -58,6 +59,9 @@ commands:
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
                                                         and modelled cycles by situation
+  isr-cycles [JOB]...                                    the same jobs on the link firmware built with isr-cycles:
+                                                        the board times its own tick handler (instructions
+                                                        under QEMU, DWT cycles on an F405) and logs it
   gcode-e2e                                             run real G-code files on the simulated board and in QEMU
   rs274-oracle                                          compare motion-gcode with LinuxCNC's rs274, call for call,
                                                         on the G-code corpus and test programs
@@ -160,6 +164,10 @@ fn run() -> Result<()> {
                 println!("{key:<36} {value}");
             }
             Ok(())
+        }
+        "isr-cycles" => {
+            setup::ensure(&root)?;
+            isr_profile::cycles::run(&root, rest).map(drop)
         }
         "rs274-oracle" => rs274::check(&root),
         "gcode-e2e" => gcode_e2e::test(&root),
@@ -306,6 +314,13 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             clippy_thumb(Board::Netduinoplus2, &[]),
         ),
         ("clippy (firmware, netduinoplus2 tamper)", clippy_thumb(Board::Netduinoplus2, &["tamper"])),
+        (
+            "clippy (firmware with isr-cycles, both boards: the DWT handler timing)",
+            Box::new(|| {
+                clippy_thumb(Board::Netduinoplus2, &["isr-cycles"])()?;
+                clippy_thumb(Board::F405Motion, &["isr-cycles"])()
+            }),
+        ),
         (
             "clippy (firmware: link, demo, bench, scenarios; f405-motion)",
             clippy_thumb(Board::F405Motion, &[]),

@@ -2,7 +2,8 @@
 
 use motion::machine::Outputs;
 
-/// Levels read in one tick, active levels resolved and debounced.
+/// Levels read in one tick, active levels resolved. Limits and e-stop raw: the machine debounces
+/// them (`motion::machine::debounce`) with the configured time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RawInputs {
     /// The e-stop loop is open.

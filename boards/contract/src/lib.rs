@@ -8,7 +8,7 @@
 //! | --- | --- | --- |
 //! | DDA tick | [`TickTimer`], [`TickRate`] | start/stop/clear/update pending; retime, supported rates |
 //! | step/dir/enable | [`StepPort`] | one store-level word write per tick; [`PinStepPort`] over `OutputPin`s |
-//! | e-stop, limits, probe, outputs | [`MachineIo`], [`EStopLine`] | `InputPin` through [`Debounced`] / [`DebouncedBank`] |
+//! | e-stop, limits, probe, outputs | [`MachineIo`], [`EStopLine`] | read raw (the machine debounces limits and e-stop); the probe through [`Debounced`] |
 //! | host link | [`HostSerial`] | bytes in/out, interrupts |
 //! | watchdog | [`Watchdog`] | start, feed, stretch |
 //! | config persistence | [`ConfigStorage`] | [`FlashConfig`] over `embedded_storage::nor_flash::NorFlash` |

@@ -14,7 +14,7 @@
 //! | DAC channel 1 | Z-slide command (PA4), mid-scale when safe |
 //! | USART1 | host link (`link` firmware), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
 //! | EXTI12 | e-stop (EXTI15_10 interrupt); the tick also reads its level |
-//! | GPIO | limit switches (debounced 2 ms), probe (PD2), wire stall (read every tick), spindle enable, wire power |
+//! | GPIO | limit switches (raw; the machine debounces them), probe (PD2), wire stall (read every tick), spindle enable, wire power |
 //! | IWDG | watchdog (link firmware), ~100 ms, fed only while tick and control run |
 //! | FLASH sectors 2-3 | the persisted board config (two 16 KiB slots; code starts at sector 4) |
 //! | DWT.CYCCNT | cycle counter for benchmarks |

@@ -2,12 +2,14 @@
 //! 12 limit switches, the probe and the wire-stall switch in; spindle enable, wire power and
 //! the Z-slide DAC out.
 //!
-//! Debouncing (`board_contract::debounce`): the limit switches are read as three port words
-//! (12 `InputPin` reads a tick would cost four times as much) and debounced per switch over
-//! 2 ms by a `DebouncedBank`; the e-stop and the probe are `InputPin`s through a trip-at-once
-//! `Debounced` (the trip is taken the tick it is seen, the release only after 2 ms stable).
-//! The wire-stall switch is passed raw: the wire controller debounces it with the job's own
-//! `debounce_ticks`. Outputs go through GPIOB's BSRR (atomic set/reset).
+//! The limit switches are read as three port words (12 `InputPin` reads a tick would cost four
+//! times as much) and the e-stop as an `InputPin` (an unreadable pin reads tripped), both raw:
+//! the machine debounces them with the configured `switch_debounce_us`
+//! (`motion::machine::debounce`), the same on every board. The probe, which the machine does not
+//! read yet, goes through a trip-at-once `Debounced` here (the trip taken the tick it is seen,
+//! the release only after 2 ms stable). The wire-stall switch is passed raw: the wire controller
+//! debounces it with the job's own `debounce_ticks`. Outputs go through GPIOB's BSRR (atomic
+//! set/reset).
 
 use super::pins::{
     self, GpioIn, Port, ESTOP, LIMIT_MAX, LIMIT_MIN, PROBE, SPINDLE_EN, WIRE_POWER, WIRE_STALL,
@@ -15,13 +17,12 @@ use super::pins::{
 use super::z_dac::ZDac;
 use crate::pac;
 use board_contract::debounce::{ticks_for_ms, SWITCH_MS};
-use board_contract::{Debounced, DebouncedBank, Debouncer, RawInputs};
+use board_contract::{Debounced, Debouncer, RawInputs};
 use motion::machine::Outputs;
 
 pub struct MachineIo {
     z_dac: ZDac,
-    /// Limits: min in bits 0..5, max in bits 8..13.
-    limits: DebouncedBank,
+    /// Raw (a 0-tick debouncer: the active level resolved, a read error tripped).
     estop: Debounced<GpioIn>,
     probe: Debounced<GpioIn>,
 }
@@ -45,18 +46,15 @@ impl MachineIo {
     pub fn new(z_dac: ZDac, tick_hz: u32) -> Self {
         let ticks = ticks_for_ms(SWITCH_MS, tick_hz);
         // Normally closed to ground: open (high) = stop / tripped.
-        let estop = Debounced::new(
-            GpioIn::new(Port::B, ESTOP as u8),
-            true,
-            Debouncer::trips_at_once(ticks, false),
-        );
+        let estop =
+            Debounced::new(GpioIn::new(Port::B, ESTOP as u8), true, Debouncer::new(0, false));
         // Normally open to ground: closed (low) = triggered.
         let probe = Debounced::new(
             GpioIn::new(Port::D, PROBE as u8),
             false,
             Debouncer::trips_at_once(ticks, false),
         );
-        MachineIo { z_dac, limits: DebouncedBank::new(ticks, 0), estop, probe }
+        MachineIo { z_dac, estop, probe }
     }
 }
 
@@ -69,17 +67,14 @@ impl board_contract::MachineIo for MachineIo {
         false
     }
 
-    /// Every input, active levels resolved and debounced.
+    /// Every input, active levels resolved; the probe debounced.
     #[inline]
     fn read(&mut self) -> RawInputs {
         let (a, b, c) = (pins::idr(Port::A), pins::idr(Port::B), pins::idr(Port::C));
-        let raw_limits =
-            gather(&LIMIT_MIN, a, b, c) as u32 | (gather(&LIMIT_MAX, a, b, c) as u32) << 8;
-        let limits = self.limits.update(raw_limits);
         RawInputs {
             estop: self.estop.update(),
-            limit_min: limits as u8,
-            limit_max: (limits >> 8) as u8,
+            limit_min: gather(&LIMIT_MIN, a, b, c),
+            limit_max: gather(&LIMIT_MAX, a, b, c),
             // Closed to ground (pulled up): low = stalled.
             wire_stall: (a >> WIRE_STALL) & 1 == 0,
             probe: self.probe.update(),

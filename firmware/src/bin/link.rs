@@ -66,6 +66,7 @@ mod app {
         watchdog: board::Watchdog,
         config: board::ConfigStorage,
         force_adc: Option<board::ForceAdc>,
+        cycles: board::CycleCounter,
     }
 
     #[init]
@@ -85,6 +86,7 @@ mod app {
             copy_encoders,
             mut force_adc,
             mut spindle,
+            cycles,
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
         // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
@@ -174,6 +176,7 @@ mod app {
                 watchdog,
                 config,
                 force_adc,
+                cycles,
             },
         )
     }
@@ -189,11 +192,13 @@ mod app {
     /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
     /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
-        local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status,
+        local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true])]
     fn tick(cx: tick::Context) {
         let l = cx.local;
+        #[cfg(feature = "isr-cycles")]
+        let entry = board_contract::CycleCounter::now(&*l.cycles);
         l.tick_timer.clear_update();
         let raw = l.io.read();
         let copy_counts = l.copy_encoders.read();
@@ -253,6 +258,9 @@ mod app {
         // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
         let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
         *l.overran = l.overrun.after_tick(late);
+        #[cfg(feature = "isr-cycles")]
+        motion_firmware::isr_cycles::BINS
+            .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
     }
 
     /// Force ADC half buffer (real board; never raised under QEMU): the force job's chain per
@@ -347,7 +355,8 @@ mod app {
     /// Every millisecond of machine time: judge the link, announce faults, send the periodic
     /// Status, and feed the watchdog when the tick and this task both ran.
     #[task(priority = 1, shared = [motion, link, host_port],
-        local = [status_waits, watchdog, config])]
+        local = [status_waits, watchdog, config,
+            isr_log: motion_firmware::isr_cycles::Logger = motion_firmware::isr_cycles::Logger::new()])]
     async fn link_status(cx: link_status::Context) {
         let link_status::SharedResources { mut motion, mut link, mut host_port, .. } = cx.shared;
         let mut overruns_seen = 0;
@@ -361,6 +370,11 @@ mod app {
                 overruns_seen = overruns;
             }
             WATCHDOG.control_alive();
+            #[cfg(feature = "isr-cycles")]
+            {
+                let tick_hz = motion.lock(|m| m.machine.config().wire.machine.tick_hz);
+                cx.local.isr_log.poll(tick_hz);
+            }
             let (responses, feed) = link.lock(|l| l.poll(&mut motion));
             link.lock(|l| l.drain_teach(&mut motion));
             if feed && WATCHDOG.poll() {

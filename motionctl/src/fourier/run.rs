@@ -139,6 +139,7 @@ pub fn machine_config(tick_hz: u32) -> WireConfig {
             axes,
         },
         scale,
+        inputs: motion::InputFilterConfig::DEFAULT,
     }
 }
 

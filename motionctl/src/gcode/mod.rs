@@ -1,6 +1,7 @@
 //! G-code jobs through `motion-gcode` (an rs274ngc-grade front end checked against LinuxCNC's
 //! `rs274`): its canonical calls become job [`Item`]s in machine millimetres, with arcs and
-//! splines cut into segments within [`CHORD_TOLERANCE_MM`].
+//! splines cut into segments within the machine's `arc_tolerance_mm` (default
+//! [`CHORD_TOLERANCE_MM`], grbl's `$12`).
 //!
 //! A program with any error is refused as a whole, before anything moves; every error is listed.
 //! What the board cannot do yet (probe moves, spindle direction, spindle-synchronised motion) is
@@ -18,8 +19,8 @@ use std::fmt;
 use std::io::Cursor;
 use std::path::Path;
 
-/// Chord tolerance for arcs and splines, mm (grbl's default arc tolerance).
-pub const CHORD_TOLERANCE_MM: f64 = curves::DEFAULT_CHORD_TOLERANCE_MM;
+/// Default chord tolerance for arcs and splines, mm (grbl's default arc tolerance).
+pub const CHORD_TOLERANCE_MM: f64 = crate::job::DEFAULT_ARC_TOLERANCE_MM;
 
 /// The G-code axis letters, in canonical order.
 const AXES: [&str; 6] = ["X", "Y", "Z", "A", "B", "C"];
@@ -210,7 +211,7 @@ impl<'a> Converter<'a> {
             Motion::Rapid { to, .. } => (vec![*to], Feed::Rapid),
             Motion::Feed { to, feed_mm_min, .. } => (vec![*to], Feed::MmPerMin(*feed_mm_min)),
             Motion::Arc { feed_mm_min, .. } | Motion::Nurbs { feed_mm_min, .. } => {
-                (curves::flatten(m, CHORD_TOLERANCE_MM), Feed::MmPerMin(*feed_mm_min))
+                (curves::flatten(m, self.machine.arc_tolerance_mm), Feed::MmPerMin(*feed_mm_min))
             }
             Motion::Probe { .. } => {
                 return Err(

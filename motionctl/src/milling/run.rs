@@ -121,7 +121,11 @@ impl MillingRunReport {
 pub fn wire_config() -> WireConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    WireConfig { machine: sc::machine(), scale: [scale; motion::MAX_AXES] }
+    WireConfig {
+        machine: sc::machine(),
+        scale: [scale; motion::MAX_AXES],
+        inputs: motion::InputFilterConfig::DEFAULT,
+    }
 }
 
 /// Judges a board trace: settling after the depth step at `step_at_steps` of X (from the

@@ -11,6 +11,7 @@
 mod disasm;
 mod trace;
 
+pub mod cycles;
 use crate::e2e::build_motionctl;
 use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
