@@ -37,6 +37,8 @@ const QUIET_FLUSH: Duration = Duration::from_millis(20);
 const LOW_WATER_S: f64 = 0.06;
 /// The host speaks at least this often (the board holds a job after 1 s of silence).
 const HEARTBEAT: Duration = Duration::from_millis(100);
+/// Longest piece of a jog, seconds.
+const JOG_PIECE_S: f64 = 0.1;
 /// Longest wait for a hold to stop the machine before a reset drops its queue.
 const STOP_WAIT: Duration = Duration::from_secs(5);
 
@@ -1034,15 +1036,28 @@ impl<'a> Bridge<'a> {
         if self.motion.check(&from, &to).is_err() {
             return self.error(error::TRAVEL_EXCEEDED);
         }
-        self.feed_now = jog.feed * k;
-        match self.motion.push_move(&target, Feed::MmPerMin(jog.feed * k), false) {
-            Ok(()) => {
+        let feed = jog.feed * k;
+        self.feed_now = feed;
+        // Pieces of at most JOG_PIECE_S each, so a cancel stops within one piece even on a
+        // board that cannot stop inside a segment.
+        let len = from.iter().zip(&to).map(|(a, b)| (b - a) * (b - a)).sum::<f64>().sqrt();
+        let pieces = (len / (feed / 60.0) / JOG_PIECE_S).ceil().clamp(1.0, 2000.0) as usize;
+        for p in 1..=pieces {
+            let f = p as f64 / pieces as f64;
+            let t: Vec<Option<f64>> = from
+                .iter()
+                .zip(&to)
+                .zip(&target)
+                .map(|((a, b), t)| t.map(|_| if p == pieces { *b } else { a + (b - a) * f }))
+                .collect();
+            if self.motion.push_move(&t, Feed::MmPerMin(feed), false).is_err() {
                 self.motion.flush();
-                self.jog = true;
-                self.ok();
+                return self.error(error::INVALID_JOG_COMMAND);
             }
-            Err(_) => self.error(error::INVALID_JOG_COMMAND),
         }
+        self.motion.flush();
+        self.jog = true;
+        self.ok();
     }
 }
 
