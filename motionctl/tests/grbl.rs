@@ -367,10 +367,31 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.send(b"~");
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:40.000,0.000,0.000|"), "{st}");
+
+    // Work offsets: $# and WCO, kept across a soft reset as grbl keeps them; G92 is not.
+    r.send(b"G10 L2 P1 X5 Y-2.5\nG92 Z1\n$#\n");
+    r.expect("ok");
+    r.expect("ok");
+    r.expect("[G54:5.000,-2.500,0.000]");
+    for _ in 0..7 {
+        r.line();
+    }
+    r.expect("[G92:0.000,0.000,-1.000]");
+    for want in ["[TLO:0.000]", "[PRB:0.000,0.000,0.000:0]", "ok"] {
+        r.expect(want);
+    }
+    let st = r.status();
+    assert!(st.contains("|WCO:5.000,-2.500,-1.000|"), "{st}");
     r.send(b"\x18");
     r.expect("");
     r.expect("Grbl 1.1h ['$' for help]");
+    let st = r.status();
+    assert!(st.contains("|WCO:5.000,-2.500,0.000|"), "{st}");
     r.send(b"$G\n");
     r.expect("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]");
     r.expect("ok");
+    r.send(b"G0 X0 Y0\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:5.000,-2.500,0.000|"), "{st}");
 }

@@ -86,6 +86,15 @@ impl Program {
     /// mm per machine axis), in G0 as grbl starts.
     /// `machine` lives as long as the bridge (the converter borrows it).
     pub fn new(machine: &'static Machine, at: &[f64]) -> Self {
+        Program::with_parameters(machine, at, Vec::new())
+    }
+
+    /// As [`Program::new`], with numbered parameters carried over (see [`Program::persistent`]).
+    pub fn with_parameters(
+        machine: &'static Machine,
+        at: &[f64],
+        parameters: Vec<(usize, f64)>,
+    ) -> Self {
         let queue = Rc::new(RefCell::new(VecDeque::new()));
         let markers = Rc::new(RefCell::new(0));
         let feed = Feed {
@@ -95,7 +104,11 @@ impl Program {
         };
         let mut p = Program {
             machine,
-            interp: Interpreter::new(feed, "grbl", Options::default()).keep_going(true),
+            interp: {
+                let mut opts = Options::default();
+                opts.parameters.extend(parameters);
+                Interpreter::new(feed, "grbl", opts).keep_going(true)
+            },
             conv: Converter::new(machine),
             queue,
             markers,
@@ -128,7 +141,8 @@ impl Program {
         let _ = self.run(&line);
     }
 
-    /// Values of numbered parameters (`#5221` ...), in program units.
+    /// Values of numbered length parameters (`#5221` ...), mm. rs274 keeps them in its machine
+    /// units, inches, whatever G20/G21 says.
     pub fn parameters(&mut self, numbers: &[u32]) -> Vec<f64> {
         let list: Vec<String> = numbers.iter().map(|n| format!("#{n}")).collect();
         let line = format!("(debug,{})", list.join(" "));
@@ -138,10 +152,33 @@ impl Program {
             .map(|m| m.split_whitespace().filter_map(|v| v.parse().ok()).collect())
             .unwrap_or_default();
         if vals.len() == numbers.len() {
-            vals
+            vals.iter().map(|v| v * 25.4).collect()
         } else {
             vec![0.0; numbers.len()]
         }
+    }
+
+    /// The parameters grbl keeps across a reset (its EEPROM): G28 and G30 positions and the
+    /// G54..G59.3 origins, as rs274 stores them.
+    pub fn persistent(&mut self) -> Vec<(usize, f64)> {
+        let mut numbers: Vec<u32> = (5161..=5166).chain(5181..=5186).collect();
+        for system in 0..9 {
+            numbers.extend((0..6).map(|a| 5221 + 20 * system + a));
+        }
+        let mut out = Vec::with_capacity(numbers.len());
+        for chunk in numbers.chunks(12) {
+            let list: Vec<String> = chunk.iter().map(|n| format!("#{n}")).collect();
+            let line = format!("(debug,{})", list.join(" "));
+            let msgs = self.run(&line).map(|b| b.messages).unwrap_or_default();
+            let vals: Vec<f64> = msgs
+                .first()
+                .map(|m| m.split_whitespace().filter_map(|v| v.parse().ok()).collect())
+                .unwrap_or_default();
+            if vals.len() == chunk.len() {
+                out.extend(chunk.iter().zip(vals).map(|(&n, v)| (n as usize, v)));
+            }
+        }
+        out
     }
 
     /// One program line: its steps, or the first error (nothing of the block is kept).
@@ -281,6 +318,14 @@ mod tests {
         let m = machine();
         let mut p = Program::new(m, &[0.0; 3]);
         p.run("G10 L2 P1 X5 Y6 Z-1").unwrap();
-        assert_eq!(p.parameters(&[5221, 5222, 5223]), vec![5.0, 6.0, -1.0]);
+        let v = p.parameters(&[5221, 5222, 5223]);
+        assert!(v.iter().zip([5.0, 6.0, -1.0]).all(|(a, b)| (a - b).abs() < 1e-4), "{v:?}");
+        p.run("G20 G10 L2 P2 X1").unwrap();
+        let v = p.parameters(&[5241]);
+        assert!((v[0] - 25.4).abs() < 1e-4, "{v:?}");
+        let kept = p.persistent();
+        let mut q = Program::with_parameters(m, &[0.0; 3], kept);
+        let v = q.parameters(&[5221, 5241]);
+        assert!((v[0] - 5.0).abs() < 1e-4 && (v[1] - 25.4).abs() < 1e-4, "{v:?}");
     }
 }

@@ -94,6 +94,8 @@ pub struct Bridge<'a> {
     /// Feed of the last move queued, mm/min.
     feed_now: f64,
     startup_lines: [String; 2],
+    /// Offsets kept across resets and program ends (grbl's EEPROM).
+    kept: Vec<(usize, f64)>,
     build_info: String,
     pub interrupt: Arc<AtomicBool>,
 }
@@ -155,6 +157,7 @@ impl<'a> Bridge<'a> {
             ovr: [100; 3],
             feed_now: 0.0,
             startup_lines: [String::new(), String::new()],
+            kept: Vec::new(),
             build_info: String::new(),
             interrupt: Arc::new(AtomicBool::new(false)),
         }
@@ -300,7 +303,7 @@ impl<'a> Bridge<'a> {
                 let line = self.report();
                 self.say(&line);
             }
-            Realtime::FeedHold if self.jog => self.stop_motion()?,
+            Realtime::FeedHold if self.jog && self.moving() => self.stop_motion()?,
             Realtime::FeedHold => {
                 if self.alarm.is_none() && !self.check {
                     self.hold = true;
@@ -308,7 +311,7 @@ impl<'a> Bridge<'a> {
             }
             Realtime::SafetyDoor => {
                 if self.alarm.is_none() && !self.check {
-                    if self.jog {
+                    if self.jog && self.moving() {
                         self.stop_motion()?;
                     }
                     self.door = true;
@@ -443,7 +446,7 @@ impl<'a> Bridge<'a> {
         }
         self.ovr = [100; 3];
         self.feed_now = 0.0;
-        self.prog = Program::new(self.machine, &self.motion.pos_mm);
+        self.new_program();
         self.motion.soft_limits = self.settings.flag(settings::SOFT_LIMITS);
         self.say("");
         self.say(WELCOME);
@@ -451,6 +454,14 @@ impl<'a> Bridge<'a> {
             self.say("[MSG:'$H'|'$X' to unlock]");
         }
         Ok(())
+    }
+
+    /// A fresh interpreter at the commanded position, keeping the offsets grbl keeps in EEPROM.
+    fn new_program(&mut self) {
+        let kept = if self.prog.ended() { Vec::new() } else { self.prog.persistent() };
+        let kept = if kept.is_empty() { self.kept.clone() } else { kept };
+        self.kept = kept.clone();
+        self.prog = Program::with_parameters(self.machine, &self.motion.pos_mm, kept);
     }
 
     /// A board fault becomes a grbl alarm.
@@ -593,7 +604,8 @@ impl<'a> Bridge<'a> {
                 }
                 Out::Dwell(s) => {
                     let until = *self.dwell_until.get_or_insert_with(|| {
-                        Instant::now() + Duration::from_secs_f64(s.clamp(0.0, 1e6))
+                        let s = if s.is_finite() { s.clamp(0.0, 1e6) } else { 0.0 };
+                        Instant::now() + Duration::from_secs_f64(s)
                     });
                     if Instant::now() < until {
                         break;
@@ -687,7 +699,7 @@ impl<'a> Bridge<'a> {
 
     fn gcode(&mut self, t: &str) {
         if self.prog.ended() {
-            self.prog = Program::new(self.machine, &self.motion.pos_mm);
+            self.new_program();
         }
         self.jog = false;
         let block = match self.prog.run(t) {
@@ -732,6 +744,10 @@ impl<'a> Bridge<'a> {
         }
         for m in block.messages {
             self.say(&format!("[MSG:{m}]"));
+        }
+        // G10 L2/L20 write origins grbl keeps across resets (and program ends).
+        if t.to_ascii_uppercase().contains("G10") && !self.prog.ended() {
+            self.kept = self.prog.persistent();
         }
         self.ok();
     }
@@ -789,7 +805,7 @@ impl<'a> Bridge<'a> {
             }
             "$G" => {
                 if self.prog.ended() {
-                    self.prog = Program::new(self.machine, &self.motion.pos_mm);
+                    self.new_program();
                 }
                 let codes = self.prog.modal().codes().join(" ");
                 self.say(&format!("[GC:{codes}]"));
@@ -846,6 +862,7 @@ impl<'a> Bridge<'a> {
                         let _ = self.prog.run(&format!("G10 L2 P{p} X0 Y0 Z0"));
                     }
                     let _ = self.prog.run("G92.1");
+                    self.kept = self.prog.persistent();
                 }
                 self.ok();
             }
@@ -854,12 +871,13 @@ impl<'a> Bridge<'a> {
             }
             _ if cmd.starts_with("$N0=") || cmd.starts_with("$N1=") => {
                 let i = if cmd.starts_with("$N0") { 0 } else { 1 };
-                let text = raw.trim()[4..].trim().to_string();
+                let text = raw.split_once('=').map_or("", |(_, t)| t).trim().to_string();
                 self.startup_lines[i] = text;
                 self.ok();
             }
             _ if cmd.starts_with("$I=") => {
-                self.build_info = raw.trim()[3..].trim().chars().take(80).collect();
+                let text = raw.split_once('=').map_or("", |(_, t)| t).trim();
+                self.build_info = text.chars().take(80).collect();
                 self.ok();
             }
             _ => self.setting(&cmd),
@@ -891,20 +909,12 @@ impl<'a> Bridge<'a> {
     /// `$#`: coordinate systems, G28, G30, G92, tool length offset, probe.
     fn parameters(&mut self) {
         if self.prog.ended() {
-            self.prog = Program::new(self.machine, &self.motion.pos_mm);
+            self.new_program();
         }
-        let k = if self.prog.modal().units == Units::Inches { 25.4 } else { 1.0 };
         let inches = self.settings.flag(settings::REPORT_INCHES);
         let fmt = |v: &[f64]| -> String {
             v.iter()
-                .map(|x| {
-                    let x = x * k;
-                    if inches {
-                        format!("{:.4}", x / 25.4)
-                    } else {
-                        format!("{x:.3}")
-                    }
-                })
+                .map(|&x| if inches { format!("{:.4}", x / 25.4) } else { format!("{x:.3}") })
                 .collect::<Vec<_>>()
                 .join(",")
         };
@@ -924,7 +934,9 @@ impl<'a> Bridge<'a> {
         lines.push(format!("[G28:{}]", fmt(&g28)));
         lines.push(format!("[G30:{}]", fmt(&g30)));
         lines.push(format!("[G92:{}]", fmt(&g92)));
-        let tlo = self.prog.modal().tool_length_offset[2];
+        let m = self.prog.modal();
+        let k = if m.units == Units::Inches { 25.4 } else { 1.0 };
+        let tlo = m.tool_length_offset[2] * k;
         lines.push(format!("[TLO:{}]", fmt(&[tlo])));
         let zeros = vec![0.0; self.gaxis.len()];
         lines.push(format!("[PRB:{}:0]", fmt(&zeros)));
@@ -1012,7 +1024,7 @@ impl<'a> Bridge<'a> {
             Err(n) => return self.error(n),
         };
         if self.prog.ended() {
-            self.prog = Program::new(self.machine, &self.motion.pos_mm);
+            self.new_program();
         }
         let modal = self.prog.modal();
         let inches = jog.inches.unwrap_or(modal.units == Units::Inches);
