@@ -57,6 +57,9 @@ pub enum Cmd {
     /// G-code tools: `moves` prints the canonical machining calls.
     #[command(subcommand)]
     Gcode(crate::gcode::cli::GcodeCmd),
+    /// Speak grbl 1.1 to G-code senders (UGS, cncjs, bCNC, Candle) on a pseudo-terminal or
+    /// TCP, with the board behind it.
+    Grbl(crate::grbl::GrblArgs),
     /// Parse and plan a job offline and run it through the host model of the firmware.
     Plan {
         #[command(flatten)]
@@ -293,6 +296,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         }
         Cmd::Check(args) => crate::gcode::cli::check(args),
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
+        Cmd::Grbl(args) => crate::grbl::run(args),
         Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
         Cmd::Fourier(cmd) => crate::cli_capabilities::run_fourier(cmd),
         Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),

@@ -12,6 +12,7 @@ pub mod convert;
 pub mod csv_log;
 pub mod fourier;
 pub mod gcode;
+pub mod grbl;
 pub mod job;
 pub mod link;
 pub mod milling;

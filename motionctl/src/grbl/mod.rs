@@ -1,0 +1,153 @@
+//! `motionctl grbl`: the board behind grbl 1.1's serial protocol, for the G-code senders people
+//! already use (Universal Gcode Sender, cncjs, bCNC, Candle, scripts), on a pseudo-terminal or
+//! a TCP socket.
+//!
+//! - [`protocol`]: real-time bytes, the 128-byte receive buffer, error and alarm numbers;
+//! - [`report`]: `?` status reports;
+//! - [`settings`]: `$$` from the machine file, `$N=V`;
+//! - [`program`]: program lines one block at a time through `motion-gcode`;
+//! - [`pipeline`]: the moves into an incremental planner, segments and events out;
+//! - [`session`]: the loop between the sender and the board's link;
+//! - [`endpoint`]: the pseudo-terminal and the TCP socket.
+
+pub mod endpoint;
+pub mod pipeline;
+pub mod program;
+pub mod protocol;
+pub mod report;
+pub mod session;
+pub mod settings;
+
+use crate::board_link::LinkArgs;
+use crate::convert::{self, Program};
+use crate::job::{self, Job};
+use crate::link::Session;
+use crate::runner;
+use crate::sim_board::{SimBoard, SIM_CAPACITY};
+use crate::transport::Transport;
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use endpoint::Endpoint;
+use motion::machine::MachineState;
+use motion::protocol::RequestBody;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+
+/// Status period asked of the board, ms.
+const STATUS_MS: u16 = 40;
+
+#[derive(Args, Debug)]
+pub struct GrblArgs {
+    /// The machine: a job TOML whose `[machine]` is used (`$$` reports it).
+    pub machine: PathBuf,
+    #[command(flatten)]
+    pub link: LinkArgs,
+    /// Create a pseudo-terminal and a symlink to it at PATH; a sender opens PATH as a serial
+    /// port.
+    #[arg(
+        long,
+        value_name = "PATH",
+        conflicts_with = "listen",
+        required_unless_present = "listen"
+    )]
+    pub pty: Option<PathBuf>,
+    /// Serve raw TCP (grblHAL's socket stream) on HOST:PORT, one sender at a time.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub listen: Option<String>,
+    /// With --sim: machine time per wall time of the simulated board.
+    #[arg(long, hide = true, value_name = "X", default_value_t = 1.0)]
+    pub sim_speed: f64,
+}
+
+/// `motionctl grbl`.
+pub fn run(args: GrblArgs) -> Result<()> {
+    let text = std::fs::read_to_string(&args.machine)
+        .with_context(|| format!("reading {}", args.machine.display()))?;
+    let machine =
+        job::parse_machine_toml(&text).with_context(|| args.machine.display().to_string())?;
+    let cfg =
+        convert::machine_config(&machine).with_context(|| args.machine.display().to_string())?;
+    let steps_per_mm = machine.axes.iter().map(|a| a.steps_per_mm).collect();
+    let program = Program {
+        config: cfg,
+        steps_per_mm,
+        items: Vec::new(),
+        commands: Vec::new(),
+        final_steps: [0; motion::MAX_AXES],
+        skipped_moves: 0,
+    };
+    let job = Job { machine: machine.clone(), items: Vec::new(), feed_commands: Vec::new() };
+    let wire = runner::wire_config(&job, &program);
+    let machine: &'static job::Machine = Box::leak(Box::new(machine));
+
+    let target = args.link.target()?;
+    let speed = args.sim_speed;
+    if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
+        bail!("--sim-speed must be within (0, 1000]");
+    }
+    let (mut t, guard): (Box<dyn Transport>, _) = if args.link.sim && speed != 1.0 {
+        (Box::new(SimBoard::new(SIM_CAPACITY, speed)), None)
+    } else {
+        args.link.open()?
+    };
+    let result = serve(&args, &mut t, &target, machine, cfg, wire);
+    crate::qemu::finish(guard, result)
+}
+
+fn serve(
+    args: &GrblArgs,
+    t: &mut Box<dyn Transport>,
+    target: &crate::transport::LinkTarget,
+    machine: &'static job::Machine,
+    cfg: motion::MachineConfig,
+    wire: motion::protocol::WireConfig,
+) -> Result<()> {
+    let mut s = Session::new(t, args.link.host_config(target));
+    let info = s.connect().map_err(|e| anyhow::anyhow!("{e}"))?;
+    eprintln!(
+        "motionctl: connected to {}: firmware {:?}, protocol v{}",
+        s.describe(),
+        info.firmware.as_str(),
+        info.version
+    );
+    let say = |m: &str| eprintln!("motionctl: {m}");
+    let home_ok = args.link.home || args.link.qemu || args.link.sim;
+    let alarm = match runner::ready_board(&mut s, wire, home_ok, "machine file", &say) {
+        Ok(_) => None,
+        Err(e) => {
+            let st = runner::ask_status(&mut s)?;
+            if st.faults == 0 && st.machine == MachineState::Idle {
+                say(&format!("{e}; a sender starts in Alarm ('$H' homes)"));
+                Some(protocol::alarm::HOMING_REQUIRED)
+            } else {
+                bail!(e);
+            }
+        }
+    };
+    runner::ask(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_MS }, "SetStatusPeriod")?;
+    s.streaming = true;
+    let latest = runner::ask_status(&mut s)?;
+
+    let mut ep: Box<dyn Endpoint> = match (&args.pty, &args.listen) {
+        (Some(path), _) => {
+            let p = endpoint::Pty::open(path)?;
+            eprintln!(
+                "motionctl: grbl 1.1 on {} -> {} (open it as a serial port)",
+                path.display(),
+                p.slave_name().display()
+            );
+            Box::new(p)
+        }
+        (None, Some(addr)) => {
+            let l = endpoint::Tcp::listen(addr)?;
+            eprintln!("motionctl: grbl 1.1 on TCP {} (one sender at a time)", l.local_addr());
+            Box::new(l)
+        }
+        (None, None) => bail!("pass --pty PATH or --listen HOST:PORT"),
+    };
+    let mut bridge = session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm);
+    let flag = bridge.interrupt.clone();
+    // Fails only if a handler is already set: keep that one.
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    bridge.run()
+}
