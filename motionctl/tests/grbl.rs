@@ -124,10 +124,15 @@ fn sender_python() -> Result<PathBuf, String> {
 fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
     let python = match sender_python() {
         Ok(p) => p,
-        Err(why) => {
-            eprintln!("SKIPPED: no grbl sender library to test with ({why})");
+        // `cargo xtask test` installs python3-venv; only a machine without PyPI may skip.
+        Err(why) if std::env::var_os("GRBL_SENDER_OFFLINE").is_some() => {
+            eprintln!("SKIPPED (GRBL_SENDER_OFFLINE): no grbl sender library ({why})");
             return;
         }
+        Err(why) => panic!(
+            "no grbl sender library to test with ({why}); set GRBL_SENDER_OFFLINE=1 to skip \
+             this test on a machine without PyPI"
+        ),
     };
     let dir = tmp_dir("pty");
     let port = dir.join("ttyGRBL");

@@ -8,7 +8,43 @@ use crate::firmware::TARGET;
 
 pub fn ensure(root: &Path) -> Result<()> {
     ensure_toolchain(root)?;
-    ensure_qemu()
+    ensure_qemu()?;
+    ensure_python_venv()
+}
+
+/// python3 with `venv` and `pip`: the grbl bridge's test installs a third-party sender from PyPI
+/// into a venv.
+fn ensure_python_venv() -> Result<()> {
+    let ready = || {
+        Command::new("python3")
+            .args(["-c", "import venv, ensurepip"])
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if ready() {
+        return Ok(());
+    }
+    const PACKAGES: [&str; 2] = ["python3", "python3-venv"];
+    if !is_root() {
+        bail!(
+            "python3 with venv is missing; install it as root with:\n    sudo apt-get install -y {}",
+            PACKAGES.join(" ")
+        );
+    }
+    println!("xtask: installing {}", PACKAGES.join(" "));
+    crate::run_status("apt-get update", Command::new("apt-get").arg("update"))?;
+    crate::run_status(
+        "apt-get install python3-venv",
+        Command::new("apt-get")
+            .args(["install", "-y", "--no-install-recommends"])
+            .args(PACKAGES)
+            .env("DEBIAN_FRONTEND", "noninteractive"),
+    )?;
+    if !ready() {
+        bail!("python3 venv is still missing after apt-get install");
+    }
+    Ok(())
 }
 
 fn stdout_of(cmd: &mut Command) -> Result<String> {

@@ -54,7 +54,7 @@ impl Settings {
         }
         s.insert(STATUS_MASK, int(3.0));
         s.insert(JUNCTION_DEVIATION, real(0.010));
-        s.insert(ARC_TOLERANCE, real(crate::gcode::CHORD_TOLERANCE_MM));
+        s.insert(ARC_TOLERANCE, real(m.arc_tolerance_mm));
         s.insert(REPORT_INCHES, int(0.0));
         s.insert(SOFT_LIMITS, int(1.0));
         s.insert(HARD_LIMITS, int(0.0));
@@ -62,7 +62,8 @@ impl Settings {
         s.insert(23, int(0.0));
         s.insert(24, real(25.0));
         s.insert(25, real(500.0));
-        s.insert(26, int(250.0));
+        // Homing switch debounce, ms: the board's switch debounce.
+        s.insert(26, int(m.switch_debounce_ms.round()));
         s.insert(27, real(1.0));
         s.insert(30, int(1000.0));
         s.insert(31, int(0.0));
