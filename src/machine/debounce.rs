@@ -304,4 +304,23 @@ mod machine_tests {
         m.tick(&mut dda, &estop(false));
         assert!(m.command(MachineCommand::ClearFault, &mut dda).is_ok());
     }
+
+    proptest::proptest! {
+        /// The debounced level changes only after exactly `n` consecutive samples of the new
+        /// level, and always then.
+        #[test]
+        fn matches_a_run_length_model(
+            n in 1u16..8,
+            raw in proptest::collection::vec(proptest::prelude::any::<bool>(), 0..200),
+        ) {
+            let mut d = super::Debouncer::new(n, false);
+            let mut state = false;
+            let mut run = 0usize;
+            for &r in &raw {
+                if r == state { run = 0 } else { run += 1 }
+                if run == n as usize { state = r; run = 0; }
+                proptest::prop_assert_eq!(d.update(r), state);
+            }
+        }
+    }
 }

@@ -16,11 +16,11 @@
 //! divide in [`Preparer::prepare`] and [`Dda::positions`]), called whenever the DDA has room or
 //! the controller changed phase.
 
-use super::debounce::Debouncer;
 use super::history::{l1_steps, sub, History, Piece, Replay};
 use super::job::JobSegment;
 use crate::config::{ConfigError, MachineConfig, MAX_AXES};
 use crate::dda::{Command, Dda, MotionState, Preparer, StepOutput, READY_DEPTH};
+use crate::machine::debounce::Debouncer;
 use crate::protocol::errors::FaultCode;
 use crate::segment::{Rate, Segment, SegmentError};
 use heapless::Deque;
@@ -220,7 +220,8 @@ impl WireCore {
             pos: [0; 4],
             history: History::new(),
             replay: Replay::new(),
-            stall_in: Debouncer::new(params.debounce_ticks),
+            // At least one sample: 0 behaves as 1 (follows the next sample).
+            stall_in: Debouncer::new(params.debounce_ticks.max(1), false),
             stalled: false,
             phase: Phase::Running,
             wire_on: true,
@@ -253,7 +254,7 @@ impl WireCore {
         if estop_raw && !matches!(self.phase, Phase::Faulted(_)) {
             self.fault(dda, FaultCode::EStop);
         }
-        self.stalled = self.stall_in.sample(stall_raw);
+        self.stalled = self.stall_in.update(stall_raw);
         match self.phase {
             Phase::Running | Phase::Returning if self.stalled => {
                 self.wire_on = false;
