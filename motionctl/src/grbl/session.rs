@@ -96,6 +96,8 @@ pub struct Bridge<'a> {
     startup_lines: [String; 2],
     /// Offsets kept across resets and program ends (grbl's EEPROM).
     kept: Vec<(usize, f64)>,
+    /// The board refused queued motion: stop the rest.
+    stop_wanted: bool,
     build_info: String,
     pub interrupt: Arc<AtomicBool>,
 }
@@ -158,6 +160,7 @@ impl<'a> Bridge<'a> {
             feed_now: 0.0,
             startup_lines: [String::new(), String::new()],
             kept: Vec::new(),
+            stop_wanted: false,
             build_info: String::new(),
             interrupt: Arc::new(AtomicBool::new(false)),
         }
@@ -504,6 +507,7 @@ impl<'a> Bridge<'a> {
                 (Pending::Batch { n }, Ok(_)) => self.acked += n,
                 (Pending::Batch { .. }, Err(r)) => {
                     eprintln!("motionctl: the board refused segments: {}", describe_rejection(&r));
+                    self.stop_wanted = true;
                     if self.alarm.is_none() {
                         self.alarm = Some(alarm::ABORT_CYCLE);
                         self.say(&format!("ALARM:{}", alarm::ABORT_CYCLE));
@@ -540,6 +544,11 @@ impl<'a> Bridge<'a> {
         if self.latest.faults != self.faults_seen {
             let bits = self.latest.faults;
             self.on_faults(bits);
+        }
+        if self.stop_wanted {
+            // What is left of a refused job stops and is dropped.
+            self.stop_wanted = false;
+            self.stop_motion()?;
         }
         if self.alarm.is_some() {
             return Ok(());
