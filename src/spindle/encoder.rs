@@ -42,7 +42,6 @@ pub struct QuadratureEncoder {
     /// Position at the last index pulse, or at start before the first one.
     reference_counts: i64,
     referenced: bool,
-    angle_turn_q32: u32,
     window: [i32; MAX_WINDOW_TICKS],
     head: usize,
     window_counts: i32,
@@ -68,7 +67,6 @@ impl QuadratureEncoder {
             position_counts: 0,
             reference_counts: 0,
             referenced: false,
-            angle_turn_q32: 0,
             window: [0; MAX_WINDOW_TICKS],
             head: 0,
             window_counts: 0,
@@ -98,19 +96,12 @@ impl QuadratureEncoder {
             self.reference_counts = at_index;
             self.referenced = true;
         }
-        let mut rel = self.position_counts.wrapping_sub(self.reference_counts);
+        let rel = self.position_counts.wrapping_sub(self.reference_counts);
         // A revolution and the tolerance without an index: the index is lost (or, before the
         // first one, never came).
         if rel > cpr + tol || rel < -(cpr + tol) {
             self.fault = Some(FaultCode::EncoderIndex);
         }
-        if rel >= cpr {
-            rel -= cpr;
-        } else if rel < 0 {
-            rel += cpr;
-        }
-        let rel = rel.clamp(0, cpr - 1) as u64;
-        self.angle_turn_q32 = ((rel * self.turn_q48_per_count) >> 16) as u32;
         // Speed window: position now minus position 2^window_log2 ticks ago.
         let mask = (1usize << self.cfg.window_log2) - 1;
         let slot = self.head & mask;
@@ -137,8 +128,18 @@ impl QuadratureEncoder {
 }
 
 impl SpindleSource for QuadratureEncoder {
+    /// From the position and the index reference when asked (not every update: most ticks
+    /// nobody reads the angle).
     fn angle_turn_q32(&self) -> u32 {
-        self.angle_turn_q32
+        let cpr = self.cfg.counts_per_rev as i64;
+        let mut rel = self.position_counts.wrapping_sub(self.reference_counts);
+        if rel >= cpr {
+            rel -= cpr;
+        } else if rel < 0 {
+            rel += cpr;
+        }
+        let rel = rel.clamp(0, cpr - 1) as u64;
+        ((rel * self.turn_q48_per_count) >> 16) as u32
     }
     fn speed_turn_q32_per_tick(&self) -> i32 {
         // counts/window * turn per count / window; |window_counts| < 2^24 so this fits.

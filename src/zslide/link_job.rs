@@ -8,9 +8,14 @@
 //! X feeds at the job's rate (commanded X in inches Q24, exact: the X axis steps follow it, at
 //! most one rise every other tick, DIR a tick before a reversed rise), [`ZGen::update`] gives the
 //! Z command at that X and spindle angle, and the Z output follows it: the Z axis's steps (the
-//! same pin rules) or the DAC code ([`ZJob::dac_code`]). The command's X is the commanded X (the
-//! counters trail it by less than a step, plus the pin stage's tick): with it the Z trace is
-//! bit-identical to the zslide scenario's (same library code), which the tests check.
+//! same pin rules) or the DAC code ([`ZJob::dac_code`]). The generator (a table evaluation: the
+//! dearest part of a tick) updates every `2^k` ticks, k from [`update_shift`]: at 20 kHz or
+//! faster, every 4th tick at the default 100 kHz; each tick between takes its command forward by
+//! the command's own velocity and acceleration ([`ZUpdate::shifted`]). The command's X is the
+//! commanded X (the counters trail it by less than a step, plus the pin stage's tick): on the
+//! generator's ticks the Z trace is the zslide scenario's to 4 * 2^-32 in (same library code),
+//! between them within one encoder count of angle of it (the scenario reads the encoder every
+//! tick), which the tests check.
 //!
 //! Faults (`ZSlideLimit`, `EncoderIndex`, `ResolverLoss`, `SpindleStopped`, a DAC code out of
 //! range) latch in the generator and reach the machine through
@@ -19,13 +24,14 @@
 //!
 //! Interrupt rate ([`ZJob::sense`], the [`StepSource`] impl): integer only, no division, bounded.
 
-use super::command::{ZCommandConfig, ZGen, ZState, ZUpdate};
+use super::command::{ZCommandConfig, ZGen, ZState, ZUpdate, MAX_SPEED_TURN_Q32_PER_TICK};
 use super::output::{DacScale, StepScale};
 use super::table::{CoefficientTable, Interp, TableError, TableForm, MAX_ORDER, MAX_WIDTH};
 use crate::dda::{Dda, StepOutput};
 use crate::machine::StepSource;
 use crate::protocol::errors::FaultCode;
 use crate::protocol::CRC32;
+use crate::spindle::SpindleSource;
 use serde::{Deserialize, Serialize};
 
 /// Rows an uploaded table may have (the Douglass table has 81).
@@ -336,9 +342,17 @@ struct ZRun {
     /// A command outside the DAC's range (latched: `ZSlideLimit`).
     dac_fault: bool,
     pins: Pins,
+    /// The generator's last update (in its own time unit: [`ZRun::update_shift`] ticks).
     last: ZUpdate,
-    /// Largest |command - output| while following, nanoinches.
-    max_following_nin: i64,
+    /// This tick's command (the last update taken forward to now).
+    command: ZUpdate,
+    /// The generator updates every `2^update_shift` ticks; the ticks between take its command
+    /// forward by its own derivatives ([`ZUpdate::shifted`]).
+    update_shift: u8,
+    /// Ticks since the last update, `0..2^update_shift`.
+    update_phase: u8,
+    /// Largest |command - output| while following, inches Q32.
+    max_following_in_q32: i64,
 }
 
 /// The Z job: the active table and the run, if any (inside the tick's resource).
@@ -349,9 +363,16 @@ pub struct ZJob {
     angle_turn_q32: u32,
     speed_turn_q32_per_tick: i32,
     source_fault: Option<FaultCode>,
+    /// Ticks until the next full reading outside the generator's update ticks.
+    refresh_in: u8,
     /// Fault bits already handed to the machine.
     reported: u32,
 }
+
+/// Outside the generator's update ticks the spindle's angle and speed are read every this many
+/// ticks (0.32 ms at 100 kHz): for Status, the force job's stopped-spindle hold and the start
+/// check. Its fault is read every tick.
+pub const SENSE_REFRESH_TICKS: u8 = 32;
 
 /// Inches Q32 to nanoinches (reports).
 #[inline]
@@ -367,6 +388,7 @@ impl ZJob {
             angle_turn_q32: 0,
             speed_turn_q32_per_tick: 0,
             source_fault: None,
+            refresh_in: 0,
             reported: 0,
         }
     }
@@ -401,6 +423,25 @@ impl ZJob {
         self.angle_turn_q32 = angle_turn_q32;
         self.speed_turn_q32_per_tick = speed_turn_q32_per_tick;
         self.source_fault = fault;
+    }
+
+    /// The spindle reading for this tick from `spindle`, reading its angle and speed (a few
+    /// dozen instructions) only when they are used: on the generator's update ticks during a
+    /// run, and every [`SENSE_REFRESH_TICKS`] ticks; its fault every tick. Interrupt rate.
+    #[inline]
+    pub fn sense_from<S: SpindleSource>(&mut self, spindle: &S) {
+        let update_tick = self.run.as_ref().is_some_and(|r| r.update_phase == 0);
+        self.refresh_in = self.refresh_in.saturating_sub(1);
+        if update_tick || self.refresh_in == 0 {
+            self.refresh_in = SENSE_REFRESH_TICKS;
+            self.sense(
+                spindle.angle_turn_q32(),
+                spindle.speed_turn_q32_per_tick(),
+                spindle.fault(),
+            );
+        } else {
+            self.source_fault = spindle.fault();
+        }
     }
 
     /// Checks `spec` against the table and the last sensed spindle speed, and engages (setup
@@ -442,18 +483,23 @@ impl ZJob {
         if bad_axis || bad_feed {
             return Err(ZStartError::Spec);
         }
+        // The generator's time unit is its update period: everything per tick scales with it.
+        let shift = update_shift(tick_hz, speed_turn_q32_per_tick);
         let cfg = ZCommandConfig {
-            tick_hz,
+            tick_hz: tick_hz >> shift,
             interp: if spec.cubic { Interp::Cubic } else { Interp::Linear },
-            advance_ticks_q16: spec.advance_ticks_q16,
-            engage_ticks: spec.engage_ticks,
+            advance_ticks_q16: spec.advance_ticks_q16 >> shift,
+            engage_ticks: (spec.engage_ticks >> shift).max(1),
             blend_start_x_in_q24: spec.blend_start_x_in_q24,
             blend_end_x_in_q24: spec.blend_end_x_in_q24,
             max_velocity_uin_per_s: spec.max_velocity_uin_per_s,
             max_accel_uin_per_s2: spec.max_accel_uin_per_s2,
-            min_speed_turn_q32_per_tick: spec.min_speed_turn_q32_per_tick,
+            min_speed_turn_q32_per_tick: spec
+                .min_speed_turn_q32_per_tick
+                .saturating_mul(1 << shift),
         };
-        prepare_run(table, speed_turn_q32_per_tick, spec, cfg, steps, dac, z_axis).map(ZPrepared)
+        let speed = per_update(speed_turn_q32_per_tick, shift);
+        prepare_run(table, speed, spec, (cfg, shift), steps, dac, z_axis).map(ZPrepared)
     }
 
     /// Starts a prepared run (a few stores: inside the tick's lock). Refused while a run exists.
@@ -490,7 +536,7 @@ fn prepare_run(
     table: &LinkTable,
     speed: i32,
     spec: &ZJobSpec,
-    cfg: ZCommandConfig,
+    (cfg, update_shift): (ZCommandConfig, u8),
     steps: Option<StepScale>,
     dac: Option<DacScale>,
     z_axis: Option<u8>,
@@ -525,8 +571,38 @@ fn prepare_run(
         dac_fault: false,
         pins: Pins::default(),
         last: ZUpdate::default(),
-        max_following_nin: 0,
+        command: ZUpdate::default(),
+        update_shift,
+        update_phase: 0,
+        max_following_in_q32: 0,
     })
+}
+
+/// Slowest rate the Z generator is updated at: its accuracy is checked from here up.
+pub const Z_UPDATE_MIN_HZ: u32 = 20_000;
+/// At most `2^MAX_UPDATE_SHIFT` ticks between updates (the interpolation's range).
+const MAX_UPDATE_SHIFT: u8 = 3;
+
+/// Ticks between generator updates, as a power of two: the largest that keeps the update rate at
+/// or above [`Z_UPDATE_MIN_HZ`] (0 below 40 kHz: every tick) and the spindle's turn per update
+/// (at the start's speed) at most half the generator's limit, so the fastest spindle it takes
+/// stays that of an update every tick.
+pub fn update_shift(tick_hz: u32, speed_turn_q32_per_tick: i32) -> u8 {
+    let turn_per_tick = speed_turn_q32_per_tick.unsigned_abs() as u64;
+    let mut s = 0;
+    while s < MAX_UPDATE_SHIFT
+        && tick_hz >> (s + 1) >= Z_UPDATE_MIN_HZ
+        && turn_per_tick << (s + 1) <= (MAX_SPEED_TURN_Q32_PER_TICK as u64) / 2
+    {
+        s += 1;
+    }
+    s
+}
+
+/// A spindle speed per tick as the generator's: per `2^shift` ticks (saturating).
+#[inline]
+fn per_update(speed_turn_q32_per_tick: i32, shift: u8) -> i32 {
+    ((speed_turn_q32_per_tick as i64) << shift).clamp(i32::MIN as i64, i32::MAX as i64) as i32
 }
 
 impl ZJob {
@@ -579,7 +655,7 @@ impl ZJob {
 
     /// The last Z command.
     pub fn last(&self) -> Option<ZUpdate> {
-        self.run.as_ref().map(|r| r.last)
+        self.run.as_ref().map(|r| r.command)
     }
 
     /// Commanded X, inches Q24.
@@ -599,7 +675,7 @@ impl ZJob {
 
     /// Largest |Z command - Z output| while following, nanoinches (Status figure).
     pub fn max_following_nin(&self) -> i64 {
-        self.run.as_ref().map_or(0, |r| r.max_following_nin)
+        self.run.as_ref().map_or(0, |r| nin(r.max_following_in_q32))
     }
 
     /// The last sensed spindle speed, 2^-32 turn per tick.
@@ -642,17 +718,28 @@ impl StepSource for ZJob {
                 .saturating_add(run.spec.x_feed_in_q24_per_tick)
                 .min(run.spec.x_end_in_q24);
         }
-        let u = match (&mut run.gen, &self.table) {
-            (Gen::Power(g), LinkTable::Power(t)) => {
-                g.update(t, run.x_in_q24, angle, speed, source_fault)
-            }
-            (Gen::Harmonic(g), LinkTable::Harmonic(t)) => {
-                g.update(t, run.x_in_q24, angle, speed, source_fault)
-            }
-            // Not reachable: the table cannot change while a run exists.
-            _ => run.last,
+        // The generator every 2^shift ticks (at once on a sensor fault); between, its command
+        // taken forward by its derivatives: a few multiplies instead of a table evaluation.
+        let u = if run.update_phase == 0 || source_fault.is_some() {
+            let speed = per_update(speed, run.update_shift);
+            let u = match (&mut run.gen, &self.table) {
+                (Gen::Power(g), LinkTable::Power(t)) => {
+                    g.update(t, run.x_in_q24, angle, speed, source_fault)
+                }
+                (Gen::Harmonic(g), LinkTable::Harmonic(t)) => {
+                    g.update(t, run.x_in_q24, angle, speed, source_fault)
+                }
+                // Not reachable: the table cannot change while a run exists.
+                _ => run.last,
+            };
+            run.last = u;
+            run.update_phase = 0;
+            u
+        } else {
+            run.last.shifted(((run.update_phase as i32) << 16) >> run.update_shift)
         };
-        run.last = u;
+        run.update_phase = (run.update_phase + 1) & ((1u8 << run.update_shift) - 1);
+        run.command = u;
         // X axis: toward the commanded X in steps.
         let x_rel = run.x_in_q24 as i64 - run.spec.x_start_in_q24 as i64;
         let x_target = (x_rel * run.spec.x_steps_per_in as i64 + (1 << 23)) >> 24;
@@ -675,8 +762,9 @@ impl StepSource for ZJob {
             u.z_in_q32 as i64
         };
         if state == ZState::Running {
-            let fe = nin((u.z_in_q32 as i64 - z_out).abs());
-            run.max_following_nin = run.max_following_nin.max(fe);
+            // In Q32 here, nanoinches when read (the conversion is monotonic).
+            let fe = (u.z_in_q32 as i64 - z_out).abs();
+            run.max_following_in_q32 = run.max_following_in_q32.max(fe);
         }
         let rise = xr | zr;
         run.pins.rose_last = rise;
@@ -691,7 +779,7 @@ impl StepSource for ZJob {
             Gen::Harmonic(g) => g.state() == ZState::Finished,
         };
         let z_home =
-            run.steps.is_none_or(|s| s.target_steps(run.last.z_in_q32) as i64 == run.z_steps);
+            run.steps.is_none_or(|s| s.target_steps(run.command.z_in_q32) as i64 == run.z_steps);
         let x_rel = run.x_in_q24 as i64 - run.spec.x_start_in_q24 as i64;
         let x_target = (x_rel * run.spec.x_steps_per_in as i64 + (1 << 23)) >> 24;
         finished && z_home && x_target == run.x_steps
@@ -704,7 +792,7 @@ mod tests {
     use crate::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
     use crate::protocol::HomingConfig;
     use crate::scenario::Scenario;
-    use crate::spindle::{QuadratureEncoder, SimSpindle, SpindleSource};
+    use crate::spindle::{QuadratureEncoder, SimSpindle};
     use crate::zslide::douglass_table::DOUGLASS_POWER;
     use crate::zslide::scenario::{self as sc, ZSlideScenario, ZSlideVariant};
 
@@ -832,8 +920,7 @@ mod tests {
             self.sim.advance(sc::spindle_speed_at(t));
             let (c, i) = self.sim.encoder(sc::CPR);
             self.enc.update(c, if index_lost { None } else { i });
-            let e = &self.enc;
-            self.job.sense(e.angle_turn_q32(), e.speed_turn_q32_per_tick(), e.fault());
+            self.job.sense_from(&self.enc);
             let inp = Inputs { sensor_faults: self.job.take_sensor_faults(), ..Inputs::QUIET };
             if self.m.z_job() {
                 self.m.tick_with(&mut self.dda, &inp, &mut self.job);
@@ -849,10 +936,32 @@ mod tests {
     }
 
     #[test]
+    fn the_generator_updates_at_20_khz_or_faster() {
+        let rpm = |rpm: u64, tick_hz: u64| ((rpm << 32) / 60 / tick_hz) as i32;
+        for (tick_hz, shift) in [(10_000, 0), (39_999, 0), (40_000, 1), (50_000, 1), (100_000, 2)] {
+            assert_eq!(update_shift(tick_hz, rpm(360, tick_hz as u64)), shift, "{tick_hz} Hz");
+        }
+        // At most every 8th tick (the interpolation's range), however fast the tick.
+        assert_eq!(update_shift(1_000_000, rpm(360, 1_000_000)), 3);
+        for hz in (1_000..=400_000).step_by(997) {
+            assert!(hz >> update_shift(hz, 0) >= Z_UPDATE_MIN_HZ.min(hz), "{hz}");
+        }
+        // A fast spindle keeps more updates: the fastest the generator takes is unchanged.
+        assert_eq!(update_shift(100_000, rpm(1_000, 100_000)), 1);
+        assert_eq!(update_shift(100_000, rpm(2_000, 100_000)), 0);
+        assert_eq!(update_shift(100_000, -rpm(2_000, 100_000)), 0);
+    }
+
+    #[test]
     fn link_job_reproduces_the_scenario_z_trace_through_the_machine() {
         let mut s = ZSlideScenario::new(ZSlideVariant::Encoder);
         let mut rig = Rig::new();
         let mut compared = 0u32;
+        // Largest change of Z over one encoder count of angle, 2^-32 in: the sampling step of
+        // the scenario's per-tick command, which reads the encoder every tick.
+        let mut one_count = 0i64;
+        let mut between = 0i64;
+        let mut on_update = 0i64;
         let mut ended_at = None;
         for t in 0..sc::RUN_TICKS {
             if s.wants_background() {
@@ -861,19 +970,40 @@ mod tests {
             assert!(s.tick());
             if t == sc::ENGAGE_TICK {
                 rig.start();
+                let count_per_tick = ((1u64 << 32) / sc::CPR as u64) as i32;
+                one_count = match &rig.job.run.as_ref().unwrap().gen {
+                    Gen::Power(g) => g.required_at(count_per_tick).0,
+                    Gen::Harmonic(g) => g.required_at(count_per_tick).0,
+                } >> 16;
                 // A table upload is refused while the job runs.
                 assert_eq!(rig.job.install(LinkTable::None), Err(ZStartError::Running));
             }
             rig.tick(t, false);
             if t >= sc::ENGAGE_TICK && rig.job.is_running() {
                 let z = rig.job.last().unwrap().z_in_q32;
-                assert_eq!(z, s.command_z_in_q32(), "tick {t}");
+                let d = (z as i64 - s.command_z_in_q32() as i64).abs();
+                // The generator updated on this tick (the phase after it is 1).
+                if rig.job.run.as_ref().unwrap().update_phase == 1 {
+                    on_update = on_update.max(d);
+                } else {
+                    between = between.max(d);
+                }
                 compared += 1;
             }
             if ended_at.is_none() && t > sc::ENGAGE_TICK && !rig.m.z_job() {
                 ended_at = Some(t);
             }
         }
+        eprintln!(
+            "|link - scenario|, 2^-32 in: {on_update} on updates, {between} between \
+             (one encoder count of angle: {one_count})"
+        );
+        // The generator updates every other tick at 50 kHz: on its ticks it is the scenario's
+        // command to rounding; between, its command taken forward by its derivatives differs
+        // from the scenario's fresh encoder reading by less than one count of angle.
+        assert_eq!(update_shift(sc::TICK_HZ, sc::speed_at_rpm(360)), 1);
+        assert!(on_update <= 4, "{on_update}");
+        assert!(between > 0 && between < one_count, "{between} vs {one_count}");
         eprintln!(
             "compared {compared} ticks; job ended at tick {ended_at:?}; max following {} nin; steps {:?}",
             rig.job.max_following_nin(),

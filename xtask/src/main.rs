@@ -58,7 +58,8 @@ commands:
                                                         (--quick: DDA tick figures only, printed)
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
-                                                        and modelled cycles by situation
+                                                        and modelled cycles by situation (ISR_PROFILE_PCS=DIR:
+                                                        also executions per PC, for llvm-symbolizer)
   isr-cycles [JOB]...                                    the same jobs on the link firmware built with isr-cycles:
                                                         the board times its own tick handler (instructions
                                                         under QEMU, DWT cycles on an F405) and logs it

@@ -14,7 +14,6 @@
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::protocol::{ErrorCode, NakDetail, Status};
 use motion::spindle::encoder::EncoderConfig;
-use motion::spindle::SpindleSource;
 use motion::zslide::link_job::{ZJob, ZPrepared};
 use motion::zslide::link_requests::{self as zr, ZNak};
 
@@ -31,11 +30,13 @@ pub fn init(spindle: &mut board::Spindle) -> bool {
     spindle.configure(ENCODER).is_ok()
 }
 
-/// Once per tick, before the machine ticks: the spindle reading into the job. Interrupt rate.
+/// Once per tick, before the machine ticks: the spindle's counter into its decoder, its reading
+/// into the job (angle and speed only on the ticks that use them: `ZJob::sense_from`).
+/// Interrupt rate.
 #[inline]
 pub fn sense(spindle: &mut board::Spindle, job: &mut ZJob) {
     spindle.update();
-    job.sense(spindle.angle_turn_q32(), spindle.speed_turn_q32_per_tick(), spindle.fault());
+    job.sense_from(spindle);
 }
 
 /// One tick with the machine's Z job (`None`: no Z job, the caller ticks as usual). The job's

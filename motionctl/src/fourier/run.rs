@@ -25,7 +25,7 @@ use motion::protocol::{
     AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, WireConfig,
     CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
 };
-use motion::spindle::{QuadratureEncoder, SimSpindle, SpindleSource};
+use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::zslide::link_job::{
     table_wire, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, ZTableUpload, MAX_TABLE_BYTES,
 };
@@ -284,7 +284,7 @@ pub fn model(
         sim.advance(speed);
         let (c, i) = sim.encoder(enc_cfg.counts_per_rev);
         enc.update(c, i);
-        job.sense(enc.angle_turn_q32(), enc.speed_turn_q32_per_tick(), enc.fault());
+        job.sense_from(&enc);
         let inp = Inputs { sensor_faults: job.take_sensor_faults(), ..Inputs::QUIET };
         if m.z_job() {
             m.tick_with(dda, &inp, job);

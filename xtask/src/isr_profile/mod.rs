@@ -204,7 +204,8 @@ fn profile_job(
     let capped = AtomicBool::new(false);
     let (analyzer, ok) = std::thread::scope(|scope| -> Result<(trace::Analyzer<'_>, bool)> {
         let reader = scope.spawn(|| -> Result<trace::Analyzer<'_>> {
-            let mut a = trace::Analyzer::new(prog, entry, &markers);
+            let keep = std::env::var_os(PCS_ENV).is_some();
+            let mut a = trace::Analyzer::new(prog, entry, &markers).keep_pcs(keep);
             let f = std::fs::File::open(&fifo).context("opening the trace FIFO")?;
             a.read(BufReader::with_capacity(1 << 20, f), job.max_ticks, &capped)?;
             Ok(a)
@@ -265,6 +266,9 @@ fn profile_job(
     if analyzer.instances.is_empty() {
         bail!("{}: no tick interrupt in {} trace lines", job.name, analyzer.lines);
     }
+    if let Some(dir) = std::env::var_os(PCS_ENV) {
+        write_pcs(Path::new(&dir), job.name, &analyzer)?;
+    }
     let mut top: Vec<(String, u64)> = analyzer
         .per_function
         .iter()
@@ -282,6 +286,23 @@ fn profile_job(
         unknown_pcs: analyzer.unknown,
         nested: analyzer.nested,
     })
+}
+
+/// Set to a directory: each job also writes `<job>-idle.pcs` and `<job>-busy.pcs` (`PC COUNT`
+/// per line, hex PC) for `llvm-symbolizer` to map onto source lines.
+const PCS_ENV: &str = "ISR_PROFILE_PCS";
+
+fn write_pcs(dir: &Path, job: &str, a: &trace::Analyzer<'_>) -> Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let stem: String =
+        job.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    for (kind, pcs) in [("idle", &a.pcs_idle), ("busy", &a.pcs_busy)] {
+        let mut v: Vec<_> = pcs.iter().collect();
+        v.sort();
+        let text: String = v.iter().map(|(pc, n)| format!("{pc:#x} {n}\n")).collect();
+        std::fs::write(dir.join(format!("{stem}-{kind}.pcs")), text)?;
+    }
+    Ok(())
 }
 
 fn situations() -> impl Iterator<Item = &'static str> {

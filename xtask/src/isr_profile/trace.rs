@@ -39,6 +39,11 @@ pub struct Analyzer<'p> {
     /// Entries into other vectors while inside (0: the handler is never preempted).
     pub nested: u64,
     pub lines: u64,
+    /// With [`Analyzer::keep_pcs`]: executions per PC, over idle instances (no marker) and
+    /// over the others, for a line-by-line look at where a tick goes.
+    pub pcs_idle: HashMap<u32, u64>,
+    pub pcs_busy: HashMap<u32, u64>,
+    keep_pcs: bool,
     current: Option<Current>,
 }
 
@@ -48,6 +53,7 @@ struct Current {
     /// The instruction executed last, settled when the next PC shows whether it branched.
     pending: (u32, Insn),
     after_single: bool,
+    pcs: Vec<u32>,
 }
 
 impl<'p> Analyzer<'p> {
@@ -80,8 +86,17 @@ impl<'p> Analyzer<'p> {
             unknown: 0,
             nested: 0,
             lines: 0,
+            pcs_idle: HashMap::new(),
+            pcs_busy: HashMap::new(),
+            keep_pcs: false,
             current: None,
         }
+    }
+
+    /// Also count executions per PC ([`Analyzer::pcs_idle`], [`Analyzer::pcs_busy`]).
+    pub fn keep_pcs(mut self, yes: bool) -> Self {
+        self.keep_pcs = yes;
+        self
     }
 
     /// Markers whose functions exist in the ELF (a renamed function would silently never mark).
@@ -149,6 +164,7 @@ impl<'p> Analyzer<'p> {
                     depth: 0,
                     pending: (pc, insn),
                     after_single: false,
+                    pcs: Vec::new(),
                 };
                 self.count(&mut cur, pc, insn);
                 self.current = Some(cur);
@@ -164,6 +180,11 @@ impl<'p> Analyzer<'p> {
             match p.flow {
                 Flow::Call => cur.depth += 1,
                 Flow::Return if cur.depth == 0 => {
+                    let to =
+                        if cur.inst.marks == 0 { &mut self.pcs_idle } else { &mut self.pcs_busy };
+                    for &a in &cur.pcs {
+                        *to.entry(a).or_insert(0) += 1;
+                    }
                     self.instances.push(cur.inst);
                     // The PC after the exception return may be the handler again (tail-chain).
                     return self.step_outside(pc);
@@ -190,6 +211,9 @@ impl<'p> Analyzer<'p> {
 
     fn count(&mut self, cur: &mut Current, pc: u32, insn: Insn) {
         cur.inst.instructions += 1;
+        if self.keep_pcs {
+            cur.pcs.push(pc);
+        }
         cur.inst.fp |= insn.fp;
         if let Some(m) = self.marks.get(&pc) {
             cur.inst.marks |= m;
