@@ -5,7 +5,8 @@ use clap::Parser;
 use motion::polar::stream::decode_all;
 use motionctl::polar::cli::{parse_contour, run, PolarCmd};
 use motionctl::polar::contour::{Limacon, Polar};
-use motionctl::polar::digitize::{digitize, Setup};
+use motionctl::polar::digitize::{digitize, FeedAt, Setup};
+use motionctl::polar::work_area::WorkArea;
 use motionctl::polar::Resolution;
 
 #[derive(Parser)]
@@ -52,6 +53,9 @@ fn digitize_writes_a_stream_that_decodes_to_the_digitizer_events() {
         res: Resolution::THESIS,
         tick_hz: motion::polar::scenario::TICK_HZ,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        // The CLI's default: Vt at the contact point.
+        feed_at: FeedAt::Contact,
     };
     let want = digitize(&Polar::closed(Limacon { b: 3.0, a: 2.0 }), &setup).unwrap();
     assert_eq!(got, want.events);

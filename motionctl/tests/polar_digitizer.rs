@@ -7,7 +7,8 @@ use motion::polar::stream::{decode_all, BlockEncoder};
 use motion::polar::StepEvent;
 use motion::segment::Rate;
 use motionctl::polar::contour::{witch, Circle, Limacon, Polar};
-use motionctl::polar::digitize::{digitize, gauss4, DigitizeError, Setup, ToolPath};
+use motionctl::polar::digitize::{digitize, gauss4, DigitizeError, FeedAt, Setup, ToolPath};
+use motionctl::polar::work_area::WorkArea;
 use motionctl::polar::Resolution;
 
 const TICK_HZ: u32 = 100_000;
@@ -23,6 +24,8 @@ pub fn limacon_setup(vt: f64) -> Setup {
         res: Resolution::THESIS,
         tick_hz: TICK_HZ,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     }
 }
 
@@ -199,7 +202,7 @@ fn open_witch_and_tangency_are_digitized() {
 #[test]
 fn degenerate_and_unbounded_inputs_are_refused() {
     use motionctl::polar::cli::parse_contour;
-    use motionctl::polar::digitize::{digitize, DigitizeError, Setup, MAX_EVENTS};
+    use motionctl::polar::digitize::{digitize, DigitizeError, FeedAt, Setup, MAX_EVENTS};
     use motionctl::polar::Resolution;
     let setup = |pole_r_in: f64, dr_in: f64| Setup {
         pole_r_in,
@@ -209,6 +212,8 @@ fn degenerate_and_unbounded_inputs_are_refused() {
         res: Resolution { dr_in, dtheta_rad: std::f64::consts::TAU / 16_000.0 },
         tick_hz: 100_000,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     };
     let limacon = parse_contour("limacon:3,2").unwrap();
     match digitize(limacon.as_ref(), &setup(6.5, 1e-12)) {

@@ -4,10 +4,11 @@
 //! host model of the DDA, which interpolates linearly in (theta, r)).
 
 use motionctl::polar::contour::{Limacon, Polar};
-use motionctl::polar::digitize::{digitize, Setup};
+use motionctl::polar::digitize::{digitize, FeedAt, Setup};
 use motionctl::polar::segments::{
     dense_path, max_deviation_in, play_events, polar_segments, run_segments,
 };
+use motionctl::polar::work_area::WorkArea;
 use motionctl::polar::Resolution;
 
 const TICK_HZ: u32 = 100_000;
@@ -21,6 +22,8 @@ fn limacon_setup() -> Setup {
         res: Resolution::THESIS,
         tick_hz: TICK_HZ,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     }
 }
 

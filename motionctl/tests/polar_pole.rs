@@ -9,11 +9,12 @@
 //! F1 on 200 chords.
 
 use motionctl::polar::contour::{serpentine, witch, Contour, Jet, Limacon, Polar};
-use motionctl::polar::digitize::{digitize, DigitizeError, Setup};
+use motionctl::polar::digitize::{digitize, DigitizeError, FeedAt, Setup};
 use motionctl::polar::pole::{
     area_error_in2, check, chord_points, f1, f1_as_listed, optimise, Constraints, HookeJeeves,
     Optimum, Pole, Violation, F1_CHORDS, MM2_PER_IN2,
 };
+use motionctl::polar::work_area::WorkArea;
 use motionctl::polar::Resolution;
 
 const RES: Resolution = Resolution::THESIS;
@@ -39,7 +40,7 @@ fn report<C: Contour + ?Sized>(name: &str, c: &C, thesis: Pole, thesis_mm2: f64,
         thesis.beta_rad,
         area_mm2(c, thesis),
         f1_at(c, thesis),
-        check(c, thesis.xy())
+        check(c, thesis.xy(), &WorkArea::FAHIM_1983)
     );
     println!(
         "{name}: our pole     C = {:.2} cm, beta = {:.3} rad: eps_a {:.3} mm^2, F1 {:.4} ({} evaluations), {:?}",
@@ -48,7 +49,7 @@ fn report<C: Contour + ?Sized>(name: &str, c: &C, thesis: Pole, thesis_mm2: f64,
         area_mm2(c, ours.pole),
         ours.f1.f1,
         ours.evals,
-        check(c, ours.pole.xy())
+        check(c, ours.pole.xy(), &WorkArea::FAHIM_1983)
     );
 }
 
@@ -57,14 +58,20 @@ fn table_4_1_witch_of_agnesi() {
     let w = witch(21.59 * CM, -8.0, 8.0);
     let thesis = Pole { c_in: 15.46 * CM, beta_rad: 1.236 };
     let mirror = Pole { beta_rad: 1.905, ..thesis };
-    assert_eq!(check(&w, thesis.xy()), Ok(()), "the thesis's pole is inside the work area");
+    assert_eq!(
+        check(&w, thesis.xy(), &WorkArea::FAHIM_1983),
+        Ok(()),
+        "the thesis's pole is inside the work area"
+    );
     let e = area_mm2(&w, thesis);
     assert!(order_of_magnitude(e, 2.59), "{e} mm^2");
     // The two printed betas are mirror images about the witch's axis: same F1.
     assert!((f1_at(&w, thesis) - f1_at(&w, mirror)).abs() < 0.01);
-    let ours = optimise(&w, &RES, Constraints::WorkArea, &HookeJeeves::default()).unwrap();
+    let ours =
+        optimise(&w, &RES, Constraints::WorkArea(WorkArea::FAHIM_1983), &HookeJeeves::default())
+            .unwrap();
     report("witch", &w, thesis, 2.59, &ours);
-    assert_eq!(check(&w, ours.pole.xy()), Ok(()));
+    assert_eq!(check(&w, ours.pole.xy(), &WorkArea::FAHIM_1983), Ok(()));
     assert!(ours.f1.f1 <= f1_at(&w, thesis) + 1e-12);
     // And it lands on the thesis's optimum (or its mirror), to a tenth of an inch and 0.02 rad.
     let near = |p: Pole| {
@@ -81,7 +88,10 @@ fn table_4_1_serpentine() {
     // the 3 in inner radius (and its left branch lies below that pole's theta = 0). HOKJEV only
     // bounds the pole's coordinates (URK/SRK), so compare under that box; our work-area optimum is
     // reported beside it.
-    assert!(matches!(check(&s, thesis.xy()), Err(Violation::WorkArea { .. })));
+    assert!(matches!(
+        check(&s, thesis.xy(), &WorkArea::FAHIM_1983),
+        Err(Violation::WorkArea { .. })
+    ));
     let [px, py] = thesis.xy();
     let nearest = chord_points(&s, 2000)
         .iter()
@@ -99,9 +109,11 @@ fn table_4_1_serpentine() {
     .unwrap();
     report("serpentine (pole box only)", &s, thesis, 4.563, &boxed);
     assert!(boxed.f1.f1 <= f1_at(&s, thesis) + 1e-12);
-    let ours = optimise(&s, &RES, Constraints::WorkArea, &HookeJeeves::default()).unwrap();
+    let ours =
+        optimise(&s, &RES, Constraints::WorkArea(WorkArea::FAHIM_1983), &HookeJeeves::default())
+            .unwrap();
     report("serpentine (work area)", &s, thesis, 4.563, &ours);
-    assert_eq!(check(&s, ours.pole.xy()), Ok(()));
+    assert_eq!(check(&s, ours.pole.xy(), &WorkArea::FAHIM_1983), Ok(()));
     assert!(order_of_magnitude(area_mm2(&s, ours.pole), 4.563));
 }
 
@@ -112,8 +124,8 @@ fn table_4_1_limacon_pole_inside_violation() {
     let random_best = Pole { c_in: 1.27 * CM, ..thesis };
     // The thesis's optimum (and its random-search best) put the machine pole inside the closed
     // limacon, which its own constraint (b) forbids: the digitizer refuses it.
-    assert_eq!(check(&l, thesis.xy()), Err(Violation::PoleInside(1)));
-    assert_eq!(check(&l, random_best.xy()), Err(Violation::PoleInside(1)));
+    assert_eq!(check(&l, thesis.xy(), &WorkArea::FAHIM_1983), Err(Violation::PoleInside(1)));
+    assert_eq!(check(&l, random_best.xy(), &WorkArea::FAHIM_1983), Err(Violation::PoleInside(1)));
     let (ri, eps) = thesis.digitizer_pole();
     let setup = Setup {
         pole_r_in: ri,
@@ -123,6 +135,8 @@ fn table_4_1_limacon_pole_inside_violation() {
         res: RES,
         tick_hz: 100_000,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     };
     assert!(matches!(digitize(&l, &setup), Err(DigitizeError::PoleInside(1))));
     let e = area_mm2(&l, thesis);
@@ -139,9 +153,11 @@ fn table_4_1_limacon_pole_inside_violation() {
     report("limacon (pole box only)", &l, thesis, 4.05, &boxed);
     assert!(boxed.f1.f1 <= f1_at(&l, thesis) + 1e-12);
     // With both constraints: a pole outside the limacon, in the work area, that the digitizer takes.
-    let ours = optimise(&l, &RES, Constraints::WorkArea, &HookeJeeves::default()).unwrap();
+    let ours =
+        optimise(&l, &RES, Constraints::WorkArea(WorkArea::FAHIM_1983), &HookeJeeves::default())
+            .unwrap();
     report("limacon (work area, pole outside)", &l, thesis, 4.05, &ours);
-    assert_eq!(check(&l, ours.pole.xy()), Ok(()));
+    assert_eq!(check(&l, ours.pole.xy(), &WorkArea::FAHIM_1983), Ok(()));
     let (ri, eps) = ours.pole.digitizer_pole();
     let d = digitize(&l, &Setup { pole_r_in: ri, pole_angle_rad: eps, ..setup }).unwrap();
     assert!(d.events.len() > 1000);

@@ -3,7 +3,8 @@
 
 use motion::polar::stream::BlockEncoder;
 use motionctl::polar::contour::{Limacon, Polar};
-use motionctl::polar::digitize::{digitize, Setup};
+use motionctl::polar::digitize::{digitize, FeedAt, Setup};
+use motionctl::polar::work_area::WorkArea;
 use motionctl::polar::Resolution;
 
 fn generate() -> Vec<u8> {
@@ -17,6 +18,8 @@ fn generate() -> Vec<u8> {
         res: Resolution::THESIS,
         tick_hz: motion::polar::scenario::TICK_HZ,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     };
     let d = digitize(&lim, &setup).unwrap();
     let mut bytes = Vec::new();

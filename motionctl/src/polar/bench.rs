@@ -1,7 +1,8 @@
 //! Digitizer throughput entry point for `cargo xtask bench`.
 
 use super::contour::{Limacon, Polar};
-use super::digitize::{digitize, Setup};
+use super::digitize::{digitize, FeedAt, Setup};
+use super::work_area::WorkArea;
 use super::Resolution;
 
 /// The benchmark contour: the limacon 3 + 2 cos (in) with the thesis's tool (0.125 in), pole
@@ -15,6 +16,8 @@ pub fn limacon_bench_setup() -> Setup {
         res: Resolution::THESIS,
         tick_hz: 100_000,
         cap_speed: true,
+        area: WorkArea::FAHIM_1983,
+        feed_at: FeedAt::Centre,
     }
 }
 

@@ -3,8 +3,9 @@
 //! The lead wires [`PolarCmd`] into the main command line.
 
 use super::contour::{serpentine, witch, Circle, Contour, Limacon, Polar, Spline};
-use super::digitize::{digitize, Setup};
+use super::digitize::{digitize, DigitizeError, FeedAt, Setup};
 use super::pole::{self, Constraints, HookeJeeves, Pole, MM2_PER_IN2};
+use super::work_area::WorkArea;
 use super::{Resolution, DR_IN, DTHETA_RAD};
 use anyhow::{bail, Context};
 use motion::polar::playback::SizeScale;
@@ -70,6 +71,22 @@ pub fn parse_contour(spec: &str) -> anyhow::Result<Box<dyn Contour>> {
     }
 }
 
+/// `--feed-at`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeedAtArg {
+    Contact,
+    Centre,
+}
+
+impl From<FeedAtArg> for FeedAt {
+    fn from(a: FeedAtArg) -> FeedAt {
+        match a {
+            FeedAtArg::Contact => FeedAt::Contact,
+            FeedAtArg::Centre => FeedAt::Centre,
+        }
+    }
+}
+
 /// Machine resolutions and pole options shared by the subcommands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ResArgs {
@@ -106,9 +123,13 @@ pub enum PolarCmd {
         /// Tool radius, in.
         #[arg(long, default_value_t = 0.0)]
         tool_radius: f64,
-        /// Tangential speed Vt of the tool centre, in/s.
+        /// Tangential speed Vt, in/s, held where --feed-at says.
         #[arg(long)]
         vt: f64,
+        /// Where Vt is held: `contact` (the cutting point on the contour: the thesis's Vt) or
+        /// `centre` (the tool centre, a machine's programmed feed).
+        #[arg(long, value_enum, default_value_t = FeedAtArg::Contact)]
+        feed_at: FeedAtArg,
         #[command(flatten)]
         res: ResArgs,
         /// Event time quantum, Hz.
@@ -117,6 +138,10 @@ pub enum PolarCmd {
         /// Only warn above the curvature speed limit (default: slow down to it, with a warning).
         #[arg(long)]
         no_cap: bool,
+        /// Machine file whose `[polar]` table gives the work area (default: Fahim's machine,
+        /// 3 < r < 13 in, 0 < theta < 2.8 rad).
+        #[arg(long, value_name = "FILE")]
+        machine: Option<std::path::PathBuf>,
         /// Stream file to write.
         #[arg(long, short)]
         out: Option<std::path::PathBuf>,
@@ -140,6 +165,9 @@ pub enum PolarCmd {
         /// the work area.
         #[arg(long, value_name = "HALF")]
         box_only: Option<f64>,
+        /// Machine file whose `[polar]` table gives the work area (default: Fahim's machine).
+        #[arg(long, value_name = "FILE")]
+        machine: Option<std::path::PathBuf>,
     },
     /// Play a stream file on the board as an event job (through the host link), then check
     /// the events fired and the final (theta, r) steps against the host model.
@@ -338,6 +366,37 @@ fn run_copy(
     Ok(())
 }
 
+/// The work area of `--machine FILE`, or Fahim's machine.
+fn work_area(machine: Option<&std::path::Path>) -> anyhow::Result<WorkArea> {
+    machine.map_or(Ok(WorkArea::FAHIM_1983), WorkArea::from_file)
+}
+
+/// For a contour that leaves the work area: a machine pole (from the pole optimiser, checked by
+/// digitizing with it) that keeps it inside, as the flags to give, or why there is none.
+fn suggest_pole(contour: &dyn Contour, setup: &Setup) -> String {
+    // The contour must stay a tool radius inside for the tool centre to be inside.
+    let opt = setup.area.inset(setup.tool_radius_in).and_then(|inner| {
+        pole::optimise(contour, &setup.res, Constraints::WorkArea(inner), &HookeJeeves::default())
+    });
+    let fits = opt.filter(|o| {
+        let (pole_r_in, pole_angle_rad) = o.pole.digitizer_pole();
+        digitize(contour, &Setup { pole_r_in, pole_angle_rad, ..*setup }).is_ok()
+    });
+    match fits {
+        Some(o) => format!(
+            "a pole that fits: --pole-c {:.4} --pole-beta {:.4} (C {:.2} mm; least area error \
+             F1 {:.4})",
+            o.pole.c_in,
+            o.pole.beta_rad,
+            o.pole.c_in * 25.4,
+            o.f1.f1
+        ),
+        None => "no machine pole fits it in this work area: the contour (with the tool) is too \
+                 large for it"
+            .to_string(),
+    }
+}
+
 /// Runs one `polar` subcommand, printing to stdout.
 pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
     match cmd {
@@ -347,13 +406,16 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             pole_beta,
             tool_radius,
             vt,
+            feed_at,
             res,
             tick_hz,
             no_cap,
+            machine,
             out,
             json,
         } => {
             let c = parse_contour(&contour)?;
+            let area = work_area(machine.as_deref())?;
             let (pole_r_in, pole_angle_rad) =
                 Pole { c_in: pole_c, beta_rad: pole_beta }.digitizer_pole();
             let setup = Setup {
@@ -361,11 +423,18 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 pole_angle_rad,
                 tool_radius_in: tool_radius,
                 vt_in_per_s: vt,
+                feed_at: feed_at.into(),
                 res: res.res()?,
                 tick_hz,
                 cap_speed: !no_cap,
+                area,
             };
-            let d = digitize(c.as_ref(), &setup)?;
+            let d = match digitize(c.as_ref(), &setup) {
+                Err(e @ DigitizeError::OutsideWorkArea { .. }) => {
+                    bail!("{e}; {}", suggest_pole(c.as_ref(), &setup))
+                }
+                r => r?,
+            };
             let ticks: u64 = d.events.iter().map(|e| e.dt_ticks as u64).sum();
             let radial = d.events.iter().filter(|e| e.axis == 1).count();
             // Where the machine starts: the tool centre's (r, theta) about the machine pole,
@@ -373,15 +442,25 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             let start_r_in = d.start_r_steps as f64 * setup.res.dr_in;
             let start_theta_deg = d.theta0_rad.to_degrees();
             let duration_s = ticks as f64 / tick_hz as f64;
+            // The cut's time from its length: the stream must last this (to a tick per event).
+            let expected_s = d.feed_length_in / d.vt_in_per_s;
+            let feed_name = match setup.feed_at {
+                FeedAt::Contact => "contact",
+                FeedAt::Centre => "centre",
+            };
             if json {
                 crate::outln!(
                     "{{\"events\":{},\"radial_events\":{radial},\"angular_events\":{},\
-                     \"path_in\":{:.6},\"duration_s\":{duration_s:.6},\"vt_in_per_s\":{:.6},\
+                     \"path_in\":{:.6},\"contact_path_in\":{:.6},\"feed_at\":\"{}\",\
+                     \"duration_s\":{duration_s:.6},\"expected_s\":{expected_s:.6},\
+                     \"vt_in_per_s\":{:.6},\
                      \"start_r_in\":{start_r_in:.6},\"start_theta_deg\":{start_theta_deg:.6},\
                      \"min_radius_of_curvature_in\":{:.6},\"warnings\":{}}}",
                     d.events.len(),
                     d.events.len() - radial,
                     d.length_in,
+                    d.contact_length_in,
+                    feed_name,
                     d.vt_in_per_s,
                     d.min_rho_in,
                     d.warnings.len()
@@ -395,14 +474,24 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             let text = !json;
             if text {
                 crate::outln!(
-                "{} events ({radial} radial, {} angular), path {:.4} in, duration {:.4} s at Vt {:.4} in/s, min radius of curvature {:.4} in",
-                d.events.len(),
-                d.events.len() - radial,
-                d.length_in,
-                ticks as f64 / tick_hz as f64,
-                d.vt_in_per_s,
-                d.min_rho_in
-            );
+                    "{} events ({radial} radial, {} angular), min radius of curvature {:.4} in",
+                    d.events.len(),
+                    d.events.len() - radial,
+                    d.min_rho_in
+                );
+                crate::outln!(
+                    "path       contact {:.4} in, tool centre {:.4} in; Vt {:.4} in/s held at the \
+                     {}",
+                    d.contact_length_in,
+                    d.length_in,
+                    d.vt_in_per_s,
+                    if setup.feed_at == FeedAt::Contact { "contact point" } else { "tool centre" }
+                );
+                crate::outln!(
+                    "time       {duration_s:.4} s ({:.4} in / {:.4} in/s = {expected_s:.4} s)",
+                    d.feed_length_in,
+                    d.vt_in_per_s
+                );
             }
             for w in &d.warnings {
                 eprintln!("motionctl: warning: {w}");
@@ -438,12 +527,13 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
         PolarCmd::Copy { link, size, teach, template, seconds } => {
             run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds)
         }
-        PolarCmd::Pole { contour, res, box_only } => {
+        PolarCmd::Pole { contour, res, box_only, machine } => {
             let c = parse_contour(&contour)?;
             let res = res.res()?;
+            let work = work_area(machine.as_deref())?;
             let constraints = match box_only {
                 Some(half_in) => Constraints::Box { centre: [0.0, 0.0], half_in },
-                None => Constraints::WorkArea,
+                None => Constraints::WorkArea(work),
             };
             let Some(o) = pole::optimise(c.as_ref(), &res, constraints, &HookeJeeves::default())
             else {
@@ -464,7 +554,12 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 "area error {:.6} in^2 = {:.3} mm^2; constraints: {:?}",
                 area,
                 area * MM2_PER_IN2,
-                pole::check(c.as_ref(), o.pole.xy())
+                pole::check(c.as_ref(), o.pole.xy(), &work)
+            );
+            crate::outln!(
+                "digitize with --pole-c {:.4} --pole-beta {:.4} (work area {work})",
+                o.pole.c_in,
+                o.pole.beta_rad
             );
             Ok(())
         }

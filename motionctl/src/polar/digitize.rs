@@ -13,7 +13,8 @@
 
 use super::contour::{Contour, Jet};
 use super::drive;
-use super::{Resolution, R_MAX_IN, R_MIN_IN, THETA_MAX_RAD};
+use super::work_area::WorkArea;
+use super::Resolution;
 use motion::polar::StepEvent;
 use std::f64::consts::PI;
 
@@ -26,13 +27,28 @@ pub struct Setup {
     /// Tool radius; the tool centre runs on the right of the direction of travel (outside a
     /// counter-clockwise closed contour).
     pub tool_radius_in: f64,
-    /// Tangential speed of the tool centre.
+    /// Tangential speed Vt, held at the point [`Setup::feed_at`] names.
     pub vt_in_per_s: f64,
+    /// Where Vt is held: the contact point (the thesis's definition) or the tool centre.
+    pub feed_at: FeedAt,
     pub res: Resolution,
     /// Event time quantum (the playback's DDA tick).
     pub tick_hz: u32,
     /// Cap Vt at the curvature-based speed limit (with a warning) instead of only warning.
     pub cap_speed: bool,
+    /// Where the tool centre may go.
+    pub area: WorkArea,
+}
+
+/// Where the tangential speed is held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FeedAt {
+    /// At the contact point on the contour (Fahim's Vt: the cut's surface speed). The tool
+    /// centre then runs at Vt (1 + R kappa): faster round convex parts, slower in concave ones.
+    #[default]
+    Contact,
+    /// At the tool centre (a machine's programmed feed).
+    Centre,
 }
 
 /// Why a contour cannot be digitized.
@@ -40,8 +56,8 @@ pub struct Setup {
 pub enum DigitizeError {
     #[error("the machine pole lies inside the closed contour (winding number {0}): the arm cannot follow it")]
     PoleInside(i32),
-    #[error("tool path leaves the work area at u = {u:.4}: r = {r_in:.4} in, theta = {theta_rad:.4} rad (need 3 < r < 13 in, 0 < theta < 2.8 rad)")]
-    OutsideWorkArea { u: f64, r_in: f64, theta_rad: f64 },
+    #[error("the tool path leaves the work area ({area}): at r = {r_in:.4} in, theta = {:.3} deg (contour parameter u = {u:.4}) it is {miss_in:.4} in ({:.3} mm) outside", theta_rad.to_degrees(), miss_in * 25.4)]
+    OutsideWorkArea { u: f64, r_in: f64, theta_rad: f64, miss_in: f64, area: WorkArea },
     #[error("tool radius {0} in is larger than the concave radius of curvature {1:.4} in: the offset path folds")]
     ToolTooLarge(f64, f64),
     #[error("bad setup: {0}")]
@@ -64,13 +80,18 @@ const MIN_PATH_IN: f64 = 1e-9;
 #[derive(Clone, Debug, Default)]
 pub struct Digitized {
     pub events: Vec<StepEvent>,
-    /// Arc length of the tool centre at each event, inches.
+    /// Arc length at each event along the path Vt is held on ([`Setup::feed_at`]), inches: the
+    /// event's time is this over Vt.
     pub s_in: Vec<f64>,
     /// Start of the machine: radial grid index, angle theta0 (the angular grid's origin).
     pub start_r_steps: i64,
     pub theta0_rad: f64,
     /// Tool-centre path length.
     pub length_in: f64,
+    /// Contact-point path length (the contour's own length; the tool-centre's with no tool).
+    pub contact_length_in: f64,
+    /// The length Vt is held along ([`Setup::feed_at`]): the cut lasts `feed_length_in / Vt`.
+    pub feed_length_in: f64,
     /// Speed the events are timed for (Vt, or the capped speed).
     pub vt_in_per_s: f64,
     /// Smallest radius of curvature of the tool-centre path.
@@ -127,9 +148,21 @@ impl<'a, C: Contour + ?Sized> ToolPath<'a, C> {
 struct Sample {
     u: f64,
     s: f64,
+    /// Contact-point arc length.
+    c: f64,
     r: f64,
     /// Unwrapped machine angle.
     th: f64,
+}
+
+/// The contact point's speed from the tool centre's `centre_speed` (|X'| = |P'| (1 + R kappa)).
+pub fn contact_speed(centre_speed: f64, tool_radius_in: f64, kappa: f64) -> f64 {
+    let g = 1.0 + tool_radius_in * kappa;
+    if g > 0.0 {
+        centre_speed / g
+    } else {
+        centre_speed
+    }
 }
 
 /// Digitizes `contour` with `setup`.
@@ -165,22 +198,38 @@ pub fn digitize<C: Contour + ?Sized>(
     let ir = |r: f64| (r / res.dr_in).round() as i64;
     let jt = |th: f64| ((th - th_start) / res.dtheta_rad).round() as i64;
     out.start_r_steps = ir(r_start);
+    let area = setup.area;
+    let outside = |u: f64, r: f64, th: f64| DigitizeError::OutsideWorkArea {
+        u,
+        r_in: r,
+        theta_rad: th,
+        miss_in: area.miss_in(r, th),
+        area,
+    };
     let check = |u: f64, r: f64, th: f64| {
-        if r <= R_MIN_IN || r >= R_MAX_IN || th <= 0.0 || th >= THETA_MAX_RAD {
-            Err(DigitizeError::OutsideWorkArea { u, r_in: r, theta_rad: th })
-        } else {
+        if area.contains(r, th) {
             Ok(())
+        } else {
+            Err(outside(u, r, th))
         }
     };
+    // The sample of the first pass furthest outside the work area, if any: (miss, u, r, theta).
+    let mut worst_out: Option<(f64, f64, f64, f64)> = None;
     // One pass over the path: its length and the radial and angular travel (for the event
     // estimate, so no resolution can make the digitizer allocate without bound), and the winding
     // number about the machine pole.
     let (mut turn, mut length, mut r_travel, mut th_travel) = (0.0, 0.0, 0.0, 0.0);
     let (mut prev_r, mut prev_th, mut prev_x) = (r_start, th_start, polar(u0).2);
     for i in 1..=PATH_SAMPLES {
-        let (r, th, x, ..) = polar(u0 + (u1 - u0) * i as f64 / PATH_SAMPLES as f64);
+        let u = u0 + (u1 - u0) * i as f64 / PATH_SAMPLES as f64;
+        let (r, th, x, ..) = polar(u);
         let dth = (th - prev_th + PI).rem_euclid(2.0 * PI) - PI;
         turn += dth;
+        let th_unwrapped = th_start + turn;
+        let miss = area.miss_in(r, th_unwrapped);
+        if miss > 0.0 && worst_out.is_none_or(|w| miss > w.0) {
+            worst_out = Some((miss, u, r, th_unwrapped));
+        }
         th_travel += dth.abs();
         r_travel += (r - prev_r).abs();
         length += (x[0] - prev_x[0]).hypot(x[1] - prev_x[1]);
@@ -207,15 +256,25 @@ pub fn digitize<C: Contour + ?Sized>(
         }
     }
     check(u0, r_start, th_start)?;
-    let mut cur = Sample { u: u0, s: 0.0, r: r_start, th: th_start };
+    // Where the path is furthest outside (the dense pass below finds a point between samples).
+    if let Some((_, u, r, th)) = worst_out {
+        return Err(outside(u, r, th));
+    }
+    let mut cur = Sample { u: u0, s: 0.0, c: 0.0, r: r_start, th: th_start };
     let (mut ri, mut tj) = (ir(r_start), 0i64);
-    let speed = |u: f64| {
-        let (_, dx, _) = path.eval(u);
-        dx[0].hypot(dx[1])
+    // Tool-centre and contact-point speeds along u (|X'| and |P'|: |X'| = |P'| (1 + R kappa)).
+    let speeds = |u: f64| {
+        let (_, dx, kappa) = path.eval(u);
+        let sp = dx[0].hypot(dx[1]);
+        (sp, contact_speed(sp, setup.tool_radius_in, kappa))
     };
+    // The sample where the tool centre's speed squared over its radius of curvature (the radial
+    // drive's load) is largest per Vt^2: (rho, centre speed / Vt) there.
+    let mut worst: (f64, f64) = (f64::INFINITY, 1.0);
     let span = u1 - u0;
     let mut h = span * 1e-4;
-    let mut events: Vec<(f64, u8, bool)> = Vec::with_capacity(1024);
+    // (tool-centre arc length, contact arc length, axis, negative) per crossing.
+    let mut events: Vec<(f64, f64, u8, bool)> = Vec::with_capacity(1024);
     // The path at the current sample, carried over from the step that accepted it (one curve
     // evaluation per accepted sample instead of two).
     let mut at = polar(u0);
@@ -227,8 +286,17 @@ pub fn digitize<C: Contour + ?Sized>(
             return Err(DigitizeError::ToolTooLarge(setup.tool_radius_in, 1.0 / kappa.abs()));
         }
         let sp = dx[0].hypot(dx[1]);
+        let csp = contact_speed(sp, setup.tool_radius_in, kappa);
         if kappa.abs() > 0.0 {
-            out.min_rho_in = out.min_rho_in.min((1.0 / kappa + setup.tool_radius_in).abs());
+            let rho = (1.0 / kappa + setup.tool_radius_in).abs();
+            out.min_rho_in = out.min_rho_in.min(rho);
+            let ratio = match setup.feed_at {
+                FeedAt::Contact => g,
+                FeedAt::Centre => 1.0,
+            };
+            if ratio * ratio / rho > worst.1 * worst.1 / worst.0 {
+                worst = (rho, ratio);
+            }
         }
         let dr = (x[0] * dx[0] + x[1] * dx[1]) / r;
         let dth = (x[0] * dx[1] - x[1] * dx[0]) / (r * r);
@@ -253,10 +321,14 @@ pub fn digitize<C: Contour + ?Sized>(
                 // Gauss-Legendre's four. The step is under half a resolution on each axis, so
                 // the h^5 error term is ~1e-15 in per step (the accuracy tests compare against
                 // 4-point Gauss-Legendre on a 200000-point grid).
-                let mid = speed((cur.u + un) / 2.0);
-                let s = cur.s + (un - cur.u) / 6.0 * (sp + 4.0 * mid + dxn[0].hypot(dxn[1]));
+                let (mid, cmid) = speeds((cur.u + un) / 2.0);
+                let (spn, kn) = (dxn[0].hypot(dxn[1]), ev.4);
+                let w = (un - cur.u) / 6.0;
+                let s = cur.s + w * (sp + 4.0 * mid + spn);
+                let c =
+                    cur.c + w * (csp + 4.0 * cmid + contact_speed(spn, setup.tool_radius_in, kn));
                 at = ev;
-                break Sample { u: un, s, r: rn, th: thn };
+                break Sample { u: un, s, c, r: rn, th: thn };
             }
             un = cur.u + (un - cur.u) / 2.0;
         };
@@ -268,7 +340,7 @@ pub fn digitize<C: Contour + ?Sized>(
         if ri_n != ri {
             let line = (ri.max(ri_n) as f64 - 0.5) * res.dr_in;
             let f = ((line - cur.r) / (next.r - cur.r)).clamp(0.0, 1.0);
-            pair[k] = (cur.s + f * (next.s - cur.s), 1, ri_n < ri);
+            pair[k] = (f, 1, ri_n < ri);
             k += 1;
             ri = ri_n;
         }
@@ -276,17 +348,30 @@ pub fn digitize<C: Contour + ?Sized>(
         if tj_n != tj {
             let line = th_start + (tj.max(tj_n) as f64 - 0.5) * res.dtheta_rad;
             let f = ((line - cur.th) / (next.th - cur.th)).clamp(0.0, 1.0);
-            pair[k] = (cur.s + f * (next.s - cur.s), 0, tj_n < tj);
+            pair[k] = (f, 0, tj_n < tj);
             k += 1;
             tj = tj_n;
         }
         if k == 2 && pair[1].0 < pair[0].0 {
             pair.swap(0, 1);
         }
-        events.extend_from_slice(&pair[..k]);
+        // Both arc lengths at each crossing (the fraction of this sample step).
+        for &(f, axis, negative) in &pair[..k] {
+            events.push((
+                cur.s + f * (next.s - cur.s),
+                cur.c + f * (next.c - cur.c),
+                axis,
+                negative,
+            ));
+        }
         cur = next;
     }
     out.length_in = cur.s;
+    out.contact_length_in = cur.c;
+    out.feed_length_in = match setup.feed_at {
+        FeedAt::Contact => cur.c,
+        FeedAt::Centre => cur.s,
+    };
     if contour.closed() {
         let winding = ((cur.th - th_start) / (2.0 * PI)).round() as i32;
         if winding != 0 {
@@ -294,12 +379,14 @@ pub fn digitize<C: Contour + ?Sized>(
         }
     }
     // Speed limit from the curvature and the radial drive's torque (warn, and cap if asked).
-    let limit = drive::curvature_speed_limit_in_per_s(out.min_rho_in);
+    // The limit is the tool centre's; with Vt held at the contact point the centre runs at
+    // Vt times the ratio there.
+    let limit = drive::curvature_speed_limit_in_per_s(worst.0) / worst.1;
     let mut vt = setup.vt_in_per_s;
     if vt > limit {
         let msg = format!(
             "Vt {:.4} in/s exceeds the curvature speed limit {:.4} in/s at radius of curvature {:.4} in: steps would be lost",
-            vt, limit, out.min_rho_in
+            vt, limit, worst.0
         );
         if setup.cap_speed {
             out.warnings.push(format!("{msg}; slowed to the limit"));
@@ -312,12 +399,16 @@ pub fn digitize<C: Contour + ?Sized>(
     // Times in whole ticks from the start (no drift), dt = difference.
     let ticks_per_in = setup.tick_hz as f64 / vt;
     let mut prev = 0u64;
-    for (s, axis, negative) in events {
-        let t = (s * ticks_per_in).round() as u64;
+    for (s, c, axis, negative) in events {
+        let fed = match setup.feed_at {
+            FeedAt::Contact => c,
+            FeedAt::Centre => s,
+        };
+        let t = (fed * ticks_per_in).round() as u64;
         let dt = t.saturating_sub(prev);
         prev = prev.max(t);
         out.events.push(StepEvent { dt_ticks: dt as u32, axis, negative });
-        out.s_in.push(s);
+        out.s_in.push(fed);
     }
     Ok(out)
 }

@@ -15,6 +15,7 @@ pub mod pole;
 pub mod run;
 pub mod segments;
 pub mod sim;
+pub mod work_area;
 
 /// Radial resolution dR, inches (0.001 in = 2.54e-3 cm).
 pub const DR_IN: f64 = 0.001;

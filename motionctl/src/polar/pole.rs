@@ -8,7 +8,8 @@
 //! relative to the machine pole, RI = C, EPS = beta - pi. Lengths in inches.
 
 use super::contour::Contour;
-use super::{Resolution, R_MAX_IN, R_MIN_IN, THETA_MAX_RAD};
+use super::work_area::WorkArea;
+use super::Resolution;
 use std::f64::consts::PI;
 
 /// Square millimetres per square inch (Table 4.1 prints both).
@@ -235,24 +236,32 @@ pub fn area_error_in2<C: Contour + ?Sized>(
 pub enum Violation {
     /// The machine pole is inside the closed contour (winding number).
     PoleInside(i32),
-    /// A contour point outside 3 < r < 13 in or 0 < theta < 2.8 rad.
+    /// A contour point outside the work area.
     WorkArea { r_in: f64, theta_rad: f64 },
 }
 
 /// Samples used for the feasibility test.
 pub const FEASIBILITY_SAMPLES: usize = 2000;
 
-/// Checks the work area (7.62 < r < 33.02 cm, 0 < theta < 2.8 rad about the machine pole) and,
-/// for a closed contour, that the pole is outside (winding number 0), on `FEASIBILITY_SAMPLES`
-/// points of the contour.
-pub fn check<C: Contour + ?Sized>(contour: &C, pole: [f64; 2]) -> Result<(), Violation> {
+/// Checks the work area (about the machine pole) and, for a closed contour, that the pole is
+/// outside (winding number 0), on `FEASIBILITY_SAMPLES` points of the contour.
+pub fn check<C: Contour + ?Sized>(
+    contour: &C,
+    pole: [f64; 2],
+    area: &WorkArea,
+) -> Result<(), Violation> {
     let pts = chord_points(contour, FEASIBILITY_SAMPLES);
-    check_points(&pts, contour.closed(), pole)
+    check_points(&pts, contour.closed(), pole, area)
 }
 
 /// [`check`] on given points.
-pub fn check_points(pts: &[[f64; 2]], closed: bool, pole: [f64; 2]) -> Result<(), Violation> {
-    check_points_margin(pts, closed, pole, 0.0)
+pub fn check_points(
+    pts: &[[f64; 2]],
+    closed: bool,
+    pole: [f64; 2],
+    area: &WorkArea,
+) -> Result<(), Violation> {
+    check_points_margin(pts, closed, pole, area, 0.0)
 }
 
 /// Margin the optimiser keeps inside the work area (inches on r, the same over 10 in on theta):
@@ -263,6 +272,7 @@ fn check_points_margin(
     pts: &[[f64; 2]],
     closed: bool,
     pole: [f64; 2],
+    area: &WorkArea,
     margin_in: f64,
 ) -> Result<(), Violation> {
     let m_th = margin_in / 10.0;
@@ -279,10 +289,10 @@ fn check_points_margin(
     }
     for p in &rel {
         let (r, th) = (p[0].hypot(p[1]), p[1].atan2(p[0]));
-        if r <= R_MIN_IN + margin_in
-            || r >= R_MAX_IN - margin_in
-            || th <= m_th
-            || th >= THETA_MAX_RAD - m_th
+        if r <= area.r_min_in + margin_in
+            || r >= area.r_max_in - margin_in
+            || th <= area.theta_min_rad + m_th
+            || th >= area.theta_max_rad - m_th
         {
             return Err(Violation::WorkArea { r_in: r, theta_rad: th });
         }
@@ -389,8 +399,8 @@ pub fn hooke_jeeves(
 /// What the pole search enforces.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Constraints {
-    /// Work area and pole outside a closed contour (the thesis's stated constraints).
-    WorkArea,
+    /// The work area and the pole outside a closed contour (the thesis's stated constraints).
+    WorkArea(WorkArea),
     /// Only a box of half-width `half_in` about `centre` (what HOKJEV's URK/SRK limits enforce).
     Box { centre: [f64; 2], half_in: f64 },
 }
@@ -418,8 +428,8 @@ pub fn optimise<C: Contour + ?Sized>(
     let check_pts = chord_points(contour, FEASIBILITY_SAMPLES / 4);
     let closed = contour.closed();
     let feasible = |p: [f64; 2]| match constraints {
-        Constraints::WorkArea => {
-            check_points_margin(&check_pts, closed, p, SEARCH_MARGIN_IN).is_ok()
+        Constraints::WorkArea(area) => {
+            check_points_margin(&check_pts, closed, p, &area, SEARCH_MARGIN_IN).is_ok()
         }
         Constraints::Box { centre, half_in } => {
             (p[0] - centre[0]).abs() <= half_in && (p[1] - centre[1]).abs() <= half_in
@@ -428,7 +438,7 @@ pub fn optimise<C: Contour + ?Sized>(
     let objective = |p: [f64; 2]| if feasible(p) { f1(&chords, p, res).f1 } else { f64::INFINITY };
     // Candidate grid: about the contour's bounding box grown by the work area's outer radius.
     let (lo, hi) = match constraints {
-        Constraints::WorkArea => {
+        Constraints::WorkArea(area) => {
             let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
             for p in &check_pts {
                 for k in 0..2 {
@@ -436,7 +446,8 @@ pub fn optimise<C: Contour + ?Sized>(
                     hi[k] = hi[k].max(p[k]);
                 }
             }
-            ([lo[0] - R_MAX_IN, lo[1] - R_MAX_IN], [hi[0] + R_MAX_IN, hi[1] + R_MAX_IN])
+            let r = area.r_max_in;
+            ([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r])
         }
         Constraints::Box { centre, half_in } => {
             ([centre[0] - half_in, centre[1] - half_in], [centre[0] + half_in, centre[1] + half_in])

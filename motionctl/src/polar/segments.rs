@@ -4,7 +4,7 @@
 //! paths are judged by (largest distance of the machine's tool centre from the ideal tool path).
 
 use super::contour::Contour;
-use super::digitize::{gauss4, DigitizeError, Setup, ToolPath};
+use super::digitize::{contact_speed, gauss4, DigitizeError, FeedAt, Setup, ToolPath};
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::polar::playback::{Playback, SizeScale};
 use motion::polar::StepEvent;
@@ -19,7 +19,7 @@ pub struct SegmentPath {
     pub segments: Vec<Segment>,
     pub start_r_steps: i64,
     pub theta0_rad: f64,
-    /// Tool-centre path length.
+    /// Length of the path Vt is held on (`Setup::feed_at`).
     pub length_in: f64,
 }
 
@@ -31,7 +31,8 @@ pub struct DensePath {
     pub xy: Vec<[f64; 2]>,
     /// Unwrapped machine angle at each point.
     pub theta: Vec<f64>,
-    /// Arc length at each point.
+    /// Arc length at each point along the path Vt is held on (`Setup::feed_at`: the contact
+    /// point's or the tool centre's).
     pub s_in: Vec<f64>,
 }
 
@@ -41,8 +42,12 @@ pub fn dense_path<C: Contour + ?Sized>(contour: &C, setup: &Setup, n: usize) -> 
     let (u0, u1) = contour.range();
     let n = n.max(1);
     let speed = |u: f64| {
-        let (_, dx, _) = path.eval(u);
-        dx[0].hypot(dx[1])
+        let (_, dx, kappa) = path.eval(u);
+        let centre = dx[0].hypot(dx[1]);
+        match setup.feed_at {
+            FeedAt::Centre => centre,
+            FeedAt::Contact => contact_speed(centre, setup.tool_radius_in, kappa),
+        }
     };
     let mut out = DensePath::default();
     let (mut s, mut th_prev, mut th_unw) = (0.0, 0.0, 0.0);
