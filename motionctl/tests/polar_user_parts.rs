@@ -141,6 +141,18 @@ fn a_users_work_area_refuses_a_contour_outside_it_and_suggests_a_pole_that_fits(
     let (ok, out, err) = with([c, b]);
     assert!(ok, "suggested pole {c} {b}: {err}");
     assert!(out.contains("start      r "), "{out}");
+    // Its plot: the part, the tool path, the steps and the work area, labelled with units.
+    let svg = dir.join("part.svg");
+    let mut a = part.to_vec();
+    a.extend(["--pole-c", c, "--pole-beta", b, "--machine", m, "--plot", svg.to_str().unwrap()]);
+    let (ok, _, err) = motionctl(&a);
+    assert!(ok, "{err}");
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    if !err.contains("unlabelled") {
+        for text in ["polar digitize limacon:3,2", "x, in", "theta, deg", "time, s", "work area"] {
+            assert!(drawn.contains(text), "{text} not in the plot");
+        }
+    }
     // A contour no pole can fit: named as such.
     let mut big = part.to_vec();
     big[2] = "circle:6";

@@ -145,6 +145,10 @@ pub enum PolarCmd {
         /// Stream file to write.
         #[arg(long, short)]
         out: Option<std::path::PathBuf>,
+        /// Draw the contour, the tool path, the machine's steps and the work area (in the plane
+        /// and in (theta, r)) and the axes against time: FILE.svg or FILE.png.
+        #[arg(long, value_name = "FILE")]
+        plot: Option<std::path::PathBuf>,
         /// The summary as one JSON object on stdout instead of text.
         #[arg(long)]
         json: bool,
@@ -412,6 +416,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             no_cap,
             machine,
             out,
+            plot,
             json,
         } => {
             let c = parse_contour(&contour)?;
@@ -495,6 +500,22 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             }
             for w in &d.warnings {
                 eprintln!("motionctl: warning: {w}");
+            }
+            if let Some(p) = &plot {
+                let title = format!(
+                    "polar digitize {contour}: tool radius {tool_radius} in, Vt {vt} in/s, pole C \
+                     {pole_c} in at beta {pole_beta} rad"
+                );
+                let w = super::figure::digitized_figure(c.as_ref(), &setup, &d, &title).write(p)?;
+                eprintln!(
+                    "motionctl: wrote {}{}",
+                    p.display(),
+                    if w == crate::plot::Written::Unlabelled {
+                        " (no system font: unlabelled)"
+                    } else {
+                        ""
+                    }
+                );
             }
             if let Some(path) = out {
                 let mut bytes = Vec::new();

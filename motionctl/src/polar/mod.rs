@@ -10,6 +10,7 @@ pub mod copy_sim;
 pub mod digitize;
 pub mod drive;
 pub mod dump;
+pub mod figure;
 pub mod listing;
 pub mod pole;
 pub mod run;
