@@ -136,7 +136,7 @@ fn work_area_edges(a: &WorkArea) -> Vec<(&'static str, Vec<(f64, f64)>)> {
         ]
     };
     let mut edge: Vec<(f64, f64)> = arc(a.r_min_in);
-    edge.extend(ray(a.theta_max_rad).into_iter());
+    edge.extend(ray(a.theta_max_rad));
     let mut outer: Vec<(f64, f64)> = arc(a.r_max_in);
     outer.reverse();
     edge.extend(outer);
