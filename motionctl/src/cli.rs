@@ -29,8 +29,8 @@ pub enum Cmd {
         job: JobArgs,
         #[command(flatten)]
         link: LinkArgs,
-        /// Write every board status report to this CSV file.
-        #[arg(long, value_name = "FILE")]
+        /// Write every board status report to this CSV file (also `--log-csv`).
+        #[arg(long = "csv", alias = "log-csv", value_name = "FILE")]
         log_csv: Option<PathBuf>,
         /// Never wait for the operator: a program pause (M0) continues at once.
         #[arg(long, short = 'y')]

@@ -33,3 +33,41 @@ fn readme_machine_states_and_faults_match_the_code() {
         );
     }
 }
+
+/// Every `motionctl ...` line in the READMEs' code blocks parses with today's flags (what a user
+/// copies from them must not meet "unexpected argument"). Usage lines with placeholders in
+/// brackets or alternatives are skipped; an output line (the transcript after a `$` command) is
+/// not a command.
+#[test]
+fn readme_command_lines_parse() {
+    use clap::Parser;
+    let mut checked = 0;
+    for (name, text) in [
+        ("README.md", include_str!("../../README.md")),
+        ("motionctl/README.md", include_str!("../README.md")),
+    ] {
+        let mut in_code = false;
+        for (n, line) in text.lines().enumerate() {
+            if line.trim_start().starts_with("```") {
+                in_code = !in_code;
+                continue;
+            }
+            let cmd = line.trim_start().trim_start_matches("$ ");
+            if !in_code || !cmd.starts_with("motionctl ") {
+                continue;
+            }
+            let cmd = cmd.split(" #").next().unwrap_or(cmd).trim();
+            if cmd.contains(['[', '|', '<', '>']) || cmd.contains("...") || cmd.ends_with('\\') {
+                continue;
+            }
+            let words: Vec<&str> = cmd.split_whitespace().collect();
+            if let Err(e) = motionctl::cli::Cli::try_parse_from(&words) {
+                if e.kind() != clap::error::ErrorKind::DisplayHelp {
+                    panic!("{name}:{}: `{cmd}`: {e}", n + 1);
+                }
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 20, "only {checked} command lines found");
+}

@@ -195,8 +195,8 @@ pub enum PolarCmd {
         /// Radial size scale M:K (M radial steps per K encoder counts), each 1..=4.
         #[arg(long, default_value = "1:1", value_parser = parse_size)]
         size: SizeScale,
-        /// Record and save the taught stream here.
-        #[arg(long, value_name = "OUT.bin")]
+        /// Record and save the taught stream here (also `--out`, `-o`).
+        #[arg(long, short = 'o', alias = "out", value_name = "OUT.bin")]
         teach: Option<std::path::PathBuf>,
         /// Template for a simulator board: `limacon[:THETA_END_RAD]` (built in: r = 3 + 2 cos
         /// theta in, from theta 0) or a file of `arm_counts,carriage_counts` waypoints.
