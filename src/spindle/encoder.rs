@@ -45,6 +45,9 @@ pub struct QuadratureEncoder {
     window: [i32; MAX_WINDOW_TICKS],
     head: usize,
     window_counts: i32,
+    /// Updates in a row without a count or an index (saturating): from the window's length on,
+    /// every slot holds the position and an update changes nothing.
+    still: u16,
     fault: Option<FaultCode>,
 }
 
@@ -70,6 +73,7 @@ impl QuadratureEncoder {
             window: [0; MAX_WINDOW_TICKS],
             head: 0,
             window_counts: 0,
+            still: 0,
             fault: None,
         })
     }
@@ -80,6 +84,16 @@ impl QuadratureEncoder {
     pub fn update(&mut self, count: u16, index_count: Option<u16>) {
         // Wrap-safe: the signed 16-bit difference is right for moves under 32768 counts/tick.
         let delta = count.wrapping_sub(self.last_count) as i16 as i64;
+        // A stopped spindle: after a window of still updates nothing can change (the position,
+        // the reference, every slot of the window), so the rest is skipped.
+        if delta == 0 && index_count.is_none() {
+            if self.still >= 1 << self.cfg.window_log2 {
+                return;
+            }
+            self.still += 1;
+        } else {
+            self.still = 0;
+        }
         self.last_count = count;
         self.position_counts = self.position_counts.wrapping_add(delta);
         let cpr = self.cfg.counts_per_rev as i64;
@@ -155,5 +169,52 @@ impl SpindleSource for QuadratureEncoder {
     }
     fn is_stopped(&self) -> bool {
         self.window_counts.unsigned_abs() < self.cfg.stop_counts_per_window
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Against a plain model that keeps the whole history: the speed window is the position now
+    /// minus the position a window ago, the angle the position since the last index modulo a
+    /// revolution; through stops longer than the window (the still fast path), starts, reversals
+    /// and index pulses.
+    #[test]
+    fn matches_a_model_with_the_whole_history_through_stops_and_starts() {
+        let cfg = EncoderConfig {
+            counts_per_rev: 4000,
+            index_tolerance_counts: 2,
+            window_log2: 4,
+            stop_counts_per_window: 1,
+        };
+        let mut e = QuadratureEncoder::new(cfg, 100).unwrap();
+        let mut history = vec![0i64];
+        let (mut pos, mut count, mut index_at) = (0i64, 100u16, None::<i64>);
+        // Speed per update in counts: runs, stops of 3 windows, a reversal, a stop of 1 tick.
+        let plan: Vec<(i64, usize)> =
+            vec![(3, 500), (0, 48), (7, 900), (0, 1), (-5, 300), (0, 100), (2, 2000), (0, 17)];
+        for (speed, n) in plan {
+            for _ in 0..n {
+                let before = pos;
+                pos += speed;
+                count = count.wrapping_add(speed as u16);
+                // An index every revolution, at position multiples of 4000.
+                let idx = (before.div_euclid(4000) != pos.div_euclid(4000)).then(|| {
+                    let at = pos.div_euclid(4000).max(before.div_euclid(4000)) * 4000;
+                    index_at = Some(at);
+                    count.wrapping_sub((pos - at) as u16)
+                });
+                e.update(count, idx);
+                history.push(pos);
+                let window = 1usize << cfg.window_log2;
+                let past = history[history.len().saturating_sub(window + 1)];
+                assert_eq!(e.window_counts() as i64, pos - past, "at {pos}");
+                assert_eq!(e.position_counts(), pos);
+                let rel = (pos - index_at.unwrap_or(0)).rem_euclid(4000) as u64;
+                assert_eq!(e.angle_turn_q32(), ((rel * ((1u64 << 48) / 4000)) >> 16) as u32);
+                assert_eq!(e.fault(), None);
+            }
+        }
     }
 }
