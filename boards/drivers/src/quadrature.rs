@@ -116,6 +116,10 @@ impl<A: InputPin, B: InputPin> Quadrature for SoftDecoder<A, B> {
             self.errors = self.errors.saturating_add(1);
             return self.position;
         };
+        // Most samples see the lines where they were.
+        if next == self.state {
+            return self.position;
+        }
         match step(self.state, next) {
             Some(d) => self.position = self.position.wrapping_add(d),
             None => self.errors = self.errors.saturating_add(1),
