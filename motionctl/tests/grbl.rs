@@ -1,13 +1,18 @@
 //! `motionctl grbl`: the grbl 1.1 bridge on the simulated board.
 //!
 //! - A third-party sender library (grbl-streamer, pinned, from PyPI in a venv under target/)
-//!   drives the bridge through its pseudo-terminal: settings, homing, a real corpus file
-//!   streamed with character counting, a feed hold and resume mid-file, a feed override, a jog
-//!   and a jog cancel, a soft reset. Every line is acknowledged and the machine ends at the
-//!   file's programmed end point.
+//!   drives the bridge through its pseudo-terminal: settings, homing, four corpus files of
+//!   different dialects streamed with character counting (plain moves and arcs, arcs by R word,
+//!   a canned cycle with polar increments, a helix in incremental inches), a feed hold and resume
+//!   mid-file, a feed override, a jog and a jog cancel, soft resets. Every line of every file is
+//!   acknowledged in the library's own log and the machine ends at each file's programmed end
+//!   point (on the step grid).
 //! - A raw session over TCP checks answers byte for byte: the welcome, status reports (also
 //!   asked in the middle of a line), character counting, `$` commands, `error:N` for bad lines,
-//!   long lines and binary noise without losing the valid line after them.
+//!   long lines, binary noise, unknown words and codes, each without losing the valid line
+//!   after it.
+//!
+//! The simulated board runs at [`SIM_SPEED`] times real time, so the files take seconds.
 
 use motion_gcode::frame::Frame;
 use motion_gcode::{Event, Interpreter, Options};
@@ -58,10 +63,14 @@ impl Drop for Bridge {
     }
 }
 
+/// The simulated board's machine time per wall time: the corpus files take about 100 s of
+/// machine time together.
+const SIM_SPEED: &str = "4";
+
 fn bridge(endpoint: &[&str], dir: Option<PathBuf>) -> Bridge {
     let child = Command::new(env!("CARGO_BIN_EXE_motionctl"))
         .current_dir(manifest())
-        .args(["grbl", "examples/corpus-machine.toml", "--sim"])
+        .args(["grbl", "examples/corpus-machine.toml", "--sim", "--sim-speed", SIM_SPEED])
         .args(endpoint)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -147,13 +156,32 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    let file = corpus("bcnc-sample.gcode");
-    let end = programmed_end(&file);
+    // Plain lines and arcs (bCNC), arcs by R word (SketchUcam), a canned cycle with polar
+    // increments (LinuxCNC), a helix in incremental inches (cncjs).
+    let files = [
+        "bcnc-sample.gcode",
+        "ugs-sketchucam-arc-rword.gcode",
+        "linuxcnc-hole-circle-g81.ngc",
+        "cncjs-helical-thread-milling.gcode",
+    ];
+    let machine = motionctl::job::parse_machine_toml(
+        &std::fs::read_to_string(manifest().join("examples/corpus-machine.toml")).unwrap(),
+    )
+    .unwrap();
+    let mut args = Vec::new();
+    for f in files {
+        let file = corpus(f);
+        let end = programmed_end(&file);
+        args.push(file.to_string_lossy().into_owned());
+        // Where the board can stop: the end point on the axis's step grid.
+        for (v, a) in end.iter().zip(&machine.axes) {
+            args.push(format!("{}", (v * a.steps_per_mm).round() / a.steps_per_mm));
+        }
+    }
     let out = Command::new(&python)
         .arg(manifest().join("tests/grbl_sender.py"))
         .arg(&port)
-        .arg(&file)
-        .args(end.iter().map(|v| format!("{v}")))
+        .args(&args)
         .output()
         .expect("run grbl_sender.py");
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -164,7 +192,12 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         "sender failed ({}):\n{stdout}\n{stderr}",
         out.status
     );
-    eprintln!("{result}");
+    let per_file: Vec<&str> = stdout.lines().filter(|l| l.starts_with("FILE ")).collect();
+    assert_eq!(per_file.len(), files.len(), "{stdout}");
+    for (l, f) in per_file.iter().zip(files) {
+        assert!(l.starts_with(&format!("FILE {f} ok=1 ")), "{l}");
+    }
+    eprintln!("{stdout}");
 }
 
 /// A raw TCP session with the bridge.
@@ -313,14 +346,25 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:20.000,7.000,1.000|"), "{st}");
 
-    // A 300-byte line, binary noise: errors, and the valid line after them runs.
+    // Garbage, each followed by a valid line that must still be answered `ok` and run: a
+    // 300-byte line, binary noise, a word this machine does not know (W), an unknown M code.
     let mut long = vec![b'X'; 300];
     long.push(b'\n');
     r.send(&long);
     r.expect("error:11");
+    r.send(b"G0 X1\n");
+    r.expect("ok");
     r.send(b"\x01\x02\x7f\xfe\xff\xc3G\x00\n");
     let l = r.line();
     assert!(l.starts_with("error:"), "{l}");
+    r.send(b"G0 X2\n");
+    r.expect("ok");
+    r.send(b"G0 X1 W5\n");
+    r.expect("error:1");
+    r.send(b"G0 X3\n");
+    r.expect("ok");
+    r.send(b"M333\n");
+    r.expect("error:20");
     r.send(b"G0 X0 Y0 Z0\n");
     r.expect("ok");
     let st = r.until_idle();
