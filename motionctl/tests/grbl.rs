@@ -50,16 +50,12 @@ fn programmed_end(path: &Path) -> [f64; 3] {
 /// A `motionctl grbl` process, killed when dropped.
 struct Bridge {
     child: Child,
-    _dir: Option<PathBuf>,
 }
 
 impl Drop for Bridge {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        if let Some(d) = &self._dir {
-            let _ = std::fs::remove_dir_all(d);
-        }
     }
 }
 
@@ -67,23 +63,40 @@ impl Drop for Bridge {
 /// machine time together.
 const SIM_SPEED: &str = "4";
 
-fn bridge(endpoint: &[&str], dir: Option<PathBuf>) -> Bridge {
+/// A bridge on `dir`/machine.toml (a copy of examples/corpus-machine.toml, made if absent: the
+/// bridge writes its settings overlay beside it).
+fn bridge(dir: &Path, endpoint: &[&str]) -> Bridge {
+    let machine = dir.join("machine.toml");
+    if !machine.exists() {
+        std::fs::copy(manifest().join("examples/corpus-machine.toml"), &machine).unwrap();
+    }
     let child = Command::new(env!("CARGO_BIN_EXE_motionctl"))
         .current_dir(manifest())
-        .args(["grbl", "examples/corpus-machine.toml", "--sim", "--sim-speed", SIM_SPEED])
+        .arg("grbl")
+        .arg(&machine)
+        .args(["--sim", "--sim-speed", SIM_SPEED])
         .args(endpoint)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("start motionctl grbl");
-    Bridge { child, _dir: dir }
+    Bridge { child }
 }
 
-fn tmp_dir(tag: &str) -> PathBuf {
+/// A scratch directory, removed when dropped.
+struct TmpDir(PathBuf);
+
+impl Drop for TmpDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn tmp_dir(tag: &str) -> TmpDir {
     let d = std::env::temp_dir().join(format!("motionctl-grbl-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TmpDir(d)
 }
 
 /// The venv's python with the sender installed, or why not (pip offline).
@@ -144,8 +157,8 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         ),
     };
     let dir = tmp_dir("pty");
-    let port = dir.join("ttyGRBL");
-    let mut b = bridge(&["--pty", port.to_str().unwrap()], Some(dir.clone()));
+    let port = dir.0.join("ttyGRBL");
+    let mut b = bridge(&dir.0, &["--pty", port.to_str().unwrap()]);
     let start = Instant::now();
     while !port.exists() {
         assert!(start.elapsed() < Duration::from_secs(20), "no pty symlink at {}", port.display());
@@ -207,6 +220,30 @@ struct Raw {
 }
 
 impl Raw {
+    /// Connects to a `--listen` bridge and reads the welcome.
+    fn connect(b: &mut Bridge) -> Raw {
+        let (addr, _drain) = listen_addr(b);
+        let s = TcpStream::connect(&addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+        let mut r = Raw { s, buf: Vec::new() };
+        r.expect("");
+        r.expect("Grbl 1.1h ['$' for help]");
+        r
+    }
+
+    /// `$$`: the settings, in order.
+    fn settings(&mut self) -> Vec<String> {
+        self.send(b"$$\n");
+        let mut settings = Vec::new();
+        loop {
+            let l = self.line();
+            if l == "ok" {
+                return settings;
+            }
+            settings.push(l);
+        }
+    }
+
     fn send(&mut self, b: &[u8]) {
         self.s.write_all(b).unwrap();
     }
@@ -277,13 +314,9 @@ fn listen_addr(b: &mut Bridge) -> (String, std::thread::JoinHandle<()>) {
 
 #[test]
 fn a_raw_session_gets_grbl_answers_byte_for_byte() {
-    let mut b = bridge(&["--listen", "127.0.0.1:0"], None);
-    let (addr, _drain) = listen_addr(&mut b);
-    let s = TcpStream::connect(&addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
-    let mut r = Raw { s, buf: Vec::new() };
-    r.expect("");
-    r.expect("Grbl 1.1h ['$' for help]");
+    let dir = tmp_dir("raw");
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
     assert_eq!(
         r.status(),
         "<Idle|MPos:0.000,0.000,0.000|Bf:15,128|FS:0,0|WCO:0.000,0.000,0.000|Ov:100,100,100>"
@@ -294,15 +327,7 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("[VER:1.1h.20190825:]");
     r.expect("[OPT:V,15,128]");
     r.expect("ok");
-    r.send(b"$$\n");
-    let mut settings = Vec::new();
-    loop {
-        let l = r.line();
-        if l == "ok" {
-            break;
-        }
-        settings.push(l);
-    }
+    let settings = r.settings();
     assert_eq!(settings.first().map(String::as_str), Some("$0=3"));
     for want in ["$10=3", "$100=80.000", "$102=400.000", "$112=1500.000", "$120=2000.000"] {
         assert!(settings.iter().any(|l| l == want), "{want} missing: {settings:?}");
@@ -443,4 +468,103 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("ok");
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:5.000,-2.500,0.000|"), "{st}");
+}
+
+#[test]
+fn settings_reconfigure_the_board_and_outlive_the_bridge() {
+    let dir = tmp_dir("settings");
+    let machine = dir.0.join("machine.toml");
+    let overlay = dir.0.join("machine.grbl.toml");
+    let new_machine = "[MSG:the board has the new config and must be homed: '$H' to home]";
+    {
+        let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+        let mut r = Raw::connect(&mut b);
+        // Values the machine file refuses are refused with its words, and change nothing.
+        r.send(b"$100=0\n");
+        r.expect("[MSG:$100=0: machine.axes[0].steps_per_mm: must be > 0 and <= 1000000, got 0]");
+        r.expect("error:52");
+        r.send(b"$26=100\n");
+        let m = r.line();
+        assert!(m.starts_with("[MSG:$26=100: machine.switch_debounce_ms: must be"), "{m}");
+        r.expect("error:52");
+        assert!(!overlay.exists());
+
+        // Steps per mm: a new config on the board (which loses its homing).
+        r.send(b"$100=7.77\n");
+        r.expect(new_machine);
+        r.expect("ok");
+        assert!(r.status().starts_with("<Alarm|"));
+        r.send(b"G0 X10\n");
+        r.expect("error:9");
+        r.send(b"$H\n");
+        r.expect("ok");
+        // 10 mm at 7.77 steps/mm is 78 steps: 10.039 mm.
+        r.send(b"G0 X10\n");
+        r.expect("ok");
+        let st = r.until_idle();
+        assert!(st.starts_with("<Idle|MPos:10.039,0.000,0.000|"), "{st}");
+
+        // Travel and max rate; with the bridge's soft limits off ($20=0), the board's own
+        // limits (from the new travel: X -500..20 mm) refuse a move they allowed before.
+        r.send(b"$20=0\n$130=520\n");
+        r.expect("ok");
+        r.expect(new_machine);
+        r.expect("ok");
+        r.send(b"$110=600\n$H\n");
+        r.expect("ok");
+        r.expect("ok");
+        r.send(b"G0 X30\n");
+        r.expect("ok");
+        r.expect("ALARM:3");
+        r.expect("[MSG:the board refused queued motion]");
+        r.send(b"$X\n");
+        r.expect("[MSG:Caution: Unlocked]");
+        r.expect("ok");
+        let s = r.settings();
+        for want in ["$20=0", "$100=7.770", "$110=600.000", "$130=520.000", "$101=80.000"] {
+            assert!(s.iter().any(|l| l == want), "{want} missing: {s:?}");
+        }
+    }
+    // The machine file is untouched; the overlay beside it has the settings.
+    assert_eq!(
+        std::fs::read_to_string(&machine).unwrap(),
+        std::fs::read_to_string(manifest().join("examples/corpus-machine.toml")).unwrap()
+    );
+    let text = std::fs::read_to_string(&overlay).unwrap();
+    assert!(text.contains("100 = 7.77"), "{text}");
+
+    // A new bridge reads them back and configures the board with them.
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
+    let s = r.settings();
+    for want in ["$20=0", "$100=7.770", "$110=600.000", "$130=520.000"] {
+        assert!(s.iter().any(|l| l == want), "{want} missing after a restart: {s:?}");
+    }
+    r.send(b"G0 X10\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:10.039,0.000,0.000|"), "{st}");
+    r.send(b"G0 X30\n");
+    r.expect("ok");
+    r.expect("ALARM:3");
+    r.expect("[MSG:the board refused queued motion]");
+    r.send(b"$X\n");
+    r.expect("[MSG:Caution: Unlocked]");
+    r.expect("ok");
+
+    // $RST=$: the machine file's values, on the board too; the overlay goes.
+    r.send(b"$RST=$\n");
+    r.expect(new_machine);
+    r.expect("ok");
+    r.send(b"$H\n");
+    r.expect("ok");
+    let s = r.settings();
+    for want in ["$20=1", "$100=80.000", "$110=15000.000", "$130=1000.000"] {
+        assert!(s.iter().any(|l| l == want), "{want} missing after $RST=$: {s:?}");
+    }
+    assert!(!overlay.exists(), "{}", std::fs::read_to_string(&overlay).unwrap_or_default());
+    r.send(b"G0 X30\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:30.000,0.000,0.000|"), "{st}");
 }
