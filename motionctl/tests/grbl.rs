@@ -568,3 +568,57 @@ fn settings_reconfigure_the_board_and_outlive_the_bridge() {
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:30.000,0.000,0.000|"), "{st}");
 }
+
+#[test]
+fn startup_lines_run_after_a_reset_and_a_restart() {
+    let dir = tmp_dir("startup");
+    {
+        let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+        let mut r = Raw::connect(&mut b);
+        // A bad line is refused when stored, with the interpreter's words.
+        r.send(b"$N1=G1 X1..2\n");
+        let m = r.line();
+        assert!(m.starts_with("[MSG:$N1: "), "{m}");
+        r.expect("error:2");
+        r.send(b"$N0=G20\n$N1=G0 X2\n$N\n");
+        for want in ["ok", "ok", "$N0=G20", "$N1=G0 X2", "ok"] {
+            r.expect(want);
+        }
+        assert_eq!(r.status().split('|').nth(1), Some("MPos:0.000,0.000,0.000"), "stored only");
+        // A soft reset runs them, in order, each answered as grbl answers it.
+        r.send(b"\x18");
+        for want in ["", "Grbl 1.1h ['$' for help]", ">G20:ok", ">G0 X2:ok"] {
+            r.expect(want);
+        }
+        let st = r.until_idle();
+        assert!(st.starts_with("<Idle|MPos:50.800,0.000,0.000|"), "2 inches: {st}");
+        r.send(b"$G\n");
+        let gc = r.line();
+        assert!(gc.contains(" G20 "), "{gc}");
+        r.expect("ok");
+    }
+    // Kept across a restart: the connect's welcome runs them.
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
+    r.expect(">G20:ok");
+    r.expect(">G0 X2:ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:50.800,0.000,0.000|"), "{st}");
+    // An error is answered in its place, and the next line still runs.
+    r.send(b"$N0=G0 X600\n");
+    r.expect("ok");
+    r.send(b"\x18");
+    for want in ["", "Grbl 1.1h ['$' for help]", "ALARM:2"] {
+        r.expect(want);
+    }
+    let m = r.line();
+    assert!(m.starts_with("[MSG:axis X target 600.000 mm is outside its travel"), "{m}");
+    r.expect(">G0 X600:error:9");
+    assert!(r.status().starts_with("<Alarm|MPos:50.800,"), "the alarm stops the rest");
+    // $RST=* forgets them.
+    r.send(b"$X\n$RST=*\n$N\n");
+    for want in ["[MSG:Caution: Unlocked]", "ok", "ok", "$N0=", "$N1=", "ok"] {
+        r.expect(want);
+    }
+    assert!(!dir.0.join("machine.grbl.toml").exists());
+}

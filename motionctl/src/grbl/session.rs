@@ -474,8 +474,29 @@ impl<'a> Bridge<'a> {
         self.say(WELCOME);
         if self.alarm.is_some() {
             self.say("[MSG:'$H'|'$X' to unlock]");
+        } else {
+            self.startup();
         }
         Ok(())
+    }
+
+    /// The `$N0`, `$N1` startup lines, each answered `>LINE:ok` or `>LINE:error:N` (grbl runs
+    /// them after a reset, and after homing when it starts in alarm).
+    fn startup(&mut self) {
+        for i in 0..2 {
+            let line = self.startup_lines[i].clone();
+            if line.is_empty() {
+                continue;
+            }
+            let answer = match self.gcode(&line) {
+                None => "ok".to_string(),
+                Some(n) => format!("error:{n}"),
+            };
+            self.say(&format!(">{line}:{answer}"));
+            if self.alarm.is_some() {
+                break;
+            }
+        }
     }
 
     /// A fresh interpreter at the commanded position, keeping the offsets grbl keeps in EEPROM.
@@ -721,11 +742,16 @@ impl<'a> Bridge<'a> {
             self.error(error::SYSTEM_GC_LOCK);
             return Ok(());
         }
-        self.gcode(t);
+        match self.gcode(t) {
+            None => self.ok(),
+            Some(n) => self.error(n),
+        }
         Ok(())
     }
 
-    fn gcode(&mut self, t: &str) {
+    /// A program line: `None` when it ran (its `[MSG:]`s said), else grbl's error number
+    /// (after any alarm it raised).
+    fn gcode(&mut self, t: &str) -> Option<u8> {
         if self.prog.ended() {
             self.new_program();
         }
@@ -734,8 +760,7 @@ impl<'a> Bridge<'a> {
             Ok(b) => b,
             Err(e) => {
                 eprintln!("motionctl: `{t}`: {} (error:{})", e.message, e.code);
-                self.error(e.code);
-                return;
+                return Some(e.code);
             }
         };
         // Every target checked before any is queued: a block runs whole or not at all.
@@ -744,7 +769,7 @@ impl<'a> Bridge<'a> {
             if let Step::Item(Item::Move(MoveCmd { target: Target::Absolute(t), .. })) = s {
                 let to: Vec<f64> = t.iter().zip(&from).map(|(t, p)| t.unwrap_or(*p)).collect();
                 if let Err(e) = self.motion.check(&from, &to) {
-                    return self.refuse_move(e);
+                    return Some(self.refuse_move(e));
                 }
                 from = to;
             }
@@ -758,7 +783,7 @@ impl<'a> Bridge<'a> {
                         self.feed_now = self.rapid_mm_min();
                     }
                     if let Err(e) = self.motion.push_move(&t, feed, self.check) {
-                        return self.refuse_move(e);
+                        return Some(self.refuse_move(e));
                     }
                 }
                 Step::Item(Item::Move(_)) => {}
@@ -777,14 +802,15 @@ impl<'a> Bridge<'a> {
         if t.to_ascii_uppercase().contains("G10") && !self.prog.ended() {
             self.kept = self.prog.persistent();
         }
-        self.ok();
+        None
     }
 
     fn rapid_mm_min(&self) -> f64 {
         self.machine.axes.iter().map(|a| a.max_rate_mm_s * 60.0).fold(f64::INFINITY, f64::min)
     }
 
-    fn refuse_move(&mut self, e: MoveError) {
+    /// Says what a refused move raised; grbl's error number for its line.
+    fn refuse_move(&mut self, e: MoveError) -> u8 {
         match e {
             MoveError::SoftLimit(m) if !self.check => {
                 eprintln!("motionctl: soft limit: {m}");
@@ -793,11 +819,11 @@ impl<'a> Bridge<'a> {
                 self.alarm = Some(alarm::SOFT_LIMIT);
                 self.say(&format!("ALARM:{}", alarm::SOFT_LIMIT));
                 self.say(&format!("[MSG:{m}]"));
-                self.error(error::SYSTEM_GC_LOCK);
+                error::SYSTEM_GC_LOCK
             }
             MoveError::SoftLimit(m) | MoveError::Invalid(m) => {
                 eprintln!("motionctl: {m}");
-                self.error(error::INVALID_TARGET);
+                error::INVALID_TARGET
             }
         }
     }
@@ -924,7 +950,29 @@ impl<'a> Bridge<'a> {
             _ if cmd.starts_with("$N0=") || cmd.starts_with("$N1=") => {
                 let i = if cmd.starts_with("$N0") { 0 } else { 1 };
                 let text = raw.split_once('=').map_or("", |(_, t)| t).trim().to_string();
+                if !idle {
+                    self.error(error::IDLE_ERROR);
+                    return Ok(());
+                }
+                if !text.is_empty() {
+                    // Checked as a program line on a scratch interpreter: nothing runs now.
+                    let mut scratch = Program::with_parameters(
+                        self.machine,
+                        &self.motion.pos_mm,
+                        self.kept.clone(),
+                    );
+                    if let Err(e) = scratch.run(&text) {
+                        eprintln!(
+                            "motionctl: startup line `{text}`: {} (error:{})",
+                            e.message, e.code
+                        );
+                        self.say(&format!("[MSG:$N{i}: {}]", e.message));
+                        self.error(e.code);
+                        return Ok(());
+                    }
+                }
                 self.startup_lines[i] = text;
+                self.save();
                 self.ok();
             }
             _ if cmd.starts_with("$I=") => {
@@ -1151,6 +1199,7 @@ impl<'a> Bridge<'a> {
             Ok(()) => {
                 self.alarm = None;
                 self.rebase();
+                self.startup();
                 self.ok();
             }
             Err(e) => {
