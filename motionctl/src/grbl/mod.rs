@@ -38,7 +38,8 @@ const STATUS_MS: u16 = 40;
 
 #[derive(Args, Debug)]
 pub struct GrblArgs {
-    /// The machine: a job TOML whose `[machine]` is used (`$$` reports it).
+    /// The machine: a job TOML whose `[machine]` is used (`$$` reports it); settings a sender
+    /// changes (`$N=V`) and its startup lines are kept in NAME.grbl.toml beside it.
     pub machine: PathBuf,
     #[command(flatten)]
     pub link: LinkArgs,
