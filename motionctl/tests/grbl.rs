@@ -511,8 +511,9 @@ fn settings_reconfigure_the_board_and_outlive_the_bridge() {
         r.expect(new_machine);
         r.expect("ok");
         r.send(b"$110=600\n$H\n");
-        r.expect("ok");
-        r.expect("ok");
+        for want in [new_machine, "ok", "ok"] {
+            r.expect(want);
+        }
         r.send(b"G0 X30\n");
         r.expect("ok");
         r.expect("ALARM:3");

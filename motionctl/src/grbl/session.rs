@@ -1087,9 +1087,7 @@ impl<'a> Bridge<'a> {
                 }
                 // The config is in; the board lost its homing.
                 eprintln!("motionctl: {e}");
-                if self.alarm.is_none() {
-                    self.say("[MSG:the board has the new config and must be homed: '$H' to home]");
-                }
+                self.say("[MSG:the board has the new config and must be homed: '$H' to home]");
                 self.alarm = Some(alarm::HOMING_REQUIRED);
             }
         }
