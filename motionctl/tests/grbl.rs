@@ -11,6 +11,11 @@
 //!   asked in the middle of a line), character counting, `$` commands, `error:N` for bad lines,
 //!   long lines, binary noise, unknown words and codes, each without losing the valid line
 //!   after it.
+//! - `$N=V` on the machine's values reconfigures the board (steps/mm change the step count of a
+//!   move, a travel change moves the board's own soft limit), survives a restart of the bridge
+//!   through the overlay beside the machine file, and `$RST=$` restores the machine file's.
+//! - `$N0`/`$N1` startup lines run after a soft reset and on connect (`>LINE:ok`), survive a
+//!   restart, and an alarm from one is answered in its place.
 //!
 //! The simulated board runs at [`SIM_SPEED`] times real time, so the files take seconds.
 
