@@ -1,13 +1,23 @@
 //! `motionctl grbl`: the grbl 1.1 bridge on the simulated board.
 //!
 //! - A third-party sender library (grbl-streamer, pinned, from PyPI in a venv under target/)
-//!   drives the bridge through its pseudo-terminal: settings, homing, a real corpus file
-//!   streamed with character counting, a feed hold and resume mid-file, a feed override, a jog
-//!   and a jog cancel, a soft reset. Every line is acknowledged and the machine ends at the
-//!   file's programmed end point.
+//!   drives the bridge through its pseudo-terminal: settings, homing, four corpus files of
+//!   different dialects streamed with character counting (plain moves and arcs, arcs by R word,
+//!   a canned cycle with polar increments, a helix in incremental inches), a feed hold and resume
+//!   mid-file, a feed override, a jog and a jog cancel, soft resets. Every line of every file is
+//!   acknowledged in the library's own log and the machine ends at each file's programmed end
+//!   point (on the step grid).
 //! - A raw session over TCP checks answers byte for byte: the welcome, status reports (also
 //!   asked in the middle of a line), character counting, `$` commands, `error:N` for bad lines,
-//!   long lines and binary noise without losing the valid line after them.
+//!   long lines, binary noise, unknown words and codes, each without losing the valid line
+//!   after it.
+//! - `$N=V` on the machine's values reconfigures the board (steps/mm change the step count of a
+//!   move, a travel change moves the board's own soft limit), survives a restart of the bridge
+//!   through the overlay beside the machine file, and `$RST=$` restores the machine file's.
+//! - `$N0`/`$N1` startup lines run after a soft reset and on connect (`>LINE:ok`), survive a
+//!   restart, and an alarm from one is answered in its place.
+//!
+//! The simulated board runs at [`SIM_SPEED`] times real time, so the files take seconds.
 
 use motion_gcode::frame::Frame;
 use motion_gcode::{Event, Interpreter, Options};
@@ -45,36 +55,53 @@ fn programmed_end(path: &Path) -> [f64; 3] {
 /// A `motionctl grbl` process, killed when dropped.
 struct Bridge {
     child: Child,
-    _dir: Option<PathBuf>,
 }
 
 impl Drop for Bridge {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        if let Some(d) = &self._dir {
-            let _ = std::fs::remove_dir_all(d);
-        }
     }
 }
 
-fn bridge(endpoint: &[&str], dir: Option<PathBuf>) -> Bridge {
+/// The simulated board's machine time per wall time: the corpus files take about 100 s of
+/// machine time together.
+const SIM_SPEED: &str = "4";
+
+/// A bridge on `dir`/machine.toml (a copy of examples/corpus-machine.toml, made if absent: the
+/// bridge writes its settings overlay beside it).
+fn bridge(dir: &Path, endpoint: &[&str]) -> Bridge {
+    let machine = dir.join("machine.toml");
+    if !machine.exists() {
+        std::fs::copy(manifest().join("examples/corpus-machine.toml"), &machine).unwrap();
+    }
     let child = Command::new(env!("CARGO_BIN_EXE_motionctl"))
         .current_dir(manifest())
-        .args(["grbl", "examples/corpus-machine.toml", "--sim"])
+        .arg("grbl")
+        .arg(&machine)
+        .args(["--sim", "--sim-speed", SIM_SPEED])
         .args(endpoint)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("start motionctl grbl");
-    Bridge { child, _dir: dir }
+    Bridge { child }
 }
 
-fn tmp_dir(tag: &str) -> PathBuf {
+/// A scratch directory, removed when dropped.
+struct TmpDir(PathBuf);
+
+impl Drop for TmpDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn tmp_dir(tag: &str) -> TmpDir {
     let d = std::env::temp_dir().join(format!("motionctl-grbl-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TmpDir(d)
 }
 
 /// The venv's python with the sender installed, or why not (pip offline).
@@ -135,8 +162,8 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         ),
     };
     let dir = tmp_dir("pty");
-    let port = dir.join("ttyGRBL");
-    let mut b = bridge(&["--pty", port.to_str().unwrap()], Some(dir.clone()));
+    let port = dir.0.join("ttyGRBL");
+    let mut b = bridge(&dir.0, &["--pty", port.to_str().unwrap()]);
     let start = Instant::now();
     while !port.exists() {
         assert!(start.elapsed() < Duration::from_secs(20), "no pty symlink at {}", port.display());
@@ -147,13 +174,32 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    let file = corpus("bcnc-sample.gcode");
-    let end = programmed_end(&file);
+    // Plain lines and arcs (bCNC), arcs by R word (SketchUcam), a canned cycle with polar
+    // increments (LinuxCNC), a helix in incremental inches (cncjs).
+    let files = [
+        "bcnc-sample.gcode",
+        "ugs-sketchucam-arc-rword.gcode",
+        "linuxcnc-hole-circle-g81.ngc",
+        "cncjs-helical-thread-milling.gcode",
+    ];
+    let machine = motionctl::job::parse_machine_toml(
+        &std::fs::read_to_string(manifest().join("examples/corpus-machine.toml")).unwrap(),
+    )
+    .unwrap();
+    let mut args = Vec::new();
+    for f in files {
+        let file = corpus(f);
+        let end = programmed_end(&file);
+        args.push(file.to_string_lossy().into_owned());
+        // Where the board can stop: the end point on the axis's step grid.
+        for (v, a) in end.iter().zip(&machine.axes) {
+            args.push(format!("{}", (v * a.steps_per_mm).round() / a.steps_per_mm));
+        }
+    }
     let out = Command::new(&python)
         .arg(manifest().join("tests/grbl_sender.py"))
         .arg(&port)
-        .arg(&file)
-        .args(end.iter().map(|v| format!("{v}")))
+        .args(&args)
         .output()
         .expect("run grbl_sender.py");
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -164,7 +210,12 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
         "sender failed ({}):\n{stdout}\n{stderr}",
         out.status
     );
-    eprintln!("{result}");
+    let per_file: Vec<&str> = stdout.lines().filter(|l| l.starts_with("FILE ")).collect();
+    assert_eq!(per_file.len(), files.len(), "{stdout}");
+    for (l, f) in per_file.iter().zip(files) {
+        assert!(l.starts_with(&format!("FILE {f} ok=1 ")), "{l}");
+    }
+    eprintln!("{stdout}");
 }
 
 /// A raw TCP session with the bridge.
@@ -174,6 +225,30 @@ struct Raw {
 }
 
 impl Raw {
+    /// Connects to a `--listen` bridge and reads the welcome.
+    fn connect(b: &mut Bridge) -> Raw {
+        let (addr, _drain) = listen_addr(b);
+        let s = TcpStream::connect(&addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+        let mut r = Raw { s, buf: Vec::new() };
+        r.expect("");
+        r.expect("Grbl 1.1h ['$' for help]");
+        r
+    }
+
+    /// `$$`: the settings, in order.
+    fn settings(&mut self) -> Vec<String> {
+        self.send(b"$$\n");
+        let mut settings = Vec::new();
+        loop {
+            let l = self.line();
+            if l == "ok" {
+                return settings;
+            }
+            settings.push(l);
+        }
+    }
+
     fn send(&mut self, b: &[u8]) {
         self.s.write_all(b).unwrap();
     }
@@ -244,13 +319,9 @@ fn listen_addr(b: &mut Bridge) -> (String, std::thread::JoinHandle<()>) {
 
 #[test]
 fn a_raw_session_gets_grbl_answers_byte_for_byte() {
-    let mut b = bridge(&["--listen", "127.0.0.1:0"], None);
-    let (addr, _drain) = listen_addr(&mut b);
-    let s = TcpStream::connect(&addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
-    let mut r = Raw { s, buf: Vec::new() };
-    r.expect("");
-    r.expect("Grbl 1.1h ['$' for help]");
+    let dir = tmp_dir("raw");
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
     assert_eq!(
         r.status(),
         "<Idle|MPos:0.000,0.000,0.000|Bf:15,128|FS:0,0|WCO:0.000,0.000,0.000|Ov:100,100,100>"
@@ -261,15 +332,7 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("[VER:1.1h.20190825:]");
     r.expect("[OPT:V,15,128]");
     r.expect("ok");
-    r.send(b"$$\n");
-    let mut settings = Vec::new();
-    loop {
-        let l = r.line();
-        if l == "ok" {
-            break;
-        }
-        settings.push(l);
-    }
+    let settings = r.settings();
     assert_eq!(settings.first().map(String::as_str), Some("$0=3"));
     for want in ["$10=3", "$100=80.000", "$102=400.000", "$112=1500.000", "$120=2000.000"] {
         assert!(settings.iter().any(|l| l == want), "{want} missing: {settings:?}");
@@ -313,14 +376,25 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:20.000,7.000,1.000|"), "{st}");
 
-    // A 300-byte line, binary noise: errors, and the valid line after them runs.
+    // Garbage, each followed by a valid line that must still be answered `ok` and run: a
+    // 300-byte line, binary noise, a word this machine does not know (W), an unknown M code.
     let mut long = vec![b'X'; 300];
     long.push(b'\n');
     r.send(&long);
     r.expect("error:11");
+    r.send(b"G0 X1\n");
+    r.expect("ok");
     r.send(b"\x01\x02\x7f\xfe\xff\xc3G\x00\n");
     let l = r.line();
     assert!(l.starts_with("error:"), "{l}");
+    r.send(b"G0 X2\n");
+    r.expect("ok");
+    r.send(b"G0 X1 W5\n");
+    r.expect("error:1");
+    r.send(b"G0 X3\n");
+    r.expect("ok");
+    r.send(b"M333\n");
+    r.expect("error:20");
     r.send(b"G0 X0 Y0 Z0\n");
     r.expect("ok");
     let st = r.until_idle();
@@ -399,4 +473,158 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("ok");
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:5.000,-2.500,0.000|"), "{st}");
+}
+
+#[test]
+fn settings_reconfigure_the_board_and_outlive_the_bridge() {
+    let dir = tmp_dir("settings");
+    let machine = dir.0.join("machine.toml");
+    let overlay = dir.0.join("machine.grbl.toml");
+    let new_machine = "[MSG:the board has the new config and must be homed: '$H' to home]";
+    {
+        let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+        let mut r = Raw::connect(&mut b);
+        // Values the machine file refuses are refused with its words, and change nothing.
+        r.send(b"$100=0\n");
+        r.expect("[MSG:$100=0: machine.axes[0].steps_per_mm: must be > 0 and <= 1000000, got 0]");
+        r.expect("error:52");
+        r.send(b"$26=100\n");
+        let m = r.line();
+        assert!(m.starts_with("[MSG:$26=100: machine.switch_debounce_ms: must be"), "{m}");
+        r.expect("error:52");
+        assert!(!overlay.exists());
+
+        // Steps per mm: a new config on the board (which loses its homing).
+        r.send(b"$100=7.77\n");
+        r.expect(new_machine);
+        r.expect("ok");
+        assert!(r.status().starts_with("<Alarm|"));
+        r.send(b"G0 X10\n");
+        r.expect("error:9");
+        r.send(b"$H\n");
+        r.expect("ok");
+        // 10 mm at 7.77 steps/mm is 78 steps: 10.039 mm.
+        r.send(b"G0 X10\n");
+        r.expect("ok");
+        let st = r.until_idle();
+        assert!(st.starts_with("<Idle|MPos:10.039,0.000,0.000|"), "{st}");
+
+        // Travel and max rate; with the bridge's soft limits off ($20=0), the board's own
+        // limits (from the new travel: X -500..20 mm) refuse a move they allowed before.
+        r.send(b"$20=0\n$130=520\n");
+        r.expect("ok");
+        r.expect(new_machine);
+        r.expect("ok");
+        r.send(b"$110=600\n$H\n");
+        for want in [new_machine, "ok", "ok"] {
+            r.expect(want);
+        }
+        r.send(b"G0 X30\n");
+        r.expect("ok");
+        r.expect("ALARM:3");
+        r.expect("[MSG:the board refused queued motion]");
+        r.send(b"$X\n");
+        r.expect("[MSG:Caution: Unlocked]");
+        r.expect("ok");
+        let s = r.settings();
+        for want in ["$20=0", "$100=7.770", "$110=600.000", "$130=520.000", "$101=80.000"] {
+            assert!(s.iter().any(|l| l == want), "{want} missing: {s:?}");
+        }
+    }
+    // The machine file is untouched; the overlay beside it has the settings.
+    assert_eq!(
+        std::fs::read_to_string(&machine).unwrap(),
+        std::fs::read_to_string(manifest().join("examples/corpus-machine.toml")).unwrap()
+    );
+    let text = std::fs::read_to_string(&overlay).unwrap();
+    assert!(text.contains("100 = 7.77"), "{text}");
+
+    // A new bridge reads them back and configures the board with them.
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
+    let s = r.settings();
+    for want in ["$20=0", "$100=7.770", "$110=600.000", "$130=520.000"] {
+        assert!(s.iter().any(|l| l == want), "{want} missing after a restart: {s:?}");
+    }
+    r.send(b"G0 X10\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:10.039,0.000,0.000|"), "{st}");
+    r.send(b"G0 X30\n");
+    r.expect("ok");
+    r.expect("ALARM:3");
+    r.expect("[MSG:the board refused queued motion]");
+    r.send(b"$X\n");
+    r.expect("[MSG:Caution: Unlocked]");
+    r.expect("ok");
+
+    // $RST=$: the machine file's values, on the board too; the overlay goes.
+    r.send(b"$RST=$\n");
+    r.expect(new_machine);
+    r.expect("ok");
+    r.send(b"$H\n");
+    r.expect("ok");
+    let s = r.settings();
+    for want in ["$20=1", "$100=80.000", "$110=15000.000", "$130=1000.000"] {
+        assert!(s.iter().any(|l| l == want), "{want} missing after $RST=$: {s:?}");
+    }
+    assert!(!overlay.exists(), "{}", std::fs::read_to_string(&overlay).unwrap_or_default());
+    r.send(b"G0 X30\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:30.000,0.000,0.000|"), "{st}");
+}
+
+#[test]
+fn startup_lines_run_after_a_reset_and_a_restart() {
+    let dir = tmp_dir("startup");
+    {
+        let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+        let mut r = Raw::connect(&mut b);
+        // A bad line is refused when stored, with the interpreter's words.
+        r.send(b"$N1=G1 X1..2\n");
+        let m = r.line();
+        assert!(m.starts_with("[MSG:$N1: "), "{m}");
+        r.expect("error:2");
+        r.send(b"$N0=G20\n$N1=G0 X2\n$N\n");
+        for want in ["ok", "ok", "$N0=G20", "$N1=G0 X2", "ok"] {
+            r.expect(want);
+        }
+        assert_eq!(r.status().split('|').nth(1), Some("MPos:0.000,0.000,0.000"), "stored only");
+        // A soft reset runs them, in order, each answered as grbl answers it.
+        r.send(b"\x18");
+        for want in ["", "Grbl 1.1h ['$' for help]", ">G20:ok", ">G0 X2:ok"] {
+            r.expect(want);
+        }
+        let st = r.until_idle();
+        assert!(st.starts_with("<Idle|MPos:50.800,0.000,0.000|"), "2 inches: {st}");
+        r.send(b"$G\n");
+        let gc = r.line();
+        assert!(gc.contains(" G20 "), "{gc}");
+        r.expect("ok");
+    }
+    // Kept across a restart: the connect's welcome runs them.
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0"]);
+    let mut r = Raw::connect(&mut b);
+    r.expect(">G20:ok");
+    r.expect(">G0 X2:ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:50.800,0.000,0.000|"), "{st}");
+    // An error is answered in its place, and the next line still runs.
+    r.send(b"$N0=G0 X600\n");
+    r.expect("ok");
+    r.send(b"\x18");
+    for want in ["", "Grbl 1.1h ['$' for help]", "ALARM:2"] {
+        r.expect(want);
+    }
+    let m = r.line();
+    assert!(m.starts_with("[MSG:axis X target 600.000 mm is outside its travel"), "{m}");
+    r.expect(">G0 X600:error:9");
+    assert!(r.status().starts_with("<Alarm|MPos:50.800,"), "the alarm stops the rest");
+    // $RST=* forgets them.
+    r.send(b"$X\n$RST=*\n$N\n");
+    for want in ["[MSG:Caution: Unlocked]", "ok", "ok", "$N0=", "$N1=", "ok"] {
+        r.expect(want);
+    }
+    assert!(!dir.0.join("machine.grbl.toml").exists());
 }

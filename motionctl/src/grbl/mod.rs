@@ -4,7 +4,7 @@
 //!
 //! - [`protocol`]: real-time bytes, the 128-byte receive buffer, error and alarm numbers;
 //! - [`report`]: `?` status reports;
-//! - [`settings`]: `$$` from the machine file, `$N=V`;
+//! - [`settings`]: `$$` from the machine file, `$N=V` onto the board and into the overlay file;
 //! - [`program`]: program lines one block at a time through `motion-gcode`;
 //! - [`pipeline`]: the moves into an incremental planner, segments and events out;
 //! - [`session`]: the loop between the sender and the board's link;
@@ -38,7 +38,8 @@ const STATUS_MS: u16 = 40;
 
 #[derive(Args, Debug)]
 pub struct GrblArgs {
-    /// The machine: a job TOML whose `[machine]` is used (`$$` reports it).
+    /// The machine: a job TOML whose `[machine]` is used (`$$` reports it); settings a sender
+    /// changes (`$N=V`) and its startup lines are kept in NAME.grbl.toml beside it.
     pub machine: PathBuf,
     #[command(flatten)]
     pub link: LinkArgs,
@@ -59,26 +60,60 @@ pub struct GrblArgs {
     pub sim_speed: f64,
 }
 
-/// `motionctl grbl`.
-pub fn run(args: GrblArgs) -> Result<()> {
-    let text = std::fs::read_to_string(&args.machine)
-        .with_context(|| format!("reading {}", args.machine.display()))?;
-    let machine =
-        job::parse_machine_toml(&text).with_context(|| args.machine.display().to_string())?;
-    let cfg =
-        convert::machine_config(&machine).with_context(|| args.machine.display().to_string())?;
-    let steps_per_mm = machine.axes.iter().map(|a| a.steps_per_mm).collect();
+/// The machine as the board's config: steps-space config and the wire config with the axes'
+/// scale, soft limits and input filter (as every job runner sends it).
+pub fn board_config(
+    machine: &job::Machine,
+) -> Result<(motion::MachineConfig, motion::protocol::WireConfig)> {
+    let cfg = convert::machine_config(machine)?;
     let program = Program {
         config: cfg,
-        steps_per_mm,
+        steps_per_mm: machine.axes.iter().map(|a| a.steps_per_mm).collect(),
         items: Vec::new(),
         commands: Vec::new(),
         final_steps: [0; motion::MAX_AXES],
         skipped_moves: 0,
     };
     let job = Job { machine: machine.clone(), items: Vec::new(), feed_commands: Vec::new() };
-    let wire = runner::wire_config(&job, &program);
+    Ok((cfg, runner::wire_config(&job, &program)))
+}
+
+/// `motionctl grbl`.
+pub fn run(args: GrblArgs) -> Result<()> {
+    let text = std::fs::read_to_string(&args.machine)
+        .with_context(|| format!("reading {}", args.machine.display()))?;
+    let file_machine =
+        job::parse_machine_toml(&text).with_context(|| args.machine.display().to_string())?;
+    convert::machine_config(&file_machine).with_context(|| args.machine.display().to_string())?;
+    // The settings a sender changed before, over the machine file's.
+    let overlay_path = settings::overlay_path(&args.machine);
+    let overlay = settings::Overlay::read(&overlay_path)?;
+    let mut values = settings::Settings::from_machine(&file_machine);
+    for (n, v) in &overlay.settings {
+        values
+            .set(&n.to_string(), &v.to_string())
+            .map_err(|e| anyhow::anyhow!("{}: settings.{n} = {v}: {e}", overlay_path.display()))?;
+    }
+    let machine = settings::machine_with(&text, &values).map_err(|e| {
+        anyhow::anyhow!("{} over {}: {e}", overlay_path.display(), args.machine.display())
+    })?;
+    if !overlay.settings.is_empty() {
+        eprintln!(
+            "motionctl: {} settings from {} over {}",
+            overlay.settings.len(),
+            overlay_path.display(),
+            args.machine.display()
+        );
+    }
+    let (cfg, wire) = board_config(&machine)?;
     let machine: &'static job::Machine = Box::leak(Box::new(machine));
+    let persist = session::Persist {
+        machine_path: args.machine.clone(),
+        machine_src: text,
+        overlay: overlay_path,
+        settings: values,
+        startup: overlay.startup,
+    };
 
     let target = args.link.target()?;
     let speed = args.sim_speed;
@@ -90,7 +125,7 @@ pub fn run(args: GrblArgs) -> Result<()> {
     } else {
         args.link.open()?
     };
-    let result = serve(&args, &mut t, &target, machine, cfg, wire);
+    let result = serve(&args, &mut t, &target, machine, cfg, wire, persist);
     crate::qemu::finish(guard, result)
 }
 
@@ -101,6 +136,7 @@ fn serve(
     machine: &'static job::Machine,
     cfg: motion::MachineConfig,
     wire: motion::protocol::WireConfig,
+    persist: session::Persist,
 ) -> Result<()> {
     let mut s = Session::new(t, args.link.host_config(target));
     let info = s.connect().map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -145,7 +181,7 @@ fn serve(
         }
         (None, None) => bail!("pass --pty PATH or --listen HOST:PORT"),
     };
-    let mut bridge = session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm);
+    let mut bridge = session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm, persist);
     let flag = bridge.interrupt.clone();
     // Fails only if a handler is already set: keep that one.
     let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));

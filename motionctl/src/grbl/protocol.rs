@@ -112,6 +112,8 @@ pub mod error {
     pub const INVALID_STATEMENT: u8 = 3;
     pub const NEGATIVE_VALUE: u8 = 4;
     pub const SETTING_DISABLED: u8 = 5;
+    /// Settings could not be applied (grbl: the EEPROM read failed).
+    pub const SETTING_READ_FAIL: u8 = 7;
     pub const IDLE_ERROR: u8 = 8;
     pub const SYSTEM_GC_LOCK: u8 = 9;
     pub const SOFT_LIMIT_ERROR: u8 = 10;

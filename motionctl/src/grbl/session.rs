@@ -52,6 +52,18 @@ enum Pending {
     Ignore,
 }
 
+/// Where the settings live: the machine file (read, never written) and the overlay the bridge
+/// keeps changed settings and startup lines in.
+pub struct Persist {
+    pub machine_path: std::path::PathBuf,
+    /// The machine file's text, which [`settings::machine_with`] edits.
+    pub machine_src: String,
+    pub overlay: std::path::PathBuf,
+    /// The settings now (the machine file's, with the overlay's over them).
+    pub settings: Settings,
+    pub startup: [String; 2],
+}
+
 /// grbl's build info (`$I`).
 const VERSION: &str = "[VER:1.1h.20190825:";
 
@@ -94,6 +106,9 @@ pub struct Bridge<'a> {
     /// Feed of the last move queued, mm/min.
     feed_now: f64,
     startup_lines: [String; 2],
+    machine_path: std::path::PathBuf,
+    machine_src: String,
+    overlay: std::path::PathBuf,
     /// Offsets kept across resets and program ends (grbl's EEPROM).
     kept: Vec<(usize, f64)>,
     /// The board refused queued motion: stop the rest.
@@ -115,6 +130,7 @@ impl<'a> Bridge<'a> {
         cfg: motion::MachineConfig,
         latest: Status,
         alarm: Option<u8>,
+        persist: Persist,
     ) -> Self {
         let mut motion = Pipeline::new(machine, cfg);
         motion.reset(&latest.positions);
@@ -133,7 +149,7 @@ impl<'a> Bridge<'a> {
             spm: machine.axes.iter().map(|a| a.steps_per_mm).collect(),
             gaxis,
             tick_hz: cfg.tick_hz.max(1) as f64,
-            settings: Settings::from_machine(machine),
+            settings: persist.settings,
             prog,
             motion,
             rx: RxBuffer::default(),
@@ -158,7 +174,10 @@ impl<'a> Bridge<'a> {
             dwell_until: None,
             ovr: [100; 3],
             feed_now: 0.0,
-            startup_lines: [String::new(), String::new()],
+            startup_lines: persist.startup,
+            machine_path: persist.machine_path,
+            machine_src: persist.machine_src,
+            overlay: persist.overlay,
             kept: Vec::new(),
             stop_wanted: false,
             build_info: String::new(),
@@ -455,8 +474,29 @@ impl<'a> Bridge<'a> {
         self.say(WELCOME);
         if self.alarm.is_some() {
             self.say("[MSG:'$H'|'$X' to unlock]");
+        } else {
+            self.startup();
         }
         Ok(())
+    }
+
+    /// The `$N0`, `$N1` startup lines, each answered `>LINE:ok` or `>LINE:error:N` (grbl runs
+    /// them after a reset, and after homing when it starts in alarm).
+    fn startup(&mut self) {
+        for i in 0..2 {
+            let line = self.startup_lines[i].clone();
+            if line.is_empty() {
+                continue;
+            }
+            let answer = match self.gcode(&line) {
+                None => "ok".to_string(),
+                Some(n) => format!("error:{n}"),
+            };
+            self.say(&format!(">{line}:{answer}"));
+            if self.alarm.is_some() {
+                break;
+            }
+        }
     }
 
     /// A fresh interpreter at the commanded position, keeping the offsets grbl keeps in EEPROM.
@@ -702,11 +742,16 @@ impl<'a> Bridge<'a> {
             self.error(error::SYSTEM_GC_LOCK);
             return Ok(());
         }
-        self.gcode(t);
+        match self.gcode(t) {
+            None => self.ok(),
+            Some(n) => self.error(n),
+        }
         Ok(())
     }
 
-    fn gcode(&mut self, t: &str) {
+    /// A program line: `None` when it ran (its `[MSG:]`s said), else grbl's error number
+    /// (after any alarm it raised).
+    fn gcode(&mut self, t: &str) -> Option<u8> {
         if self.prog.ended() {
             self.new_program();
         }
@@ -715,8 +760,7 @@ impl<'a> Bridge<'a> {
             Ok(b) => b,
             Err(e) => {
                 eprintln!("motionctl: `{t}`: {} (error:{})", e.message, e.code);
-                self.error(e.code);
-                return;
+                return Some(e.code);
             }
         };
         // Every target checked before any is queued: a block runs whole or not at all.
@@ -725,7 +769,7 @@ impl<'a> Bridge<'a> {
             if let Step::Item(Item::Move(MoveCmd { target: Target::Absolute(t), .. })) = s {
                 let to: Vec<f64> = t.iter().zip(&from).map(|(t, p)| t.unwrap_or(*p)).collect();
                 if let Err(e) = self.motion.check(&from, &to) {
-                    return self.refuse_move(e);
+                    return Some(self.refuse_move(e));
                 }
                 from = to;
             }
@@ -739,7 +783,7 @@ impl<'a> Bridge<'a> {
                         self.feed_now = self.rapid_mm_min();
                     }
                     if let Err(e) = self.motion.push_move(&t, feed, self.check) {
-                        return self.refuse_move(e);
+                        return Some(self.refuse_move(e));
                     }
                 }
                 Step::Item(Item::Move(_)) => {}
@@ -758,14 +802,15 @@ impl<'a> Bridge<'a> {
         if t.to_ascii_uppercase().contains("G10") && !self.prog.ended() {
             self.kept = self.prog.persistent();
         }
-        self.ok();
+        None
     }
 
     fn rapid_mm_min(&self) -> f64 {
         self.machine.axes.iter().map(|a| a.max_rate_mm_s * 60.0).fold(f64::INFINITY, f64::min)
     }
 
-    fn refuse_move(&mut self, e: MoveError) {
+    /// Says what a refused move raised; grbl's error number for its line.
+    fn refuse_move(&mut self, e: MoveError) -> u8 {
         match e {
             MoveError::SoftLimit(m) if !self.check => {
                 eprintln!("motionctl: soft limit: {m}");
@@ -774,11 +819,11 @@ impl<'a> Bridge<'a> {
                 self.alarm = Some(alarm::SOFT_LIMIT);
                 self.say(&format!("ALARM:{}", alarm::SOFT_LIMIT));
                 self.say(&format!("[MSG:{m}]"));
-                self.error(error::SYSTEM_GC_LOCK);
+                error::SYSTEM_GC_LOCK
             }
             MoveError::SoftLimit(m) | MoveError::Invalid(m) => {
                 eprintln!("motionctl: {m}");
-                self.error(error::INVALID_TARGET);
+                error::INVALID_TARGET
             }
         }
     }
@@ -863,8 +908,32 @@ impl<'a> Bridge<'a> {
                     return Ok(());
                 }
                 if cmd != "$RST=#" {
-                    self.settings.restore();
+                    let mut next = self.settings.clone();
+                    next.restore();
+                    // The machine file's own values, on the board too if they differ.
+                    match settings::machine_with(&self.machine_src, &next) {
+                        Ok(m) => {
+                            if let Err(why) = self.install_machine(m, true)? {
+                                self.say(&format!("[MSG:{cmd}: {why}]"));
+                                self.error(error::SETTING_READ_FAIL);
+                                return Ok(());
+                            }
+                        }
+                        Err(why) => {
+                            self.say(&format!(
+                                "[MSG:{cmd}: {}: {why}]",
+                                self.machine_path.display()
+                            ));
+                            self.error(error::SETTING_READ_FAIL);
+                            return Ok(());
+                        }
+                    }
+                    self.settings = next;
                     self.motion.soft_limits = self.settings.flag(settings::SOFT_LIMITS);
+                    if cmd == "$RST=*" {
+                        self.startup_lines = [String::new(), String::new()];
+                    }
+                    self.save();
                 }
                 if cmd != "$RST=$" {
                     for p in 1..=6 {
@@ -881,7 +950,29 @@ impl<'a> Bridge<'a> {
             _ if cmd.starts_with("$N0=") || cmd.starts_with("$N1=") => {
                 let i = if cmd.starts_with("$N0") { 0 } else { 1 };
                 let text = raw.split_once('=').map_or("", |(_, t)| t).trim().to_string();
+                if !idle {
+                    self.error(error::IDLE_ERROR);
+                    return Ok(());
+                }
+                if !text.is_empty() {
+                    // Checked as a program line on a scratch interpreter: nothing runs now.
+                    let mut scratch = Program::with_parameters(
+                        self.machine,
+                        &self.motion.pos_mm,
+                        self.kept.clone(),
+                    );
+                    if let Err(e) = scratch.run(&text) {
+                        eprintln!(
+                            "motionctl: startup line `{text}`: {} (error:{})",
+                            e.message, e.code
+                        );
+                        self.say(&format!("[MSG:$N{i}: {}]", e.message));
+                        self.error(e.code);
+                        return Ok(());
+                    }
+                }
                 self.startup_lines[i] = text;
+                self.save();
                 self.ok();
             }
             _ if cmd.starts_with("$I=") => {
@@ -889,30 +980,129 @@ impl<'a> Bridge<'a> {
                 self.build_info = text.chars().take(80).collect();
                 self.ok();
             }
-            _ => self.setting(&cmd),
+            _ => self.setting(&cmd)?,
         }
         Ok(())
     }
 
-    fn setting(&mut self, cmd: &str) {
+    fn setting(&mut self, cmd: &str) -> Result<()> {
         let Some((n, v)) = cmd[1..].split_once('=') else {
-            return self.error(error::INVALID_STATEMENT);
+            self.error(error::INVALID_STATEMENT);
+            return Ok(());
         };
-        if !n.chars().all(|c| c.is_ascii_digit()) || n.is_empty() {
-            return self.error(error::INVALID_STATEMENT);
+        let Ok(num) = n.parse::<u16>() else {
+            self.error(error::INVALID_STATEMENT);
+            return Ok(());
+        };
+        if !n.chars().all(|c| c.is_ascii_digit()) {
+            self.error(error::INVALID_STATEMENT);
+            return Ok(());
         }
         if self.moving() {
-            return self.error(error::IDLE_ERROR);
+            self.error(error::IDLE_ERROR);
+            return Ok(());
         }
-        match self.settings.set(n, v) {
-            Ok(()) => {
-                self.motion.soft_limits = self.settings.flag(settings::SOFT_LIMITS);
-                self.ok();
+        let mut next = self.settings.clone();
+        match next.set(n, v) {
+            Ok(()) => {}
+            Err(SetError::BadNumber) => {
+                self.error(error::BAD_NUMBER_FORMAT);
+                return Ok(());
             }
-            Err(SetError::BadNumber) => self.error(error::BAD_NUMBER_FORMAT),
-            Err(SetError::Unknown) => self.error(error::INVALID_STATEMENT),
-            Err(SetError::Negative) => self.error(error::NEGATIVE_VALUE),
+            Err(SetError::Unknown) => {
+                self.error(error::INVALID_STATEMENT);
+                return Ok(());
+            }
+            Err(SetError::Negative) => {
+                self.error(error::NEGATIVE_VALUE);
+                return Ok(());
+            }
         }
+        let axes = self.machine.axes.len();
+        if settings::is_machine_field(num, axes) && next.get(num) != self.settings.get(num) {
+            let machine = match settings::machine_with(&self.machine_src, &next) {
+                Ok(m) => m,
+                Err(why) => {
+                    eprintln!("motionctl: ${num}={v}: {why}");
+                    self.say(&format!("[MSG:${num}={v}: {why}]"));
+                    self.error(settings::OUT_OF_RANGE);
+                    return Ok(());
+                }
+            };
+            if let Err(why) = self.install_machine(machine, settings::is_board_field(num, axes))? {
+                self.say(&format!("[MSG:${num}={v}: {why}]"));
+                self.error(error::SETTING_READ_FAIL);
+                return Ok(());
+            }
+        }
+        self.settings = next;
+        self.motion.soft_limits = self.settings.flag(settings::SOFT_LIMITS);
+        self.save();
+        self.ok();
+        Ok(())
+    }
+
+    /// Writes the overlay; a failure is told (the setting is in effect for this session).
+    fn save(&mut self) {
+        let o = settings::Overlay {
+            settings: self.settings.changed(),
+            startup: self.startup_lines.clone(),
+        };
+        if let Err(e) = o.write(&self.overlay, &self.machine_path) {
+            eprintln!("motionctl: {e:#}");
+            self.say(&format!("[MSG:not saved, in effect until the bridge stops: {e:#}]"));
+        }
+    }
+
+    /// The bridge runs `machine` from now on; with `board`, the board gets its config first
+    /// (through [`runner::ready_board`], as at start: only when it differs from the board's).
+    /// A new config loses the board's homing: the bridge is then in alarm until `$H`. The
+    /// inner error says why the board refused (nothing changed then).
+    fn install_machine(&mut self, machine: Machine, board: bool) -> Result<Result<(), String>> {
+        let (cfg, wire) = match super::board_config(&machine) {
+            Ok(c) => c,
+            Err(e) => return Ok(Err(format!("{e:#}"))),
+        };
+        if board {
+            self.stop_motion()?;
+            let say = |m: &str| eprintln!("motionctl: {m}");
+            let r = runner::ready_board(
+                &mut self.s,
+                wire,
+                false,
+                "machine with the grbl settings",
+                &say,
+            );
+            runner::ask(
+                &mut self.s,
+                RequestBody::SetStatusPeriod { ms: super::STATUS_MS },
+                "SetStatusPeriod",
+            )?;
+            self.refresh()?;
+            self.faults_seen = self.latest.faults;
+            if let Err(e) = r {
+                let config_now = runner::ask(&mut self.s, RequestBody::GetConfig, "GetConfig")?;
+                if config_now != Reply::Config(wire) {
+                    return Ok(Err(e));
+                }
+                // The config is in; the board lost its homing.
+                eprintln!("motionctl: {e}");
+                self.say("[MSG:the board has the new config and must be homed: '$H' to home]");
+                self.alarm = Some(alarm::HOMING_REQUIRED);
+            }
+        }
+        // Machines live as long as the bridge (the interpreter borrows them); one per change.
+        let machine: &'static Machine = Box::leak(Box::new(machine));
+        self.machine = machine;
+        self.spm = machine.axes.iter().map(|a| a.steps_per_mm).collect();
+        self.tick_hz = cfg.tick_hz.max(1) as f64;
+        let soft = self.motion.soft_limits;
+        self.motion = Pipeline::new(machine, cfg);
+        self.motion.soft_limits = soft;
+        self.rebase();
+        let kept = self.kept.clone();
+        self.prog = Program::with_parameters(machine, &self.motion.pos_mm, kept);
+        Ok(Ok(()))
     }
 
     /// `$#`: coordinate systems, G28, G30, G92, tool length offset, probe.
@@ -1007,6 +1197,7 @@ impl<'a> Bridge<'a> {
             Ok(()) => {
                 self.alarm = None;
                 self.rebase();
+                self.startup();
                 self.ok();
             }
             Err(e) => {
