@@ -71,3 +71,19 @@ fn readme_command_lines_parse() {
     }
     assert!(checked > 20, "only {checked} command lines found");
 }
+
+const WORDS_BEGIN: &str =
+    "<!-- gcode-words:begin (generated from motion_gcode::table::markdown) -->\n";
+const WORDS_END: &str = "<!-- gcode-words:end -->";
+
+#[test]
+fn readme_gcode_words_match_the_interpreter_table() {
+    let readme = include_str!("../../README.md");
+    let rendered = motion_gcode::table::markdown();
+    let start = readme.find(WORDS_BEGIN).expect("README has the gcode-words:begin marker")
+        + WORDS_BEGIN.len();
+    let end = readme.find(WORDS_END).expect("README has the gcode-words:end marker");
+    if readme[start..end].trim() != rendered.trim() {
+        panic!("README.md's G-code word table is out of date; put this between the markers:\n{rendered}");
+    }
+}
