@@ -165,3 +165,35 @@ fn a_users_work_area_refuses_a_contour_outside_it_and_suggests_a_pole_that_fits(
     assert!(!ok && err.contains("machine.toml: [polar]") && err.contains("r_max"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_users_part_plays_on_the_simulated_board_in_its_cut_time() {
+    let dir = std::env::temp_dir().join(format!("polar_user_run_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = dir.join("part.bin");
+    let b = bin.to_str().unwrap();
+    let d = json(&[
+        "polar",
+        "digitize",
+        "circle:2",
+        POLE[0],
+        POLE[1],
+        POLE[2],
+        POLE[3],
+        "--tool-radius",
+        "0.25",
+        "--vt",
+        "1.5",
+        "-o",
+        b,
+    ]);
+    let r = json(&["polar", "run", b, "--sim"]);
+    assert_eq!(r["ok"], true, "{r}");
+    assert_eq!(r["events_fired"], d["events"], "{r} vs {d}");
+    // Back where it started (a closed contour), in degrees and inches.
+    assert_eq!((num(&r, "theta_deg"), num(&r, "r_in")), (0.0, 0.0), "{r}");
+    // The board's time is the stream's (to the status period, 40 ms by default).
+    let (board, stream) = (num(&r, "board_s"), num(&d, "duration_s"));
+    assert!((board - stream).abs() < 0.05, "board {board} s vs stream {stream} s");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

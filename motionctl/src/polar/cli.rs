@@ -185,6 +185,9 @@ pub enum PolarCmd {
         /// Radial size scale M:K (M radial steps per K recorded ones), each 1..=4.
         #[arg(long, default_value = "1:1", value_parser = parse_size)]
         size: SizeScale,
+        /// Print the summary as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Copy mode: the arm and carriage encoders drive theta and r live (radial size M:K);
     /// with --teach, record the encoder events and save them as a stream file for `polar run`.
@@ -216,11 +219,20 @@ pub fn parse_size(s: &str) -> Result<SizeScale, String> {
 }
 
 /// `polar run`: opens the link (QEMU, serial, TCP or the simulated board), plays the stream.
+/// Theta steps from home in degrees, r steps in inches (the polar machine's scales).
+fn deg(theta_steps: i64) -> f64 {
+    theta_steps as f64 * 360.0 / motion::polar::job::THETA_STEPS_PER_REV as f64
+}
+fn inches(r_steps: i64) -> f64 {
+    r_steps as f64 / motion::polar::job::R_STEPS_PER_IN as f64
+}
+
 fn run_stream(
     file: &std::path::Path,
     link: &crate::board_link::LinkArgs,
     speed: f64,
     size: SizeScale,
+    json: bool,
 ) -> anyhow::Result<()> {
     use crate::transport::Transport;
     let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
@@ -250,6 +262,30 @@ fn run_stream(
     };
     let result = super::run::run(&mut t, &bytes, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
+    if json {
+        let v = serde_json::json!({
+            "file": file.display().to_string(),
+            "events": r.events,
+            "events_fired": r.events_fired,
+            "blocks": r.blocks,
+            "theta_deg": deg(r.positions[0]),
+            "r_in": inches(r.positions[1]),
+            "theta_steps": r.positions[0],
+            "r_steps": r.positions[1],
+            "model_theta_steps": r.expected_positions[0],
+            "model_r_steps": r.expected_positions[1],
+            "board_s": r.board_ticks as f64 / motion::polar::scenario::TICK_HZ as f64,
+            "wall_s": r.seconds,
+            "retransmissions": r.retransmissions,
+            "ok": r.ok(),
+            "problems": r.problems,
+        });
+        crate::outln!("{v}");
+        if !r.ok() {
+            bail!("verification failed: {}", r.problems.join("; "));
+        }
+        return Ok(());
+    }
     crate::outln!(
         "events     {} fired, {} in {} ({} blocks)",
         r.events_fired,
@@ -258,7 +294,9 @@ fn run_stream(
         r.blocks
     );
     crate::outln!(
-        "positions  theta {} r {} steps; host model theta {} r {}",
+        "positions  theta {:.3} deg, r {:.4} in ({} and {} steps); host model {} and {} steps",
+        deg(r.positions[0]),
+        inches(r.positions[1]),
         r.positions[0],
         r.positions[1],
         r.expected_positions[0],
@@ -544,7 +582,9 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             crate::out!("{text}");
             r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
         }
-        PolarCmd::Run { file, link, speed, size } => run_stream(&file, &link, speed, size),
+        PolarCmd::Run { file, link, speed, size, json } => {
+            run_stream(&file, &link, speed, size, json)
+        }
         PolarCmd::Copy { link, size, teach, template, seconds } => {
             run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds)
         }
