@@ -162,11 +162,6 @@ pub fn finish_contour(source: &str, mut pts: Vec<Point2>) -> Result<Vec<Point2>>
             ),
         ));
     }
-    let area = polygon_area_signed_mm2(&pts);
-    let scale = pts.iter().map(|p| p.norm_mm()).fold(0.0, f64::max).max(1.0);
-    if area.abs() <= 1e-9 * scale * scale {
-        return Err(cad_err(source, "the contour encloses no area (degenerate)"));
-    }
     if let Some((a, b, p)) = self_intersection(&pts) {
         return Err(cad_err(
             source,
@@ -175,6 +170,11 @@ pub fn finish_contour(source: &str, mut pts: Vec<Point2>) -> Result<Vec<Point2>>
                 p.x_mm, p.y_mm
             ),
         ));
+    }
+    let area = polygon_area_signed_mm2(&pts);
+    let scale = pts.iter().map(|p| p.norm_mm()).fold(0.0, f64::max).max(1.0);
+    if area.abs() <= 1e-9 * scale * scale {
+        return Err(cad_err(source, "the contour encloses no area (degenerate)"));
     }
     if area < 0.0 {
         pts.reverse();
