@@ -515,3 +515,37 @@ fn bad_drawings_are_refused_with_the_file_and_the_reason() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `wire run` streams a contour die like any other: two of its segments on the in-process
+/// simulated board end where the host model says, in order, and the plot is titled as a run.
+#[test]
+fn wire_run_streams_the_svg_pair_to_the_sim_board() {
+    let dir = temp_dir("run");
+    let plot = dir.join("run.svg");
+    let (top, bottom) = (data("circle_r20.svg"), data("rounded_square_36.svg") + "#bottom");
+    let (code, out, err) = motionctl(&[
+        "wire",
+        "run",
+        "--sim",
+        "--top",
+        &top,
+        "--bottom",
+        &bottom,
+        "--thickness",
+        "30",
+        "--points",
+        "60",
+        "--segments",
+        "1..3",
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("hash_ok=1") && out.contains("positions_ok=1"), "{out}");
+    assert!(out.contains("result     OK"), "{out}");
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    if !err.contains("no system font") {
+        assert!(svg.contains("wire run: contours"), "run title missing");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

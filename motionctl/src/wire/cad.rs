@@ -46,8 +46,8 @@ pub const MIN_CHORD_TOL_MM: f64 = 1e-4;
 pub const MAX_FLAT_POINTS: usize = 200_000;
 /// Most points per face after resampling.
 pub const MAX_POINTS: usize = 100_000;
-/// Nesting limit of curve subdivision.
-const MAX_DEPTH: u32 = 24;
+/// Nesting limit of curve subdivision (at most 65536 chords per curve).
+const MAX_DEPTH: u32 = 16;
 
 /// Why a contour could not be read: the file (and the element, layer or entity) and what.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -450,6 +450,7 @@ fn dxf_polyline(file: &str, bytes: &[u8], select: Option<&str>, tol: f64) -> Res
     // Flatten in drawing units with the tolerance converted to them.
     let tol_u = tol / scale;
     let mut pieces = Vec::new();
+    let mut total = 0usize;
     let mut layers: Vec<String> = Vec::new();
     for (k, e) in drawing.entities().enumerate() {
         let layer = &e.common.layer;
@@ -460,6 +461,16 @@ fn dxf_polyline(file: &str, bytes: &[u8], select: Option<&str>, tol: f64) -> Res
             continue;
         }
         if let Some(p) = dxf_piece(file, k, e, tol_u)? {
+            total += p.points.len();
+            if total > MAX_FLAT_POINTS {
+                return Err(cad_err(
+                    file,
+                    format!(
+                        "the entities flatten to more than {MAX_FLAT_POINTS} points: use a larger \
+                         chord tolerance"
+                    ),
+                ));
+            }
             pieces.push(p);
         }
     }
@@ -545,11 +556,12 @@ fn dxf_piece(file: &str, k: usize, e: &dxf::entities::Entity, tol: f64) -> Resul
                     format!("{}: radius {} is not > 0", name("ARC"), a.radius),
                 ));
             }
-            let (s, mut e_deg) = (a.start_angle, a.end_angle);
-            while e_deg <= s {
-                e_deg += 360.0;
-            }
-            let (a0, sweep) = (s.to_radians(), (e_deg - s).to_radians());
+            // Counter-clockwise from the start to the end angle; equal angles: a full turn.
+            let sweep_deg = match (a.end_angle - a.start_angle).rem_euclid(360.0) {
+                d if d > 0.0 && d.is_finite() => d,
+                _ => 360.0,
+            };
+            let (a0, sweep) = (a.start_angle.to_radians(), sweep_deg.to_radians());
             let c = Point2::new(a.center.x, a.center.y);
             let mut pts =
                 vec![Point2::new(c.x_mm + a.radius * a0.cos(), c.y_mm + a.radius * a0.sin())];
