@@ -370,7 +370,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         job.area_ruled_mm2,
         job.area_trapezoid_mm2
     );
-    say!("  60 A / FR           {:.3} s (cut time at the area rate)", job.time_ruled_s);
+    say!("  60 A / FR           {:.3} s", job.time_ruled_s);
     let thesis_time_s = crate::wire::path::time_s(job.area_trapezoid_mm2, fr)?;
     say!(
         "  thesis 60 A / FR    {:.3} s (its trapezoid areas (RB + RT) ZT / 2, not the ruled area)",

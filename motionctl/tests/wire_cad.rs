@@ -501,6 +501,33 @@ fn bad_drawings_are_refused_with_the_file_and_the_reason() {
         assert_eq!(code, Some(1), "{arg}: {err}");
         assert!(err.contains(&want), "{arg}: want `{want}`: {err}");
     }
+    // A thin C (1 mm wide, opening towards +X): 40 points cut across its slot, 80 do not.
+    let c = dir.join("thin_c.svg");
+    std::fs::write(
+        &c,
+        svg_with("M 20 -20 L -20 -20 L -20 20 L 20 20 L 20 19 L -19 19 L -19 -19 L 20 -19 Z"),
+    )
+    .unwrap();
+    let c = c.to_str().unwrap();
+    let run = |n: &str| {
+        motionctl(&[
+            "wire",
+            "plan",
+            "--top",
+            c,
+            "--bottom",
+            &good,
+            "--thickness",
+            "30",
+            "--points",
+            n,
+        ])
+    };
+    let (code, _, err) = run("40");
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("thin_c.svg") && err.contains("crosses itself"), "{err}");
+    let (code, _, err) = run("80");
+    assert_eq!(code, Some(0), "{err}");
     // Missing thickness, a bad point count or chord tolerance.
     for (extra, want) in [
         (vec![], "--thickness"),

@@ -918,6 +918,15 @@ pub fn resample(pts: &[Point2], n: usize) -> Resampled {
     Resampled { points, deviation_mm }
 }
 
+/// Why two contours could not be paired: a face (named by its file) or a parameter.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PairError {
+    #[error(transparent)]
+    Cad(#[from] CadError),
+    #[error(transparent)]
+    Wire(#[from] super::WireError),
+}
+
 /// The two faces of a contour die.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourPair {
@@ -930,15 +939,33 @@ pub struct ContourPair {
 
 /// Pairs `top` (at Z = `zt_mm`) and `bottom` (Z = 0) with `n` points each: the die's faces are
 /// the resampled points and the first again (the cut closes).
-pub fn pair(top: Contour, bottom: Contour, zt_mm: f64, n: usize) -> super::Result<ContourPair> {
+pub fn pair(
+    top: Contour,
+    bottom: Contour,
+    zt_mm: f64,
+    n: usize,
+) -> std::result::Result<ContourPair, PairError> {
     if !(3..=MAX_POINTS).contains(&n) {
-        return Err(super::WireError::BadParameter {
+        return Err(PairError::Wire(super::WireError::BadParameter {
             name: "points",
             value: n as f64,
             reason: "must be 3 .. 100000",
-        });
+        }));
     }
     let (tr, br) = (resample(&top.points, n), resample(&bottom.points, n));
+    // Too few points can cut across a thin part of a face.
+    for (c, r) in [(&top, &tr), (&bottom, &br)] {
+        if let Some((_, _, p)) = self_intersection(&r.points) {
+            return Err(PairError::Cad(cad_err(
+                &c.source,
+                format!(
+                    "resampled to {n} points the face crosses itself near ({:.3}, {:.3}) mm: use \
+                     more points",
+                    p.x_mm, p.y_mm
+                ),
+            )));
+        }
+    }
     let close = |v: &[Point2]| v.iter().copied().chain(v.first().copied()).collect::<Vec<_>>();
     let die = Die::new(zt_mm, close(&tr.points), close(&br.points))?;
     Ok(ContourPair { top, bottom, top_resampled: tr, bottom_resampled: br, die })
