@@ -115,17 +115,17 @@ fn svg_rounded_square_through_transform_and_viewbox_units() {
 
 #[test]
 fn dxf_faces_match_their_analytic_shapes() {
-    let f = data("faces.dxf");
+    let file = data("faces.dxf");
     // LWPOLYLINE with two bulge-1 spans: a 20 x 10 slot, every point 5 mm from its core
     // segment (-10, 0)..(10, 0).
-    let slot = read_contour(&format!("{f}#slot"), TOL).unwrap();
+    let slot = read_contour(&format!("{file}#slot"), TOL).unwrap();
     for p in &slot.points {
         let d = (p.x_mm.clamp(-10.0, 10.0) - p.x_mm).hypot(p.y_mm);
         assert!((d - 5.0).abs() <= 1e-9, "slot point {p:?} is {d} from the core");
     }
     check_convex(&slot, 200.0 + PI * 25.0, 40.0 + 10.0 * PI, 1e-9);
     // CIRCLE R 22.
-    let disk = read_contour(&format!("{f}#disk"), TOL).unwrap();
+    let disk = read_contour(&format!("{file}#disk"), TOL).unwrap();
     for p in &disk.points {
         assert!((p.norm_mm() - 22.0).abs() <= 1e-9, "disk point {p:?}");
     }
@@ -133,7 +133,7 @@ fn dxf_faces_match_their_analytic_shapes() {
     // Half disk R 18: an ARC, a LINE written against the loop's direction and a rational
     // quadratic SPLINE (the exact quarter circle: with its weights ignored its middle would sit
     // 6 % outside), listed out of order.
-    let half = read_contour(&format!("{f}#half"), TOL).unwrap();
+    let half = read_contour(&format!("{file}#half"), TOL).unwrap();
     for p in &half.points {
         let on_line = p.y_mm.abs() <= 1e-9 && p.x_mm.abs() <= 18.0 + 1e-9;
         let on_arc = p.y_mm >= -1e-9 && (p.norm_mm() - 18.0).abs() <= 1e-9;
@@ -142,6 +142,35 @@ fn dxf_faces_match_their_analytic_shapes() {
     assert!(half.points.iter().any(|p| p.x_mm > 1.0 && p.y_mm > 1.0), "the spline's quarter");
     assert!(half.points.iter().any(|p| p.x_mm < -1.0 && p.y_mm > 1.0), "the arc's quarter");
     check_convex(&half, PI * 18.0 * 18.0 / 2.0, PI * 18.0 + 36.0, 1e-9);
+    // The same layers through `wire plan`: the disk over the slot, 64 points a face.
+    let (top, bottom) = (format!("{file}#disk"), format!("{file}#slot"));
+    let (code, out, err) = motionctl(&[
+        "wire",
+        "plan",
+        "--top",
+        &top,
+        "--bottom",
+        &bottom,
+        "--thickness",
+        "25",
+        "--points",
+        "64",
+        "--json",
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let j = json_of(&out);
+    assert_eq!(j["points_per_face"].as_u64(), Some(65));
+    let (a, l) = (PI * 22.0 * 22.0, 2.0 * PI * 22.0);
+    let drawn = f(&j, &["top", "drawn_area_mm2"]);
+    assert!(drawn <= a && drawn >= a - l * TOL, "disk {drawn} vs {a}");
+    let (a, l) = (200.0 + 25.0 * PI, 40.0 + 10.0 * PI);
+    let drawn = f(&j, &["bottom", "drawn_area_mm2"]);
+    assert!(drawn <= a && drawn >= a - l * TOL, "slot {drawn} vs {a}");
+    // 64 points on the flattened circle R 22 (each between R - tol and R): the regular 64-gon
+    // within the circle's length times tol.
+    let an = 32.0 * 22.0 * 22.0 * (2.0 * PI / 64.0).sin();
+    let resampled = f(&j, &["top", "polygon_area_mm2"]);
+    assert!((resampled - an).abs() <= 2.0 * PI * 22.0 * TOL, "{resampled} vs {an}");
 }
 
 #[test]
