@@ -63,7 +63,9 @@ pub struct WirePlanArgs {
 pub struct DrawingArgs {
     /// Top face (Z = ZT) from a drawing: an SVG path or a DXF contour (LWPOLYLINE, LINE, ARC,
     /// CIRCLE, SPLINE), `FILE` or `FILE#ID` (SVG element id, DXF layer). SVG: 1 user unit = 1
-    /// mm unless width/height and viewBox say otherwise, y up. Needs --bottom and --thickness.
+    /// mm unless width/height and viewBox say otherwise, the page's centre at the workpiece
+    /// centre, y up; DXF: $INSUNITS, the drawing's origin at the workpiece centre. Needs
+    /// --bottom and --thickness.
     #[arg(long, value_name = "FILE", requires = "bottom", conflicts_with_all = ["die", "mdi"])]
     top: Option<String>,
     /// Bottom face (Z = 0) from a drawing, as --top.

@@ -113,6 +113,35 @@ fn svg_rounded_square_through_transform_and_viewbox_units() {
     check_convex(&c, s * s - (4.0 - PI) * r * r, 4.0 * (s - 2.0 * r) + 2.0 * PI * r, e);
 }
 
+/// Real units over a viewBox: 4 in over 400 units is 0.254 mm a unit, and the page's centre
+/// (200, 200) is the workpiece centre; without a page the user origin is.
+#[test]
+fn svg_units_and_page_centre() {
+    let dir = temp_dir("units");
+    let inch = dir.join("inch.svg");
+    std::fs::write(
+        &inch,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"4in\" height=\"4in\" \
+         viewBox=\"0 0 400 400\"><circle cx=\"200\" cy=\"200\" r=\"100\"/></svg>",
+    )
+    .unwrap();
+    let bare = dir.join("bare.svg");
+    std::fs::write(
+        &bare,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\"><circle cx=\"3\" cy=\"-4\" r=\"10\"/></svg>",
+    )
+    .unwrap();
+    for (p, centre, r) in [(&inch, (0.0, 0.0), 25.4), (&bare, (3.0, 4.0), 10.0)] {
+        let c = read_contour(p.to_str().unwrap(), TOL).unwrap();
+        for q in &c.points {
+            let d = (q.x_mm - centre.0).hypot(q.y_mm - centre.1);
+            assert!(d >= r - F32_MM && d <= r * (1.0 + BEZIER_E) + F32_MM, "{p:?}: {q:?}");
+        }
+        check_convex(&c, PI * r * r, 2.0 * PI * r, BEZIER_E * r + F32_MM);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn dxf_faces_match_their_analytic_shapes() {
     let file = data("faces.dxf");

@@ -15,12 +15,13 @@
 //!   Béziers, four per full turn below about 300 user units of radius, which lie at most
 //!   2.7e-4 R outside the true arc (0.005 mm at R 20 mm); Béziers are then flattened within
 //!   the chord tolerance.
-//! - DXF: `$INSUNITS` scales to mm (unitless counts as mm); entities lie in the XY plane
-//!   (extrusion +Z, or -Z for a mirrored one).
+//! - DXF: `$INSUNITS` scales to mm (unitless counts as mm); the drawing's origin is the
+//!   workpiece centre; entities lie in the XY plane (extrusion +Z, or -Z for a mirrored one).
 //!
 //! Which contour: an SVG file gives its first path (`<path>`, `<circle>`, `<rect>`,
-//! `<polygon>`, ... in document order, invisible ones included) or the one whose `id` is named
-//! (`FILE#ID` on the command line); it must have exactly one subpath. A DXF file gives the one
+//! `<polygon>`, ... in document order; unpainted ones included, `display: none` ones not) or
+//! the one whose `id` is named (`FILE#ID` on the command line); it must have exactly one
+//! subpath. A DXF file gives the one
 //! closed loop its LWPOLYLINE, LINE, ARC, CIRCLE and SPLINE entities make (open pieces are
 //! chained end to end within 0.001 mm, in any order and direction), or the loop on the named
 //! layer (`FILE#LAYER`); other entity types are ignored.
