@@ -12,7 +12,8 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct WirePlanArgs {
     /// Wire job file (TOML, version 1: fr_mm2_per_min, tolerance_mm, [backlash] x_steps,
-    /// y_steps, beta_steps, alpha_steps); the flags below override it.
+    /// y_steps, beta_steps, alpha_steps, [contours] top, bottom, thickness_mm, points,
+    /// chord_tolerance_mm); the flags below override it.
     #[arg(long, value_name = "FILE")]
     job: Option<PathBuf>,
     /// Area rate, mm^2/min [default: 800].
@@ -33,8 +34,8 @@ pub struct WirePlanArgs {
     /// by commas or blanks, `#` comment lines; cut from and back to the centre at FR 800.
     #[arg(long, value_name = "FILE", conflicts_with = "die")]
     mdi: Option<PathBuf>,
-    /// Workpiece thickness ZT, mm [default: the die's].
-    #[arg(long, value_name = "MM")]
+    /// Workpiece thickness ZT, mm [default: the die's; required with --top/--bottom].
+    #[arg(long, visible_alias = "thickness", value_name = "MM")]
     zt: Option<f64>,
     /// Start and end point of the wire on the workpiece, mm [default: the die's: (0, 0), the
     /// gear (0, -60)]; the board's positions count from there.
@@ -52,6 +53,37 @@ pub struct WirePlanArgs {
     /// --die gear: pressure angle, deg [default: 20].
     #[arg(long, value_name = "DEG")]
     pressure_angle: Option<f64>,
+    #[command(flatten)]
+    drawing: Box<DrawingArgs>,
+}
+
+/// The die from two drawings, and the plot (boxed: they would make every `motionctl` command
+/// as large as the wire's).
+#[derive(clap::Args, Debug)]
+pub struct DrawingArgs {
+    /// Top face (Z = ZT) from a drawing: an SVG path or a DXF contour (LWPOLYLINE, LINE, ARC,
+    /// CIRCLE, SPLINE), `FILE` or `FILE#ID` (SVG element id, DXF layer). SVG: 1 user unit = 1
+    /// mm unless width/height and viewBox say otherwise, the page's centre at the workpiece
+    /// centre, y up; DXF: $INSUNITS, the drawing's origin at the workpiece centre. Needs
+    /// --bottom and --thickness.
+    #[arg(long, value_name = "FILE", requires = "bottom", conflicts_with_all = ["die", "mdi"])]
+    top: Option<String>,
+    /// Bottom face (Z = 0) from a drawing, as --top.
+    #[arg(long, value_name = "FILE", requires = "top")]
+    bottom: Option<String>,
+    /// --top/--bottom: points per face after resampling by arc length (each face
+    /// counter-clockwise from where the ray from its centroid towards +X leaves it) [default:
+    /// 120].
+    #[arg(long, value_name = "N")]
+    points: Option<usize>,
+    /// --top/--bottom: largest distance of a flattened chord from the drawn curve, mm [default:
+    /// 0.01].
+    #[arg(long, value_name = "MM")]
+    chord_tol: Option<f64>,
+    /// Draw the job: the ruled surface in 3-D (both faces and every few ruling lines), the two
+    /// faces from above, and the four axes against time on the host model (.svg or .png).
+    #[arg(long, value_name = "FILE.svg|.png")]
+    plot: Option<PathBuf>,
 }
 
 /// `--start X,Y`: two numbers, mm.
@@ -77,9 +109,82 @@ fn parse_backlash(s: &str) -> Result<[u32; 4], String> {
 }
 
 impl WirePlanArgs {
-    /// The die to cut: `--mdi FILE`, else `--die NAME` (default circle-complex), with the
-    /// overrides. Errors name the file and its line.
-    fn die(&self) -> Result<crate::wire::dies::DieJob> {
+    /// The job file's path and text, if one was given.
+    fn job_text(&self) -> Result<Option<(&std::path::Path, String)>> {
+        match &self.job {
+            Some(path) => {
+                let src = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                Ok(Some((path.as_path(), src)))
+            }
+            None => Ok(None),
+        }
+    }
+
+    /// The die to cut: `--top/--bottom` drawings, else the job file's `[contours]`, else
+    /// `--mdi FILE`, else `--die NAME` (default circle-complex), with the overrides; for a
+    /// contour die also the contours. Errors name the file.
+    fn die(&self) -> Result<(crate::wire::dies::DieJob, Option<crate::wire::cad::ContourPair>)> {
+        use crate::wire::cad;
+        let spec = match self.job_text()? {
+            Some((path, src)) => {
+                let base = path.parent().unwrap_or(std::path::Path::new("."));
+                crate::wire::job_file::parse_contours(&src, base)
+                    .with_context(|| path.display().to_string())?
+            }
+            None => None,
+        };
+        let drawings = match (self.drawing.top.as_ref().zip(self.drawing.bottom.as_ref()), &spec) {
+            (Some((t, b)), _) => Some((t.clone(), b.clone())),
+            (None, Some(s)) => Some((s.top.clone(), s.bottom.clone())),
+            (None, None) => None,
+        };
+        if let Some((top, bottom)) = drawings {
+            if spec.is_some() && (self.die.is_some() || self.mdi.is_some()) {
+                anyhow::bail!("the job file's [contours] and --die/--mdi name two dies: give one");
+            }
+            let zt = self.zt.or(spec.as_ref().map(|s| s.thickness_mm)).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--top/--bottom need the workpiece thickness: --thickness MM (or \
+                     thickness_mm in the job file's [contours])"
+                )
+            })?;
+            let points = self
+                .drawing
+                .points
+                .or(spec.as_ref().and_then(|s| s.points))
+                .unwrap_or(cad::DEFAULT_POINTS);
+            let tol = self
+                .drawing
+                .chord_tol
+                .or(spec.as_ref().and_then(|s| s.chord_tolerance_mm))
+                .unwrap_or(cad::DEFAULT_CHORD_TOL_MM);
+            cad::check_chord_tol(tol).map_err(|e| anyhow::anyhow!("--chord-tol: {e}"))?;
+            let pair = cad::pair(
+                cad::read_contour(&top, tol)?,
+                cad::read_contour(&bottom, tol)?,
+                zt,
+                points,
+            )?;
+            let o = crate::wire::dies::DieOverrides {
+                start: self.start,
+                module_mm: self.module,
+                teeth: self.teeth,
+                pitch_diameter_mm: self.pitch_diameter,
+                pressure_angle_deg: self.pressure_angle,
+                ..Default::default()
+            };
+            return Ok((crate::wire::dies::contour_die(&pair, &o)?, Some(pair)));
+        }
+        if self.drawing.points.is_some() || self.drawing.chord_tol.is_some() {
+            anyhow::bail!("--points and --chord-tol apply to --top/--bottom drawings only");
+        }
+        Ok((self.named_die()?, None))
+    }
+
+    /// `--mdi FILE`, else `--die NAME` (default circle-complex), with the overrides. Errors
+    /// name the file and its line.
+    fn named_die(&self) -> Result<crate::wire::dies::DieJob> {
         use crate::wire::dies;
         let o = dies::DieOverrides {
             zt_mm: self.zt,
@@ -107,13 +212,9 @@ impl WirePlanArgs {
     fn params(&self, die_fr_mm2_per_min: f64) -> Result<ContinuousParams> {
         let defaults =
             ContinuousParams { fr_mm2_per_min: die_fr_mm2_per_min, ..ContinuousParams::default() };
-        let mut prm = match &self.job {
-            Some(path) => {
-                let src = std::fs::read_to_string(path)
-                    .with_context(|| format!("reading {}", path.display()))?;
-                crate::wire::job_file::parse_spec_with(&src, defaults)
-                    .with_context(|| path.display().to_string())?
-            }
+        let mut prm = match self.job_text()? {
+            Some((path, src)) => crate::wire::job_file::parse_spec_with(&src, defaults)
+                .with_context(|| path.display().to_string())?,
             None => defaults,
         };
         prm.fr_mm2_per_min = self.fr.unwrap_or(prm.fr_mm2_per_min);
@@ -132,6 +233,9 @@ pub enum WireCmd {
     Plan {
         #[command(flatten)]
         plan: WirePlanArgs,
+        /// The report as JSON (mm, mm^2, s, deg) instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Plan the circle -> complex die and stream it to the board (4 axes: X, Y in mm; beta,
     /// alpha in degrees), checked against the host model at the end.
@@ -213,7 +317,7 @@ fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) -> crate::job
 
 pub fn run_wire(cmd: WireCmd) -> Result<()> {
     let plan = match &cmd {
-        WireCmd::Plan { plan } | WireCmd::Run { plan, .. } => plan,
+        WireCmd::Plan { plan, .. } | WireCmd::Run { plan, .. } => plan,
         WireCmd::Table11 { csv } => {
             use crate::wire::table11;
             let t = table11::table11(&continuous::circle_complex_path()?, 800.0)?;
@@ -222,7 +326,16 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             return Ok(());
         }
     };
-    let die = plan.die()?;
+    let json = matches!(cmd, WireCmd::Plan { json: true, .. });
+    // The text report, unless JSON was asked for.
+    macro_rules! say {
+        ($($t:tt)*) => {
+            if !json {
+                crate::outln!($($t)*);
+            }
+        };
+    }
+    let (die, contours) = plan.die()?;
     let prm = plan.params(die.fr_mm2_per_min)?;
     let (fr, tolerance) = (prm.fr_mm2_per_min, prm.tol_mm);
     let path = die.path()?;
@@ -243,33 +356,65 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             first.entry_rate = motion::segment::Rate::ZERO;
         }
         job.segments = part;
-        crate::outln!("  only segments       {r:?} of {n}");
+        say!("  only segments       {r:?} of {n}");
     }
-    crate::outln!(
-        "{} die, ZT {} mm, FR {fr} mm^2/min, tolerance {tolerance} mm",
-        die.label,
-        die.die.zt_mm
-    );
-    print_die_figures(&die);
-    crate::outln!("  segments            {}", job.segments.len());
-    crate::outln!(
+    say!("{} die, ZT {} mm, FR {fr} mm^2/min, tolerance {tolerance} mm", die.label, die.die.zt_mm);
+    if !json {
+        print_die_figures(&die);
+        if let Some(c) = &contours {
+            print_contour_figures(c);
+        }
+    }
+    let bound = IkBound::of(&job);
+    say!("  segments            {}", job.segments.len());
+    say!(
         "  ruled area          {:.3} mm^2 (thesis trapezoids {:.3})",
         job.area_ruled_mm2,
         job.area_trapezoid_mm2
     );
-    crate::outln!("  60 A / FR           {:.3} s", job.time_ruled_s);
-    crate::outln!(
+    say!("  60 A / FR           {:.3} s", job.time_ruled_s);
+    let thesis_time_s = crate::wire::path::time_s(job.area_trapezoid_mm2, fr)?;
+    say!(
         "  thesis 60 A / FR    {:.3} s (its trapezoid areas (RB + RT) ZT / 2, not the ruled area)",
-        crate::wire::path::time_s(job.area_trapezoid_mm2, fr)?
+        thesis_time_s
     );
+    say!(
+        "  IK error bound      {:.4} mm: wire off the ruled surface at most (joint-linear {:.4} + \
+         step quantisation {:.4}; tolerance {tolerance})",
+        bound.total_mm,
+        bound.joint_linear_mm,
+        bound.quantisation_mm
+    );
+    // Joint samples of the host model for the plot: about 2000 over the job.
+    let stride = if plan.drawing.plot.is_some() {
+        ((job.time_ruled_s * cfg.tick_hz as f64 / 2000.0) as u64).max(1)
+    } else {
+        u64::MAX
+    };
+    let mut samples: Vec<(u64, [i64; 4])> = Vec::new();
+    let report = {
+        let mut segs = job.segments.iter().copied();
+        motion::model::run(
+            &cfg,
+            || segs.next(),
+            &[],
+            u64::MAX,
+            |dda, _| {
+                if dda.now() % stride == 0 {
+                    let p = dda.positions();
+                    samples.push((dda.now(), [p[0], p[1], p[2], p[3]]));
+                }
+            },
+        )
+        .map_err(|e| anyhow::anyhow!("the model refused a segment: {e:?}"))?
+    };
     let run_model = |segments: &[motion::segment::Segment]| {
         let mut segs = segments.iter().copied();
         motion::model::run(&cfg, || segs.next(), &[], u64::MAX, |_, _| {})
             .map_err(|e| anyhow::anyhow!("the model refused a segment: {e:?}"))
     };
-    let report = run_model(&job.segments)?;
     let t = report.ticks as f64 / cfg.tick_hz as f64;
-    crate::outln!(
+    say!(
         "  host model          {t:.3} s ({:+.0} ppm), {} segments, final steps {:?}",
         (t / job.time_ruled_s - 1.0) * 1e6,
         report.segments,
@@ -282,7 +427,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         let bare =
             continuous::plan(&path, &cfg, &ContinuousParams { backlash_steps: [0; 4], ..prm })?;
         let bare_s = run_model(&bare.segments)?.ticks as f64 / cfg.tick_hz as f64;
-        crate::outln!(
+        say!(
             "  backlash            {:?} steps (X, Y, beta, alpha): {takeups} take-up segments, \
              {:.3} s nominal; +{:.3} s on the host model ({:.3} s without)",
             prm.backlash_steps,
@@ -290,6 +435,42 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             t - bare_s,
             bare_s
         );
+    }
+    if let Some(p) = &plan.drawing.plot {
+        let origin = job.point_steps.first().copied().unwrap_or([0; 4]);
+        let joints: Vec<(f64, crate::wire::ik::Joints)> = samples
+            .iter()
+            .chain(std::iter::once(&(report.ticks, {
+                let mut f = [0i64; 4];
+                f.copy_from_slice(&report.positions[..4]);
+                f
+            })))
+            .map(|(tick, s)| {
+                let abs = [s[0] + origin[0], s[1] + origin[1], s[2] + origin[2], s[3] + origin[3]];
+                (*tick as f64 / cfg.tick_hz as f64, continuous::joints_from_steps(abs))
+            })
+            .collect();
+        let title = format!(
+            "wire {}: {} die, ZT {} mm, FR {fr} mm^2/min",
+            if matches!(cmd, WireCmd::Run { .. }) { "run" } else { "plan" },
+            die.label,
+            die.die.zt_mm
+        );
+        let fig = crate::wire::figure::figure(&title, &die.die, &joints);
+        let w = fig.write(p)?;
+        eprintln!(
+            "motionctl: wrote {}{}",
+            p.display(),
+            if w == crate::plot::Written::Unlabelled {
+                " (no system font: unlabelled)"
+            } else {
+                ""
+            }
+        );
+    }
+    if json {
+        let j = plan_json(&die, contours.as_ref(), &job, &prm, &bound, t, thesis_time_s, plan);
+        crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     }
     let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, .. } = cmd else {
         return Ok(());
@@ -331,6 +512,107 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         true,
         crate::runner::DEFAULT_STATUS_PERIOD_MS,
     )
+}
+
+/// How far the wire can be from the designed ruled surface: the planner's largest
+/// joint-linear deviation inside a piece plus the step quantisation margin, mm.
+struct IkBound {
+    joint_linear_mm: f64,
+    quantisation_mm: f64,
+    total_mm: f64,
+}
+
+impl IkBound {
+    fn of(job: &continuous::ContinuousJob) -> Self {
+        let joint_linear_mm = job.pieces.iter().map(|p| p.deviation_mm).fold(0.0, f64::max);
+        IkBound {
+            joint_linear_mm,
+            quantisation_mm: job.margin_mm,
+            total_mm: joint_linear_mm + job.margin_mm,
+        }
+    }
+}
+
+/// Length of the closed polyline through `face` (a die face repeats its first point), mm.
+fn face_perimeter_mm(face: &[crate::wire::Point2]) -> f64 {
+    crate::wire::cad::perimeter_mm(face)
+}
+
+/// The drawn contours: each face's drawing, its flattened and resampled length and area, and
+/// how far the resampled polygon cuts the drawn one.
+fn print_contour_figures(c: &crate::wire::cad::ContourPair) {
+    for (name, contour, r) in [
+        ("top drawing", &c.top, &c.top_resampled),
+        ("bottom drawing", &c.bottom, &c.bottom_resampled),
+    ] {
+        crate::outln!(
+            "  {name:<19} {}: {} points flattened, perimeter {:.3} mm, area {:.3} mm^2; \
+             resampled perimeter {:.3} mm, at most {:.4} mm inside the drawing",
+            contour.source,
+            contour.points.len(),
+            contour.perimeter_mm(),
+            contour.area_mm2(),
+            crate::wire::cad::perimeter_mm(&r.points),
+            r.deviation_mm
+        );
+    }
+}
+
+/// The `wire plan --json` report (mm, mm^2, s, deg).
+#[allow(clippy::too_many_arguments)]
+fn plan_json(
+    die: &crate::wire::dies::DieJob,
+    contours: Option<&crate::wire::cad::ContourPair>,
+    job: &continuous::ContinuousJob,
+    prm: &ContinuousParams,
+    bound: &IkBound,
+    host_model_s: f64,
+    thesis_time_s: f64,
+    plan: &WirePlanArgs,
+) -> serde_json::Value {
+    use crate::wire::area::{polygon_area_mm2, sector_area_mm2};
+    use serde_json::json;
+    let face =
+        |pts: &[crate::wire::Point2],
+         drawn: Option<(&crate::wire::cad::Contour, &crate::wire::cad::Resampled)>| {
+            let mut f = json!({
+                "polygon_area_mm2": polygon_area_mm2(pts),
+                "sector_area_mm2": sector_area_mm2(pts),
+                "perimeter_mm": face_perimeter_mm(pts),
+            });
+            if let Some((c, r)) = drawn {
+                f["source"] = json!(c.source);
+                f["drawn_points"] = json!(c.points.len());
+                f["drawn_perimeter_mm"] = json!(c.perimeter_mm());
+                f["drawn_area_mm2"] = json!(c.area_mm2());
+                f["resampling_deviation_mm"] = json!(r.deviation_mm);
+            }
+            f
+        };
+    let (dt, db) = match contours {
+        Some(c) => (Some((&c.top, &c.top_resampled)), Some((&c.bottom, &c.bottom_resampled))),
+        None => (None, None),
+    };
+    json!({
+        "die": die.label,
+        "zt_mm": die.die.zt_mm,
+        "fr_mm2_per_min": prm.fr_mm2_per_min,
+        "tolerance_mm": prm.tol_mm,
+        "points_per_face": die.die.top.len(),
+        "start_mm": [die.start.x_mm, die.start.y_mm],
+        "top": face(&die.die.top, dt),
+        "bottom": face(&die.die.bottom, db),
+        "segments": job.segments.len(),
+        "ruled_area_mm2": job.area_ruled_mm2,
+        "trapezoid_area_mm2": job.area_trapezoid_mm2,
+        "cut_time_s": job.time_ruled_s,
+        "thesis_time_s": thesis_time_s,
+        "host_model_time_s": host_model_s,
+        "ik_error_bound_mm": bound.total_mm,
+        "ik_joint_linear_mm": bound.joint_linear_mm,
+        "ik_quantisation_mm": bound.quantisation_mm,
+        "plot": plan.drawing.plot.as_ref().map(|p| p.display().to_string()),
+    })
 }
 
 /// The die's points, start and face areas (the thesis's sector method and the exact polygon).

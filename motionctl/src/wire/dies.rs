@@ -230,3 +230,16 @@ pub fn mdi_die(name: &str, text: &str, o: &DieOverrides) -> Result<DieJob> {
         fr_mm2_per_min: 800.0,
     })
 }
+
+/// A user die from two drawn contours ([`super::cad::pair`]): from and back to the centre (or
+/// `o.start`), at the default feed 800 mm^2/min. `o.zt_mm` is required (the drawings carry no
+/// thickness).
+pub fn contour_die(pair: &super::cad::ContourPair, o: &DieOverrides) -> Result<DieJob> {
+    only_gear(o)?;
+    Ok(DieJob {
+        label: format!("contours {} -> {}", pair.top.source, pair.bottom.source),
+        die: pair.die.clone(),
+        start: o.start.unwrap_or_default(),
+        fr_mm2_per_min: 800.0,
+    })
+}

@@ -15,6 +15,12 @@
 //! y_steps = 20
 //! beta_steps = 250         # the thesis's 1 deg of the 18:1 gearbox
 //! alpha_steps = 0
+//! [contours]               # a die from two drawings instead of --die / --mdi (see wire::cad)
+//! top = "top.svg"          # FILE or FILE#ID (SVG path id, DXF layer); relative to this file
+//! bottom = "bottom.dxf#outer"
+//! thickness_mm = 30        # workpiece thickness ZT (required with [contours])
+//! points = 120             # points per face after resampling (default 120)
+//! chord_tolerance_mm = 0.01  # curve flattening (default 0.01)
 //! ```
 
 use super::backlash::{self, BacklashError};
@@ -34,6 +40,8 @@ pub enum WireJobFileError {
     Field { field: &'static str, value: f64 },
     #[error(transparent)]
     Backlash(#[from] BacklashError),
+    #[error("contours.points = {0}: must be a whole number 3 .. 100000")]
+    Points(i64),
 }
 
 #[derive(Deserialize)]
@@ -44,6 +52,71 @@ struct File {
     tolerance_mm: Option<f64>,
     #[serde(default)]
     backlash: BacklashTable,
+    contours: Option<ContoursTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ContoursTable {
+    top: String,
+    bottom: String,
+    thickness_mm: f64,
+    points: Option<i64>,
+    chord_tolerance_mm: Option<f64>,
+}
+
+/// The `[contours]` table of a wire job file: the drawings of the two faces.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContourSpec {
+    /// `FILE` or `FILE#ID`, resolved against the job file's folder.
+    pub top: String,
+    pub bottom: String,
+    pub thickness_mm: f64,
+    pub points: Option<usize>,
+    pub chord_tolerance_mm: Option<f64>,
+}
+
+/// The `[contours]` table of `src`, if any; relative drawing paths are taken from `base` (the
+/// job file's folder).
+pub fn parse_contours(
+    src: &str,
+    base: &std::path::Path,
+) -> Result<Option<ContourSpec>, WireJobFileError> {
+    let f: File = toml::from_str(src).map_err(|e| WireJobFileError::Toml(e.to_string()))?;
+    if f.version != 1 {
+        return Err(WireJobFileError::Version(f.version));
+    }
+    let Some(c) = f.contours else { return Ok(None) };
+    let resolve = |s: &str| {
+        let p = std::path::Path::new(s);
+        if p.is_absolute() {
+            s.to_string()
+        } else {
+            base.join(p).display().to_string()
+        }
+    };
+    let positive = |field: &'static str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(WireJobFileError::Field { field, value: v })
+        }
+    };
+    let points = match c.points {
+        Some(n) if (3..=super::cad::MAX_POINTS as i64).contains(&n) => Some(n as usize),
+        Some(n) => return Err(WireJobFileError::Points(n)),
+        None => None,
+    };
+    Ok(Some(ContourSpec {
+        top: resolve(&c.top),
+        bottom: resolve(&c.bottom),
+        thickness_mm: positive("contours.thickness_mm", c.thickness_mm)?,
+        points,
+        chord_tolerance_mm: c
+            .chord_tolerance_mm
+            .map(|v| positive("contours.chord_tolerance_mm", v))
+            .transpose()?,
+    }))
 }
 
 // Signed, so that a negative lash is refused with the field's name rather than a type error.

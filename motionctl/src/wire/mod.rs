@@ -19,9 +19,11 @@
 
 pub mod area;
 pub mod backlash;
+pub mod cad;
 pub mod continuous;
 pub mod csv;
 pub mod dies;
+pub mod figure;
 pub mod gear;
 pub mod ik;
 pub mod job_file;
