@@ -82,6 +82,11 @@ impl Planner {
         self.window.is_full()
     }
 
+    /// Pieces in the window, waiting to be emitted (a long move takes several).
+    pub fn queued(&self) -> usize {
+        self.window.len()
+    }
+
     /// Adds a move, split into pieces of at most `MAX_SEGMENT_TICKS`. Fails without change when the
     /// move is invalid or the window lacks room for all its pieces.
     pub fn push(&mut self, mv: &Move) -> Result<(), PlanError> {
