@@ -360,29 +360,7 @@ fn run_gcode(
         anyhow!("{label}: {} segments, more than a run counts", checked.totals.segments)
     })?;
     let items = gcode::stream::items(&job.job, &parsed.machine)?;
-    let mut stream: plan::Stream<_, gcode::stream::Stop> =
-        plan::Stream::over(&checked.program.config, items);
-    let next = move || {
-        let out = stream.next()?;
-        let line = match stream.source() {
-            Some(job::Source::Gcode { line }) => Some(line),
-            _ => None,
-        };
-        Some(match out {
-            Ok(o) => Ok((o, line)),
-            Err(gcode::stream::Stop::Plan(p)) => Err(format!("{label}: {p}")),
-            Err(gcode::stream::Stop::Refused) => Err(match stream.items().verdict() {
-                Err(r) => format!("{label} changed since it was checked: {r}"),
-                Ok(()) => format!("{label} changed since it was checked"),
-            }),
-        })
-    };
-    let outputs = runner::Outputs::streamed(
-        next,
-        segments,
-        checked.totals.nominal_ticks,
-        checked.report.ticks,
-    );
+    let outputs = gcode::stream::outputs(items, &checked, &label, segments);
     let mut expected = [0i64; motion::MAX_AXES];
     expected.copy_from_slice(&checked.report.positions[..motion::MAX_AXES]);
     board_link::stream_outputs(

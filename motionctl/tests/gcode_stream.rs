@@ -177,3 +177,81 @@ fn errors_and_warnings_kept_are_bounded_and_counted() {
     assert_eq!(c.warnings_omitted, 500);
     assert!(c.warnings[0].contains("many-warnings.ngc:3: warning: G4 dwell"), "{}", c.warnings[0]);
 }
+
+fn sim_opts() -> motionctl::runner::RunOptions {
+    motionctl::runner::RunOptions {
+        host: motion::protocol::HostConfig { rto_ms: 20, window: 8 },
+        home: true,
+        ..Default::default()
+    }
+}
+
+/// A short job of zig-zags, an arc and a spindle on/off, `n` lines of motion.
+fn short_job(n: usize) -> String {
+    let mut src = String::from("G21 G90 F6000\nM3 S1000\n");
+    for i in 0..n {
+        src.push_str(&format!("G1 X{} Y{:.1}\n", 2 * (i % 2), i as f64 * 0.2));
+    }
+    // A full circle from where the zig-zag ends.
+    let (x, y) = (2 * ((n - 1) % 2), (n - 1) as f64 * 0.2);
+    src.push_str(&format!("G2 X{x} Y{y:.1} I-5 J0\nM5\nM2\n"));
+    src
+}
+
+#[test]
+fn the_second_pass_streams_to_the_board_as_checked() {
+    use motionctl::sim_board::{SimBoard, SIM_CAPACITY};
+    let m = machine();
+    let p = temp_file("run.ngc", &short_job(60));
+    let c = stream::check_and_plan(stream::items(&p, &m).unwrap(), |_| {}).unwrap();
+    let segments = c.totals.segments as u32;
+    assert!(segments > 60, "{segments}");
+    let job = Job { machine: m.clone(), items: vec![], feed_commands: vec![] };
+    let outputs = stream::outputs(stream::items(&p, &m).unwrap(), &c, "run.ngc", segments);
+    let mut expected = [0i64; motion::MAX_AXES];
+    expected.copy_from_slice(&c.report.positions[..motion::MAX_AXES]);
+    let mut board = SimBoard::new(SIM_CAPACITY, 8.0);
+    let r = motionctl::runner::run_outputs(
+        &mut board,
+        &job,
+        &c.program,
+        outputs,
+        &expected,
+        sim_opts(),
+    )
+    .unwrap();
+    assert!(r.ok(), "{:?}", r.problems);
+    assert_eq!((r.segments, r.acked, r.done), (segments, segments, segments));
+    assert_eq!(r.positions, expected[..3].to_vec());
+}
+
+#[test]
+fn a_file_changed_between_the_passes_stops_the_run() {
+    use motionctl::sim_board::{SimBoard, SIM_CAPACITY};
+    let m = machine();
+    let job = Job { machine: m.clone(), items: vec![], feed_commands: vec![] };
+    for (name, changed, why) in [
+        ("changed-error.ngc", short_job(60).replace("Y4.0\n", "Y4.0 Q\n"), "1 error in the G-code"),
+        ("changed-longer.ngc", short_job(61), "more than"),
+        ("changed-shorter.ngc", short_job(59), "segments instead of"),
+    ] {
+        let p = temp_file(name, &short_job(60));
+        let c = stream::check_and_plan(stream::items(&p, &m).unwrap(), |_| {}).unwrap();
+        let segments = c.totals.segments as u32;
+        std::fs::write(&p, changed).unwrap();
+        let outputs = stream::outputs(stream::items(&p, &m).unwrap(), &c, name, segments);
+        let mut board = SimBoard::new(SIM_CAPACITY, 8.0);
+        let e = motionctl::runner::run_outputs(
+            &mut board,
+            &job,
+            &c.program,
+            outputs,
+            &c.program.final_steps,
+            sim_opts(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(&format!("{name} changed since it was checked")), "{e}");
+        assert!(e.contains(why) && e.contains("Abort sent to the board"), "{e}");
+    }
+}

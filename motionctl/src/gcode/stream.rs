@@ -332,3 +332,49 @@ pub fn check_and_plan<S: LineSource>(
     };
     Ok(Checked { program, totals, report, warnings, warnings_omitted })
 }
+
+/// The second pass: `items` (the file read again) planned as the board takes the segments, each
+/// with its G-code line, for [`crate::runner::run_outputs`]. The file must give what the first
+/// pass checked: an error, or another number of segments than `segments`, ends the run (the file
+/// changed in between).
+pub fn outputs<'a, S: LineSource + 'a>(
+    items: Items<'a, S>,
+    checked: &Checked,
+    label: &str,
+    segments: u32,
+) -> crate::runner::Outputs<'a> {
+    let label = label.to_string();
+    let mut stream: Stream<_, Stop> = Stream::over(&checked.program.config, items);
+    let mut given = 0u32;
+    let changed = format!("{label} changed since it was checked");
+    let next = move || {
+        let Some(out) = stream.next() else {
+            return (given != segments)
+                .then(|| Err(format!("{changed}: {given} segments instead of {segments}")));
+        };
+        let line = match stream.source() {
+            Some(crate::job::Source::Gcode { line }) => Some(line),
+            _ => None,
+        };
+        Some(match out {
+            Ok(crate::plan::Output::Segment(_)) if given >= segments => {
+                Err(format!("{changed}: more than {segments} segments"))
+            }
+            Ok(o) => {
+                given += matches!(o, crate::plan::Output::Segment(_)) as u32;
+                Ok((o, line))
+            }
+            Err(Stop::Plan(p)) => Err(format!("{label}: {p}")),
+            Err(Stop::Refused) => Err(match stream.items().verdict() {
+                Err(r) => format!("{changed}: {r}"),
+                Ok(()) => changed.clone(),
+            }),
+        })
+    };
+    crate::runner::Outputs::streamed(
+        next,
+        segments,
+        checked.totals.nominal_ticks,
+        checked.report.ticks,
+    )
+}
