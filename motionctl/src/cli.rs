@@ -64,6 +64,10 @@ pub enum Cmd {
     Plan {
         #[command(flatten)]
         job: JobArgs,
+        /// Check and plan only: skip the host model's tick-by-tick run of every segment (most
+        /// of the time on a long file); the summary then has the planned figures only.
+        #[arg(long)]
+        no_model: bool,
     },
     /// Show the board's motion state.
     Status {
@@ -204,9 +208,7 @@ fn is_gcode(args: &JobArgs) -> Result<bool> {
 /// The first pass over a G-code job, streamed: every error, the plan and the host model's run,
 /// in bounded memory (nothing of the job kept but counts). Warnings are printed.
 pub fn check_gcode(args: &JobArgs) -> Result<(Job, gcode::stream::Checked)> {
-    use gcode::stream::{CheckError, Refusal};
     let machine = gcode_machine(&args.job, args.machine.as_deref())?;
-    let name = args.job.display().to_string();
     let items = gcode::stream::items(&args.job, &machine)?;
     // A bar for long files only; indicatif draws nothing when stderr is not a terminal.
     let long = std::fs::metadata(&args.job).is_ok_and(|m| m.len() > 1 << 20);
@@ -223,18 +225,54 @@ pub fn check_gcode(args: &JobArgs) -> Result<(Job, gcode::stream::Checked)> {
     };
     let checked = gcode::stream::check_and_plan(items, |done| bar.set_position(done as u64));
     bar.finish_and_clear();
-    let checked = match checked {
-        Ok(c) => c,
-        Err(CheckError::Refused(Refusal::Gcode(e))) => return Err(e.into()),
-        Err(e) => return Err(anyhow!(e).context(name)),
-    };
-    for w in &checked.warnings {
+    let checked = accepted(args, checked)?;
+    print_warnings(args, &checked.warnings, checked.warnings_omitted);
+    Ok((Job { machine, items: Vec::new(), feed_commands: Vec::new() }, checked))
+}
+
+/// A check's verdict with the whole-program path's messages (the G-code's errors as they are,
+/// anything else after the file's name).
+fn accepted<T>(args: &JobArgs, r: Result<T, gcode::stream::CheckError>) -> Result<T> {
+    use gcode::stream::{CheckError, Refusal};
+    match r {
+        Ok(c) => Ok(c),
+        Err(CheckError::Refused(Refusal::Gcode(e))) => Err(e.into()),
+        Err(e) => Err(anyhow!(e).context(args.job.display().to_string())),
+    }
+}
+
+fn print_warnings(args: &JobArgs, warnings: &[String], omitted: usize) {
+    for w in warnings {
         eprintln!("motionctl: {w}");
     }
-    if checked.warnings_omitted > 0 {
-        eprintln!("motionctl: {name}: {} more warnings not shown", checked.warnings_omitted);
+    if omitted > 0 {
+        eprintln!("motionctl: {}: {omitted} more warnings not shown", args.job.display());
     }
-    Ok((Job { machine, items: Vec::new(), feed_commands: Vec::new() }, checked))
+}
+
+/// `plan --no-model`: check and plan, without the host model's tick-by-tick run (G-code
+/// streamed as for `plan`). The summary says what was planned and where the job ends.
+fn plan_without_model(args: &JobArgs) -> Result<String> {
+    let (machine, commands, totals, final_steps) = if is_gcode(args)? {
+        let machine = gcode_machine(&args.job, args.machine.as_deref())?;
+        let items = gcode::stream::items(&args.job, &machine)?;
+        let p = accepted(args, gcode::stream::check_and_plan_only(items))?;
+        print_warnings(args, &p.warnings, p.warnings_omitted);
+        (machine, 0, p.totals, p.program.final_steps)
+    } else {
+        let (job, program) = load_program(args)?;
+        let planned = plan::plan(&program).with_context(|| args.job.display().to_string())?;
+        let totals = plan::Totals {
+            moves: program.moves().count(),
+            skipped_moves: program.skipped_moves,
+            segments: planned.segments.len(),
+            spindle_events: planned.spindle_events,
+            pauses: planned.pauses,
+            nominal_ticks: planned.nominal_ticks,
+        };
+        (job.machine, program.commands.len(), totals, program.final_steps)
+    };
+    Ok(plan::plan_text(&args.job, &machine, commands, &totals, &final_steps))
 }
 
 /// Loads and converts a job to planner terms.
@@ -285,13 +323,17 @@ pub fn summary_text(path: &Path, job: &Job, program: &Program, s: &Summary) -> S
 /// Runs a parsed command line.
 pub fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Cmd::Plan { job } if is_gcode(&job)? => {
+        Cmd::Plan { job, no_model: true } => {
+            crate::out!("{}", plan_without_model(&job)?);
+            Ok(())
+        }
+        Cmd::Plan { job, .. } if is_gcode(&job)? => {
             let (parsed, c) = check_gcode(&job)?;
             let text = plan::summary_text(&job.job, &parsed.machine, 0, &c.totals, &c.report);
             crate::out!("{text}");
             Ok(())
         }
-        Cmd::Plan { job } => {
+        Cmd::Plan { job, .. } => {
             let (parsed, program, summary) = plan_job(&job)?;
             crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
             Ok(())

@@ -386,6 +386,50 @@ pub fn summary_text(
     s
 }
 
+/// The `plan --no-model` summary: what was planned and where the job ends, without a model run.
+pub fn plan_text(
+    path: &std::path::Path,
+    machine: &crate::job::Machine,
+    feed_commands: usize,
+    t: &Totals,
+    final_steps: &[i64; MAX_AXES],
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let m = machine;
+    let _ = writeln!(s, "job        {}", path.display());
+    let _ =
+        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
+    let _ = writeln!(
+        s,
+        "moves      {} ({} skipped: no steps after rounding)",
+        t.moves, t.skipped_moves
+    );
+    let _ = writeln!(
+        s,
+        "events     {} spindle, {} pause, {feed_commands} feed commands",
+        t.spindle_events, t.pauses,
+    );
+    let _ = writeln!(s, "segments   {} planned (host model not run: --no-model)", t.segments);
+    let _ = writeln!(
+        s,
+        "time       nominal {:.4} s ({} ticks)",
+        t.nominal_ticks as f64 / m.tick_hz.max(1) as f64,
+        t.nominal_ticks
+    );
+    let _ = writeln!(s, "{:<6} {:>12} {:>12}", "axis", "final_steps", "final_mm");
+    for (i, a) in m.axes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "{:<6} {:>12} {:>12.4}",
+            a.name,
+            final_steps[i],
+            final_steps[i] as f64 / a.steps_per_mm
+        );
+    }
+    s
+}
+
 /// A stream planned and run through the host model as the model takes its segments: nothing
 /// is kept but the counts. For jobs without feed commands (a G-code file): the model then never
 /// holds, so it runs until the last segment is done. `progress` is called now and then with the

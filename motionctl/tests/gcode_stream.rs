@@ -101,6 +101,9 @@ fn the_checking_pass_plans_and_models_as_plan_job_does() {
         assert_eq!(c.report, whole.report, "{name}");
         assert_eq!(c.program.final_steps, program.final_steps, "{name}");
         assert_eq!(c.program.config, program.config, "{name}");
+        // Without the model: the same plan.
+        let p = stream::check_and_plan_only(stream::items(&path, &m).unwrap()).unwrap();
+        assert_eq!((p.totals, p.program), (c.totals, c.program.clone()), "{name}");
         let text = |t, r| motionctl::plan::summary_text(&path, &m, 0, t, r);
         assert_eq!(
             text(&c.totals, &c.report),
@@ -114,8 +117,15 @@ fn args_job(m: &Machine) -> Job {
 }
 
 fn refusal(path: &Path, m: &Machine) -> String {
-    match stream::check_and_plan(stream::items(path, m).unwrap(), |_| {}) {
+    let without_model = match stream::check_and_plan_only(stream::items(path, m).unwrap()) {
         Err(e) => e.to_string(),
+        Ok(_) => panic!("{}: accepted without the model", path.display()),
+    };
+    match stream::check_and_plan(stream::items(path, m).unwrap(), |_| {}) {
+        Err(e) => {
+            assert_eq!(e.to_string(), without_model);
+            e.to_string()
+        }
         Ok(_) => panic!("{}: accepted", path.display()),
     }
 }

@@ -230,9 +230,15 @@ impl<'a> Converter<'a> {
 
     fn motion(&mut self, line: u32, m: &Motion, out: &mut Vec<Item>) -> Result<(), String> {
         let source = Source::Gcode { line: line as usize };
+        let mut point = |p: &Pos, feed: Feed| -> Result<(), String> {
+            let target = self.target(p)?;
+            out.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
+            Ok(())
+        };
         let (points, feed) = match m {
-            Motion::Rapid { to, .. } => (vec![*to], Feed::Rapid),
-            Motion::Feed { to, feed_mm_min, .. } => (vec![*to], Feed::MmPerMin(*feed_mm_min)),
+            // One point: no list of them (the common case, once per line of a CAM file).
+            Motion::Rapid { to, .. } => return point(to, Feed::Rapid),
+            Motion::Feed { to, feed_mm_min, .. } => return point(to, Feed::MmPerMin(*feed_mm_min)),
             Motion::Arc { feed_mm_min, .. } | Motion::Nurbs { feed_mm_min, .. } => {
                 (curves::flatten(m, self.machine.arc_tolerance_mm), Feed::MmPerMin(*feed_mm_min))
             }
@@ -246,9 +252,8 @@ impl<'a> Converter<'a> {
                 return Err("G33.1 rigid tapping needs spindle synchronisation".into())
             }
         };
-        for p in points {
-            let target = self.target(&p)?;
-            out.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
+        for p in &points {
+            point(p, feed)?;
         }
         Ok(())
     }

@@ -277,9 +277,54 @@ impl std::error::Error for CheckError {}
 /// model, keeping only counts. Errors come in the whole-program path's order: the G-code's
 /// (every one), else the first move the machine cannot take, else the planner's refusal.
 pub fn check_and_plan<S: LineSource>(
-    mut items: Items<'_, S>,
+    items: Items<'_, S>,
     progress: impl FnMut(u32),
 ) -> Result<Checked, CheckError> {
+    let (planned, report) = check(items, Some(progress))?;
+    let Some(report) = report else {
+        return Err(CheckError::Mismatch("the host model did not run".into()));
+    };
+    let (totals, n) = (planned.totals, planned.program.config.axis_count as usize);
+    if report.segments as usize != totals.segments {
+        return Err(CheckError::Mismatch(format!(
+            "the model ran {} of {} segments",
+            report.segments, totals.segments
+        )));
+    }
+    if report.positions[..n] != planned.program.final_steps[..n] {
+        return Err(CheckError::Mismatch(format!(
+            "the model ended at {:?} steps but the job ends at {:?}",
+            &report.positions[..n],
+            &planned.program.final_steps[..n]
+        )));
+    }
+    Ok(Checked {
+        program: planned.program,
+        totals,
+        report,
+        warnings: planned.warnings,
+        warnings_omitted: planned.warnings_omitted,
+    })
+}
+
+/// What a pass that plans without the host model learnt ([`check_and_plan_only`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Planned {
+    pub program: Program,
+    pub totals: Totals,
+    pub warnings: Vec<String>,
+    pub warnings_omitted: usize,
+}
+
+/// [`check_and_plan`] without the host model's tick-by-tick run: check and plan only.
+pub fn check_and_plan_only<S: LineSource>(items: Items<'_, S>) -> Result<Planned, CheckError> {
+    check(items, None::<fn(u32)>).map(|(p, _)| p)
+}
+
+fn check<S: LineSource>(
+    mut items: Items<'_, S>,
+    model: Option<impl FnMut(u32)>,
+) -> Result<(Planned, Option<Report>), CheckError> {
     let config = match &items.stepper {
         Ok(s) => Some(*s.config()),
         Err(_) => None,
@@ -287,7 +332,25 @@ pub fn check_and_plan<S: LineSource>(
     let mut run = None;
     if let Some(config) = config {
         let mut stream: Stream<_, Stop> = Stream::over(&config, items.by_ref());
-        run = Some(plan::simulate_stream(&config, &mut stream, progress));
+        run = Some(match model {
+            Some(progress) => plan::simulate_stream(&config, &mut stream, progress)
+                .map(|(t, r, stopped)| (t, Some(r), stopped)),
+            None => {
+                let (mut t, mut stopped) = (Totals::default(), None);
+                for out in stream.by_ref() {
+                    match out {
+                        Ok(crate::plan::Output::Segment(s)) => {
+                            t.segments += 1;
+                            t.nominal_ticks += s.duration_ticks as u64;
+                        }
+                        Ok(crate::plan::Output::Spindle(_)) => t.spindle_events += 1,
+                        Ok(crate::plan::Output::Pause) => t.pauses += 1,
+                        Err(e) => stopped = Some(e),
+                    }
+                }
+                Ok((t, None, stopped))
+            }
+        });
     }
     items.drain();
     items.verdict().map_err(CheckError::Refused)?;
@@ -305,20 +368,6 @@ pub fn check_and_plan<S: LineSource>(
     totals.moves = items.moves();
     totals.skipped_moves = items.skipped_moves();
     let final_steps = items.final_steps();
-    let n = config.axis_count as usize;
-    if report.segments as usize != totals.segments {
-        return Err(CheckError::Mismatch(format!(
-            "the model ran {} of {} segments",
-            report.segments, totals.segments
-        )));
-    }
-    if report.positions[..n] != final_steps[..n] {
-        return Err(CheckError::Mismatch(format!(
-            "the model ended at {:?} steps but the job ends at {:?}",
-            &report.positions[..n],
-            &final_steps[..n]
-        )));
-    }
     let (warnings, warnings_omitted) = items.warnings();
     let steps_per_mm =
         items.stepper.as_ref().map(|s| s.steps_per_mm().to_vec()).unwrap_or_default();
@@ -330,7 +379,7 @@ pub fn check_and_plan<S: LineSource>(
         final_steps,
         skipped_moves: totals.skipped_moves,
     };
-    Ok(Checked { program, totals, report, warnings, warnings_omitted })
+    Ok((Planned { program, totals, warnings, warnings_omitted }, report))
 }
 
 /// The second pass: `items` (the file read again) planned as the board takes the segments, each
