@@ -1132,8 +1132,42 @@ pub fn run_outputs(
 
 #[cfg(test)]
 mod tests {
-    use super::{JobWatch, Overdue};
+    use super::{JobWatch, Overdue, Whereabouts};
+    use motion::segment::{Rate, Segment};
+    use std::collections::VecDeque;
     use std::time::Duration;
+
+    #[test]
+    fn whereabouts_give_the_executing_line_and_the_planned_time_left() {
+        let seg = |ticks: u32| Segment {
+            steps: [1, 0, 0, 0, 0, 0],
+            duration_ticks: ticks,
+            entry_rate: Rate::ONE,
+            exit_rate: Rate::ONE,
+            accel_per_tick: Rate::ONE,
+            id: 0,
+        };
+        let mut w = Whereabouts {
+            in_flight: VecDeque::new(),
+            done: 0,
+            done_ticks: 0,
+            planned_ticks: 6_000,
+            stretch: 1.5,
+            tick_hz: 1_000.0,
+        };
+        assert_eq!(w.at(1.0), (None, Some(9.0)));
+        w.sent(Some(7), &seg(1_000));
+        w.sent(Some(7), &seg(1_000));
+        w.sent(Some(9), &seg(2_000));
+        assert_eq!(w.at(1.0), (Some(7), Some(9.0)));
+        w.update(2);
+        // 4000 nominal ticks left, 1.5 machine ticks each, at 1 kHz.
+        assert_eq!(w.at(1.0), (Some(9), Some(6.0)));
+        assert_eq!(w.at(0.5), (Some(9), Some(12.0)));
+        assert_eq!(w.at(0.0), (Some(9), None));
+        w.update(3);
+        assert_eq!(w.at(1.0), (None, Some(3.0)));
+    }
 
     #[test]
     fn job_watch_bounds_board_time_not_wall_time() {
