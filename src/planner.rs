@@ -51,6 +51,9 @@ struct Planned {
     v_junction: u64,
     v_entry: u64,
     v_exit: u64,
+    /// Entry speed of the backward pass (from rest at the window's end), once computed: the
+    /// forward pass caps each exit by the next piece's.
+    v_back: Option<u64>,
 }
 
 pub struct Planner {
@@ -80,6 +83,11 @@ impl Planner {
     /// Room for moves; each move may take several slots when it is split.
     pub fn is_full(&self) -> bool {
         self.window.is_full()
+    }
+
+    /// Pieces in the window, waiting to be emitted (a long move takes several).
+    pub fn queued(&self) -> usize {
+        self.window.len()
     }
 
     /// Adds a move, split into pieces of at most `MAX_SEGMENT_TICKS`. Fails without change when the
@@ -200,7 +208,17 @@ impl Planner {
         let ticks = ticks.clamp(1, u64::MAX as u128) as u64;
         // The DDA runs the piece in exactly `ticks`: that defines its nominal speed.
         let v_nom = (((len as u128) << Q16) * tick_hz as u128 / ticks as u128) as u64;
-        Planned { steps: *steps, len, ticks, v_nom, accel, v_junction: 0, v_entry: 0, v_exit: 0 }
+        Planned {
+            steps: *steps,
+            len,
+            ticks,
+            v_nom,
+            accel,
+            v_junction: 0,
+            v_entry: 0,
+            v_exit: 0,
+            v_back: None,
+        }
     }
 
     /// Highest path speed at the junction for which no axis's velocity jumps by more than its
@@ -220,18 +238,62 @@ impl Planner {
     }
 
     /// Backward pass from rest at the window's end, then forward pass from the fixed entry.
+    ///
+    /// Incremental, with the result of a full pass over the window: a piece's backward entry
+    /// depends only on the next piece's, so once a piece's comes out as it was before the new
+    /// pieces, every earlier piece's is unchanged too, and so is its forward entry (the fixed
+    /// entry moves only as pieces are emitted, each emitted exit being the next piece's entry).
+    /// The forward pass then starts at that piece, whose exit cap (the next piece's backward
+    /// entry) may have changed.
     fn replan(&mut self) {
+        let n = self.window.len();
+        let mut start = 0;
         let mut next_entry_max = 0u64;
-        for p in self.window.iter_mut().rev() {
+        for (k, p) in self.window.iter_mut().rev().enumerate() {
             p.v_exit = next_entry_max;
-            p.v_entry = p.v_junction.min(reachable(p.v_exit, p.accel, p.len));
-            next_entry_max = p.v_entry;
+            let back = p.v_junction.min(reachable(p.v_exit, p.accel, p.len));
+            let same = p.v_back == Some(back);
+            p.v_back = Some(back);
+            next_entry_max = back;
+            if same {
+                start = n - 1 - k;
+                break;
+            }
         }
         let mut entry = self.emitted_exit;
-        for p in self.window.iter_mut() {
+        for (j, p) in self.window.iter_mut().enumerate().skip(start) {
+            if j == start && start > 0 {
+                entry = p.v_entry;
+            }
             p.v_entry = entry;
             p.v_exit = p.v_exit.min(reachable(entry, p.accel, p.len));
             entry = p.v_exit;
+        }
+        #[cfg(test)]
+        self.check_replan();
+    }
+
+    /// The full pass the incremental one must equal (tests only).
+    #[cfg(test)]
+    fn check_replan(&self) {
+        let mut full: heapless::Vec<(u64, u64), LOOKAHEAD> = heapless::Vec::new();
+        let mut next_entry_max = 0u64;
+        let mut back: heapless::Vec<(u64, u64), LOOKAHEAD> = heapless::Vec::new();
+        for p in self.window.iter().rev() {
+            let exit = next_entry_max;
+            let entry = p.v_junction.min(reachable(exit, p.accel, p.len));
+            let _ = back.push((entry, exit));
+            next_entry_max = entry;
+        }
+        back.reverse();
+        let mut entry = self.emitted_exit;
+        for (p, &(_, exit)) in self.window.iter().zip(back.iter()) {
+            let x = exit.min(reachable(entry, p.accel, p.len));
+            let _ = full.push((entry, x));
+            entry = x;
+        }
+        for (i, (p, &(e, x))) in self.window.iter().zip(full.iter()).enumerate() {
+            assert_eq!((p.v_entry, p.v_exit), (e, x), "piece {i} of {}", self.window.len());
         }
     }
 }
@@ -241,4 +303,69 @@ fn reachable(v0: u64, accel: u64, len: u64) -> u64 {
     let v0 = v0 as u128;
     let sq = v0 * v0 + ((2 * accel as u128 * len as u128) << Q16);
     isqrt_u128(sq).min(u64::MAX as u128) as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{AxisLimits, StepTiming};
+    use proptest::prelude::*;
+
+    fn config() -> MachineConfig {
+        let mut axes = [AxisLimits::UNUSED; MAX_AXES];
+        for (i, a) in axes.iter_mut().take(3).enumerate() {
+            *a = AxisLimits {
+                max_rate_hz: 20_000 - 5_000 * i as u32,
+                accel_steps_per_s2: 160_000 / (i as u32 + 1),
+                junction_jerk_hz: 800 / (i as u32 + 1),
+            };
+        }
+        let timing = StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 };
+        MachineConfig { tick_hz: 100_000, timing, axis_count: 3, axes }
+    }
+
+    proptest! {
+        /// Every replan (checked against the full pass inside `replan`) over random short and
+        /// long moves, emitted as the window fills, with occasional ends at rest.
+        #[test]
+        fn incremental_replan_equals_the_full_pass(
+            moves in prop::collection::vec(
+                ((-400i32..400, -400i32..400, -60i32..60), 1u32..30_000, 0u8..40),
+                1..200,
+            )
+        ) {
+            let mut p = Planner::new(&config());
+            let mut steps = [0i64; 3];
+            let mut emitted = [0i64; 3];
+            for ((x, y, z), feed, r) in moves {
+                // One in 40 a long move (split into pieces), one in 40 an end at rest.
+                let k = if r == 0 { 200 } else { 1 };
+                let mv = Move { steps: [x * k, y * k, z, 0, 0, 0], feed_hz: feed };
+                loop {
+                    match p.push(&mv) {
+                        Ok(()) | Err(PlanError::Empty) => break,
+                        Err(PlanError::Full) => {
+                            p.finish();
+                            while let Some(s) = p.pop() {
+                                for i in 0..3 { emitted[i] += s.steps[i] as i64; }
+                            }
+                        }
+                        Err(e) => prop_assert!(false, "{e:?}"),
+                    }
+                }
+                for i in 0..3 { steps[i] += mv.steps[i] as i64; }
+                if r == 1 {
+                    p.finish();
+                }
+                while let Some(s) = p.pop() {
+                    for i in 0..3 { emitted[i] += s.steps[i] as i64; }
+                }
+            }
+            p.finish();
+            while let Some(s) = p.pop() {
+                for i in 0..3 { emitted[i] += s.steps[i] as i64; }
+            }
+            prop_assert_eq!(emitted, steps);
+        }
+    }
 }

@@ -138,6 +138,23 @@ pub fn stream(
     yes: bool,
     status_ms: u16,
 ) -> Result<()> {
+    let outputs = runner::Outputs::planned(outputs);
+    stream_outputs(label, parsed, program, outputs, expected, link, log_csv, yes, status_ms)
+}
+
+/// [`stream`] with the outputs pulled as the board takes them (a job planned while it runs).
+#[allow(clippy::too_many_arguments)]
+pub fn stream_outputs(
+    label: &str,
+    parsed: &Job,
+    program: &Program,
+    outputs: runner::Outputs<'_>,
+    expected: &[i64; motion::MAX_AXES],
+    link: &LinkArgs,
+    log_csv: Option<&Path>,
+    yes: bool,
+    status_ms: u16,
+) -> Result<()> {
     if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
         bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
     }
@@ -166,9 +183,9 @@ pub fn stream(
         interrupt: Some(interrupt),
         home: link.home || link.qemu || link.sim,
     };
-    let segments = outputs.iter().filter(|o| matches!(o, plan::Output::Segment(_))).count();
+    let segments = outputs.segments();
     crate::outln!("job        {label} ({segments} segments) on {target}");
-    let result = runner::run(&mut t, parsed, program, outputs, expected, opts);
+    let result = runner::run_outputs(&mut t, parsed, program, outputs, expected, opts);
     let report = crate::qemu::finish(qemu_guard, result)?;
     crate::out!("{}", report.text(&axes));
     crate::outln!("{}", report.machine_line());

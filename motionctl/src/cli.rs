@@ -64,6 +64,10 @@ pub enum Cmd {
     Plan {
         #[command(flatten)]
         job: JobArgs,
+        /// Check and plan only: skip the host model's tick-by-tick run of every segment (most
+        /// of the time on a long file); the summary then has the planned figures only.
+        #[arg(long)]
+        no_model: bool,
     },
     /// Show the board's motion state.
     Status {
@@ -164,21 +168,7 @@ pub fn load_job(path: &Path, format: Option<JobFormat>, machine: Option<&Path>) 
     match format {
         JobFormat::Toml => job::parse_toml(&read(path)?).with_context(|| name.to_string()),
         JobFormat::Gcode => {
-            let machine_path = match machine {
-                Some(m) => m.to_path_buf(),
-                None => {
-                    let beside = path.with_file_name("machine.toml");
-                    if !beside.exists() {
-                        bail!(
-                            "{name}: a G-code job needs a machine: pass --machine FILE \
-                             (or put machine.toml beside it)"
-                        );
-                    }
-                    beside
-                }
-            };
-            let machine = job::parse_machine_toml(&read(&machine_path)?)
-                .with_context(|| machine_path.display().to_string())?;
+            let machine = gcode_machine(path, machine)?;
             let loaded = gcode::load(path, &machine)?;
             for w in &loaded.warnings {
                 eprintln!("motionctl: {w}");
@@ -186,6 +176,103 @@ pub fn load_job(path: &Path, format: Option<JobFormat>, machine: Option<&Path>) 
             Ok(Job { machine, items: loaded.items, feed_commands: Vec::new() })
         }
     }
+}
+
+/// A G-code job's machine: `machine`, or `machine.toml` beside the file.
+fn gcode_machine(path: &Path, machine: Option<&Path>) -> Result<job::Machine> {
+    let machine_path = match machine {
+        Some(m) => m.to_path_buf(),
+        None => {
+            let beside = path.with_file_name("machine.toml");
+            if !beside.exists() {
+                bail!(
+                    "{}: a G-code job needs a machine: pass --machine FILE \
+                     (or put machine.toml beside it)",
+                    path.display()
+                );
+            }
+            beside
+        }
+    };
+    job::parse_machine_toml(&read(&machine_path)?)
+        .with_context(|| machine_path.display().to_string())
+}
+
+fn is_gcode(args: &JobArgs) -> Result<bool> {
+    Ok(match args.format {
+        Some(f) => f == JobFormat::Gcode,
+        None => format_of(&args.job)? == JobFormat::Gcode,
+    })
+}
+
+/// The first pass over a G-code job, streamed: every error, the plan and the host model's run,
+/// in bounded memory (nothing of the job kept but counts). Warnings are printed.
+pub fn check_gcode(args: &JobArgs) -> Result<(Job, gcode::stream::Checked)> {
+    let machine = gcode_machine(&args.job, args.machine.as_deref())?;
+    let items = gcode::stream::items(&args.job, &machine)?;
+    // A bar for long files only; indicatif draws nothing when stderr is not a terminal.
+    let long = std::fs::metadata(&args.job).is_ok_and(|m| m.len() > 1 << 20);
+    let bar = if long {
+        let bar = indicatif::ProgressBar::new_spinner();
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{spinner} checking: {pos} segments run")
+        {
+            bar.set_style(style);
+        }
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let checked = gcode::stream::check_and_plan(items, |done| bar.set_position(done as u64));
+    bar.finish_and_clear();
+    let checked = accepted(args, checked)?;
+    print_warnings(args, &checked.warnings, checked.warnings_omitted);
+    Ok((Job { machine, items: Vec::new(), feed_commands: Vec::new() }, checked))
+}
+
+/// A check's verdict with the whole-program path's messages (the G-code's errors as they are,
+/// anything else after the file's name).
+fn accepted<T>(args: &JobArgs, r: Result<T, gcode::stream::CheckError>) -> Result<T> {
+    use gcode::stream::{CheckError, Refusal};
+    match r {
+        Ok(c) => Ok(c),
+        Err(CheckError::Refused(Refusal::Gcode(e))) => Err(e.into()),
+        Err(e) => Err(anyhow!(e).context(args.job.display().to_string())),
+    }
+}
+
+fn print_warnings(args: &JobArgs, warnings: &[String], omitted: usize) {
+    for w in warnings {
+        eprintln!("motionctl: {w}");
+    }
+    if omitted > 0 {
+        eprintln!("motionctl: {}: {omitted} more warnings not shown", args.job.display());
+    }
+}
+
+/// `plan --no-model`: check and plan, without the host model's tick-by-tick run (G-code
+/// streamed as for `plan`). The summary says what was planned and where the job ends.
+fn plan_without_model(args: &JobArgs) -> Result<String> {
+    let (machine, commands, totals, final_steps) = if is_gcode(args)? {
+        let machine = gcode_machine(&args.job, args.machine.as_deref())?;
+        let items = gcode::stream::items(&args.job, &machine)?;
+        let p = accepted(args, gcode::stream::check_and_plan_only(items))?;
+        print_warnings(args, &p.warnings, p.warnings_omitted);
+        (machine, 0, p.totals, p.program.final_steps)
+    } else {
+        let (job, program) = load_program(args)?;
+        let planned = plan::plan(&program).with_context(|| args.job.display().to_string())?;
+        let totals = plan::Totals {
+            moves: program.moves().count(),
+            skipped_moves: program.skipped_moves,
+            segments: planned.segments.len(),
+            spindle_events: planned.spindle_events,
+            pauses: planned.pauses,
+            nominal_ticks: planned.nominal_ticks,
+        };
+        (job.machine, program.commands.len(), totals, program.final_steps)
+    };
+    Ok(plan::plan_text(&args.job, &machine, commands, &totals, &final_steps))
 }
 
 /// Loads and converts a job to planner terms.
@@ -230,63 +317,23 @@ pub fn plan_job(args: &JobArgs) -> Result<(Job, Program, Summary)> {
 
 /// The `plan` summary as text.
 pub fn summary_text(path: &Path, job: &Job, program: &Program, s: &Summary) -> String {
-    use std::fmt::Write;
-    let mut t = String::new();
-    let m = &job.machine;
-    let r = &s.report;
-    let _ = writeln!(t, "job        {}", path.display());
-    let _ =
-        writeln!(t, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
-    let _ = writeln!(
-        t,
-        "moves      {} ({} skipped: no steps after rounding)",
-        s.moves, s.skipped_moves
-    );
-    let _ = writeln!(
-        t,
-        "events     {} spindle, {} pause, {} feed commands",
-        s.plan.spindle_events,
-        s.plan.pauses,
-        program.commands.len()
-    );
-    let _ = writeln!(
-        t,
-        "segments   {} planned, {} run by the model, {} underruns",
-        s.plan.segments.len(),
-        r.segments,
-        r.underruns
-    );
-    let _ = writeln!(
-        t,
-        "time       {:.4} s ({} ticks); nominal {:.4} s",
-        s.seconds(),
-        r.ticks,
-        s.plan.nominal_ticks as f64 / m.tick_hz as f64
-    );
-    let _ = writeln!(
-        t,
-        "{:<6} {:>12} {:>12} {:>12} {:>10} {:>10}",
-        "axis", "final_steps", "final_mm", "steps_run", "peak_hz", "peak_mm_s"
-    );
-    for (i, a) in m.axes.iter().enumerate() {
-        let _ = writeln!(
-            t,
-            "{:<6} {:>12} {:>12.4} {:>12} {:>10} {:>10.2}",
-            a.name,
-            r.positions[i],
-            r.positions[i] as f64 / a.steps_per_mm,
-            r.steps[i],
-            r.peak_rate_hz[i],
-            r.peak_rate_hz[i] as f64 / a.steps_per_mm
-        );
-    }
-    t
+    plan::summary_text(path, &job.machine, program.commands.len(), &s.totals(), &s.report)
 }
 
 /// Runs a parsed command line.
 pub fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Cmd::Plan { job } => {
+        Cmd::Plan { job, no_model: true } => {
+            crate::out!("{}", plan_without_model(&job)?);
+            Ok(())
+        }
+        Cmd::Plan { job, .. } if is_gcode(&job)? => {
+            let (parsed, c) = check_gcode(&job)?;
+            let text = plan::summary_text(&job.job, &parsed.machine, 0, &c.totals, &c.report);
+            crate::out!("{text}");
+            Ok(())
+        }
+        Cmd::Plan { job, .. } => {
             let (parsed, program, summary) = plan_job(&job)?;
             crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
             Ok(())
@@ -323,6 +370,9 @@ fn run_job(
     yes: bool,
     status_ms: u16,
 ) -> Result<()> {
+    if is_gcode(job)? {
+        return run_gcode(job, link, log_csv, yes, status_ms);
+    }
     // Check the whole job, and learn where it must end, before touching the link.
     let (parsed, program, summary) = plan_job(job)?;
     let outputs: Vec<plan::Output> = plan::Stream::new(&program)
@@ -333,6 +383,38 @@ fn run_job(
     let label = job.job.display().to_string();
     board_link::stream(
         &label, &parsed, &program, &outputs, &expected, link, log_csv, yes, status_ms,
+    )
+}
+
+/// `run` for G-code, in two streamed passes: the first checks the whole file, plans it and runs
+/// it through the host model (a file with any error is refused here, before the link is
+/// touched); the second reads it again and plans it as the board takes the segments.
+fn run_gcode(
+    job: &JobArgs,
+    link: &LinkArgs,
+    log_csv: Option<&Path>,
+    yes: bool,
+    status_ms: u16,
+) -> Result<()> {
+    let (parsed, checked) = check_gcode(job)?;
+    let label = job.job.display().to_string();
+    let segments = u32::try_from(checked.totals.segments).map_err(|_| {
+        anyhow!("{label}: {} segments, more than a run counts", checked.totals.segments)
+    })?;
+    let items = gcode::stream::items(&job.job, &parsed.machine)?;
+    let outputs = gcode::stream::outputs(items, &checked, &label, segments);
+    let mut expected = [0i64; motion::MAX_AXES];
+    expected.copy_from_slice(&checked.report.positions[..motion::MAX_AXES]);
+    board_link::stream_outputs(
+        &job.job.display().to_string(),
+        &parsed,
+        &checked.program,
+        outputs,
+        &expected,
+        link,
+        log_csv,
+        yes,
+        status_ms,
     )
 }
 

@@ -126,46 +126,86 @@ pub fn machine_config(m: &Machine) -> Result<MachineConfig, ConvertError> {
     Ok(cfg)
 }
 
-/// The whole job in steps: config, moves, events and feed commands. Checks soft limits per move.
-pub fn convert(job: &Job) -> Result<Program, ConvertError> {
-    let config = machine_config(&job.machine)?;
-    let axes = &job.machine.axes;
-    let steps_per_mm: Vec<f64> = axes.iter().map(|a| a.steps_per_mm).collect();
-    let mut pos_mm = vec![0.0f64; axes.len()];
-    let mut pos_steps = [0i64; MAX_AXES];
-    let mut items = Vec::with_capacity(job.items.len());
-    let mut skipped_moves = 0;
-    for item in &job.items {
+/// Job items to planner items one at a time, in machine steps: what [`convert`] does for a whole
+/// job, for a caller that streams (a G-code file of any length) and never holds the items.
+#[derive(Clone, Debug)]
+pub struct Stepper {
+    config: MachineConfig,
+    axes: Vec<Axis>,
+    steps_per_mm: Vec<f64>,
+    pos_mm: [f64; MAX_AXES],
+    pos_steps: [i64; MAX_AXES],
+    skipped_moves: usize,
+}
+
+impl Stepper {
+    /// Validates `machine` (as [`machine_config`]); every axis starts at 0.
+    pub fn new(machine: &Machine) -> Result<Self, ConvertError> {
+        let config = machine_config(machine)?;
+        Ok(Stepper {
+            config,
+            axes: machine.axes.clone(),
+            steps_per_mm: machine.axes.iter().map(|a| a.steps_per_mm).collect(),
+            pos_mm: [0.0; MAX_AXES],
+            pos_steps: [0; MAX_AXES],
+            skipped_moves: 0,
+        })
+    }
+
+    pub fn config(&self) -> &MachineConfig {
+        &self.config
+    }
+
+    pub fn steps_per_mm(&self) -> &[f64] {
+        &self.steps_per_mm
+    }
+
+    /// Where the items so far leave each axis, steps from the start.
+    pub fn final_steps(&self) -> [i64; MAX_AXES] {
+        self.pos_steps
+    }
+
+    /// Moves so far that rounded to no steps (dropped).
+    pub fn skipped_moves(&self) -> usize {
+        self.skipped_moves
+    }
+
+    /// One item in steps; `None` for a move that rounds to no steps. Checks soft limits. After an
+    /// error the position is unchanged.
+    pub fn item(&mut self, item: &Item) -> Result<Option<ProgramItem>, ConvertError> {
         let m = match item {
-            Item::Spindle(on) => {
-                items.push(ProgramItem::Spindle(*on));
-                continue;
-            }
-            Item::Pause => {
-                items.push(ProgramItem::Pause);
-                continue;
-            }
+            Item::Spindle(on) => return Ok(Some(ProgramItem::Spindle(*on))),
+            Item::Pause => return Ok(Some(ProgramItem::Pause)),
             Item::Move(m) => m,
         };
-        let what = m.source.to_string();
-        let target_mm: Vec<f64> = match &m.target {
-            Target::Absolute(t) => t.iter().zip(&pos_mm).map(|(t, p)| t.unwrap_or(*p)).collect(),
-            Target::Relative(d) => d.iter().zip(&pos_mm).map(|(d, p)| p + d).collect(),
+        let n = self.axes.len();
+        let what = || m.source.to_string();
+        let given = match &m.target {
+            Target::Absolute(t) => t.len(),
+            Target::Relative(d) => d.len(),
         };
-        if target_mm.len() != axes.len() {
-            return Err(error(what, "target does not match the machine's axes"));
+        if given < n {
+            return Err(error(what(), "target does not match the machine's axes"));
+        }
+        let mut target_mm = [0.0f64; MAX_AXES];
+        for i in 0..n {
+            target_mm[i] = match &m.target {
+                Target::Absolute(t) => t[i].unwrap_or(self.pos_mm[i]),
+                Target::Relative(d) => self.pos_mm[i] + d[i],
+            };
         }
         let mut steps = [0i32; MAX_AXES];
-        for (i, a) in axes.iter().enumerate() {
+        let mut target_steps = [0i64; MAX_AXES];
+        for (i, a) in self.axes.iter().enumerate() {
             let t = target_mm[i];
-            if t != pos_mm[i] {
-                check_soft_limit(a, t).map_err(|msg| error(&what, msg))?;
+            if t != self.pos_mm[i] {
+                check_soft_limit(a, t).map_err(|msg| error(what(), msg))?;
             }
-            let target_steps = (t * a.steps_per_mm).round() as i64;
-            let delta = target_steps - pos_steps[i];
+            target_steps[i] = (t * a.steps_per_mm).round() as i64;
+            let delta = target_steps[i] - self.pos_steps[i];
             steps[i] = i32::try_from(delta).map_err(|_| {
                 error(
-                    &what,
+                    what(),
                     format!(
                         "axis {} moves {delta} steps, more than one move can hold ({}); split it",
                         a.name,
@@ -173,26 +213,45 @@ pub fn convert(job: &Job) -> Result<Program, ConvertError> {
                     ),
                 )
             })?;
-            pos_steps[i] = target_steps;
-        }
-        pos_mm = target_mm;
-        if steps.iter().all(|&s| s == 0) {
-            skipped_moves += 1;
-            continue;
         }
         let feed_hz = match m.feed {
-            Feed::Rapid => rapid_feed_hz(&steps, &config),
+            _ if steps.iter().all(|&s| s == 0) => None,
+            Feed::Rapid => Some(rapid_feed_hz(&steps, &self.config)),
             Feed::MmPerMin(f) => {
                 if !(f.is_finite() && f > 0.0) {
-                    return Err(error(what, format!("feed must be > 0 mm/min, got {f}")));
+                    return Err(error(what(), format!("feed must be > 0 mm/min, got {f}")));
                 }
-                feed_hz(&steps, &steps_per_mm, f)
+                Some(feed_hz(&steps, &self.steps_per_mm, f))
             }
         };
-        items.push(ProgramItem::Move { mv: Move { steps, feed_hz }, source: m.source });
+        self.pos_mm[..n].copy_from_slice(&target_mm[..n]);
+        self.pos_steps[..n].copy_from_slice(&target_steps[..n]);
+        let Some(feed_hz) = feed_hz else {
+            self.skipped_moves += 1;
+            return Ok(None);
+        };
+        Ok(Some(ProgramItem::Move { mv: Move { steps, feed_hz }, source: m.source }))
     }
-    let commands = feed_commands(job, config.tick_hz)?;
-    Ok(Program { config, steps_per_mm, items, commands, final_steps: pos_steps, skipped_moves })
+}
+
+/// The whole job in steps: config, moves, events and feed commands. Checks soft limits per move.
+pub fn convert(job: &Job) -> Result<Program, ConvertError> {
+    let mut stepper = Stepper::new(&job.machine)?;
+    let mut items = Vec::with_capacity(job.items.len());
+    for item in &job.items {
+        if let Some(p) = stepper.item(item)? {
+            items.push(p);
+        }
+    }
+    let commands = feed_commands(job, stepper.config.tick_hz)?;
+    Ok(Program {
+        config: stepper.config,
+        steps_per_mm: stepper.steps_per_mm,
+        items,
+        commands,
+        final_steps: stepper.pos_steps,
+        skipped_moves: stepper.skipped_moves,
+    })
 }
 
 fn check_soft_limit(a: &Axis, t: f64) -> Result<(), String> {

@@ -6,10 +6,12 @@
 
 use crate::convert::{Program, ProgramItem};
 use crate::job::Source;
-use motion::planner::{Move, PlanError, Planner};
+use motion::planner::{Move, PlanError, Planner, LOOKAHEAD};
 use motion::report::Report;
-use motion::{Segment, MAX_AXES};
+use motion::{MachineConfig, Segment, MAX_AXES};
+use std::collections::VecDeque;
 use std::fmt;
+use std::marker::PhantomData;
 
 /// What a runner does next.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,54 +46,125 @@ impl fmt::Display for PlanFailure {
 impl std::error::Error for PlanFailure {}
 
 /// Segments and events of a program, in order.
-pub struct Stream<'a> {
+///
+/// It pulls items from `I` only as the planner's window needs them, so a source that streams (a
+/// G-code file read line by line) is planned in memory bounded by the window, whatever its
+/// length. An item the source cannot give (`Err`) ends the stream at once with that error, with
+/// nothing of the window emitted.
+pub struct Stream<I, E = PlanFailure> {
     planner: Planner,
-    items: std::slice::Iter<'a, ProgramItem>,
+    items: I,
     /// A move that did not fit the window; pushed again once the window has drained.
     retry: Option<(Move, Source)>,
     event: Option<Output>,
     finished: bool,
+    /// An error ended the stream.
+    failed: bool,
+    /// Where the pieces in the window came from, oldest first: (source, pieces).
+    sources: VecDeque<(Source, usize)>,
+    last_source: Option<Source>,
+    _error: PhantomData<E>,
 }
 
-impl<'a> Stream<'a> {
+type ProgramItems<'a> = std::iter::Map<
+    std::slice::Iter<'a, ProgramItem>,
+    fn(&ProgramItem) -> Result<ProgramItem, PlanFailure>,
+>;
+
+impl<'a> Stream<ProgramItems<'a>> {
     pub fn new(program: &'a Program) -> Self {
-        Stream {
-            planner: Planner::new(&program.config),
-            items: program.items.iter(),
-            retry: None,
-            event: None,
-            finished: false,
-        }
+        let ok: fn(&ProgramItem) -> Result<ProgramItem, PlanFailure> = |i| Ok(*i);
+        Stream::over(&program.config, program.items.iter().map(ok))
     }
 }
 
-impl Iterator for Stream<'_> {
-    type Item = Result<Output, PlanFailure>;
+impl<I, E> Stream<I, E>
+where
+    I: Iterator<Item = Result<ProgramItem, E>>,
+    E: From<PlanFailure>,
+{
+    /// The items of `items`, planned for `config`.
+    pub fn over(config: &MachineConfig, items: I) -> Self {
+        Stream {
+            planner: Planner::new(config),
+            items,
+            retry: None,
+            event: None,
+            finished: false,
+            failed: false,
+            sources: VecDeque::with_capacity(LOOKAHEAD),
+            last_source: None,
+            _error: PhantomData,
+        }
+    }
+
+    /// Where the segment [`Iterator::next`] gave last was written.
+    pub fn source(&self) -> Option<Source> {
+        self.last_source
+    }
+
+    /// The item source (to read what it found once the stream has ended).
+    pub fn items(&self) -> &I {
+        &self.items
+    }
+
+    pub fn items_mut(&mut self) -> &mut I {
+        &mut self.items
+    }
+
+    fn pop(&mut self) -> Option<Segment> {
+        let seg = self.planner.pop()?;
+        if let Some((source, left)) = self.sources.front_mut() {
+            self.last_source = Some(*source);
+            *left -= 1;
+            if *left == 0 {
+                self.sources.pop_front();
+            }
+        }
+        Some(seg)
+    }
+}
+
+impl<I, E> Iterator for Stream<I, E>
+where
+    I: Iterator<Item = Result<ProgramItem, E>>,
+    E: From<PlanFailure>,
+{
+    type Item = Result<Output, E>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if self.failed {
+            return None;
+        }
         loop {
-            if let Some(seg) = self.planner.pop() {
+            if let Some(seg) = self.pop() {
                 return Some(Ok(Output::Segment(seg)));
             }
             // The planner has drained (it was finished before the event was taken).
             if let Some(ev) = self.event.take() {
                 return Some(Ok(ev));
             }
+            if self.finished {
+                return None;
+            }
             let (mv, source) = match self.retry.take() {
                 Some(r) => r,
                 None => match self.items.next() {
-                    Some(&ProgramItem::Move { mv, source }) => (mv, source),
-                    Some(ProgramItem::Spindle(on)) => {
+                    Some(Ok(ProgramItem::Move { mv, source })) => (mv, source),
+                    Some(Ok(ProgramItem::Spindle(on))) => {
                         self.planner.finish();
-                        self.event = Some(Output::Spindle(*on));
+                        self.event = Some(Output::Spindle(on));
                         continue;
                     }
-                    Some(ProgramItem::Pause) => {
+                    Some(Ok(ProgramItem::Pause)) => {
                         self.planner.finish();
                         self.event = Some(Output::Pause);
                         continue;
                     }
-                    None if self.finished => return None,
+                    Some(Err(e)) => {
+                        self.failed = true;
+                        return Some(Err(e));
+                    }
                     None => {
                         self.planner.finish();
                         self.finished = true;
@@ -99,8 +172,14 @@ impl Iterator for Stream<'_> {
                     }
                 },
             };
+            let before = self.planner.queued();
             match self.planner.push(&mv) {
-                Ok(()) => {}
+                Ok(()) => {
+                    let pieces = self.planner.queued().saturating_sub(before);
+                    if pieces > 0 {
+                        self.sources.push_back((source, pieces));
+                    }
+                }
                 // A long move split into more pieces than the window has free: end the motion so
                 // far at rest, then push it into the drained window.
                 Err(PlanError::Full) if !self.planner.is_full() => {
@@ -108,7 +187,10 @@ impl Iterator for Stream<'_> {
                     self.retry = Some((mv, source));
                 }
                 Err(PlanError::Full) => self.retry = Some((mv, source)),
-                Err(error) => return Some(Err(PlanFailure { source, error })),
+                Err(error) => {
+                    self.failed = true;
+                    return Some(Err(PlanFailure { source, error }.into()));
+                }
             }
         }
     }
@@ -220,6 +302,179 @@ pub fn simulate_plan(
         report,
         finished,
     })
+}
+
+/// What a planned job amounts to, without its segments.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Totals {
+    /// Moves planned (moves that round to no steps are not).
+    pub moves: usize,
+    pub skipped_moves: usize,
+    pub segments: usize,
+    pub spindle_events: usize,
+    pub pauses: usize,
+    /// Sum of the segments' nominal durations (at full speed, override 1.0).
+    pub nominal_ticks: u64,
+}
+
+impl Summary {
+    pub fn totals(&self) -> Totals {
+        Totals {
+            moves: self.moves,
+            skipped_moves: self.skipped_moves,
+            segments: self.plan.segments.len(),
+            spindle_events: self.plan.spindle_events,
+            pauses: self.plan.pauses,
+            nominal_ticks: self.plan.nominal_ticks,
+        }
+    }
+}
+
+/// The `plan` summary as text: the job, what was planned and what the host model did.
+pub fn summary_text(
+    path: &std::path::Path,
+    machine: &crate::job::Machine,
+    feed_commands: usize,
+    t: &Totals,
+    r: &Report,
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let m = machine;
+    let _ = writeln!(s, "job        {}", path.display());
+    let _ =
+        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
+    let _ = writeln!(
+        s,
+        "moves      {} ({} skipped: no steps after rounding)",
+        t.moves, t.skipped_moves
+    );
+    let _ = writeln!(
+        s,
+        "events     {} spindle, {} pause, {feed_commands} feed commands",
+        t.spindle_events, t.pauses,
+    );
+    let _ = writeln!(
+        s,
+        "segments   {} planned, {} run by the model, {} underruns",
+        t.segments, r.segments, r.underruns
+    );
+    let _ = writeln!(
+        s,
+        "time       {:.4} s ({} ticks); nominal {:.4} s",
+        r.ticks as f64 / r.tick_hz.max(1) as f64,
+        r.ticks,
+        t.nominal_ticks as f64 / m.tick_hz as f64
+    );
+    let _ = writeln!(
+        s,
+        "{:<6} {:>12} {:>12} {:>12} {:>10} {:>10}",
+        "axis", "final_steps", "final_mm", "steps_run", "peak_hz", "peak_mm_s"
+    );
+    for (i, a) in m.axes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "{:<6} {:>12} {:>12.4} {:>12} {:>10} {:>10.2}",
+            a.name,
+            r.positions[i],
+            r.positions[i] as f64 / a.steps_per_mm,
+            r.steps[i],
+            r.peak_rate_hz[i],
+            r.peak_rate_hz[i] as f64 / a.steps_per_mm
+        );
+    }
+    s
+}
+
+/// The `plan --no-model` summary: what was planned and where the job ends, without a model run.
+pub fn plan_text(
+    path: &std::path::Path,
+    machine: &crate::job::Machine,
+    feed_commands: usize,
+    t: &Totals,
+    final_steps: &[i64; MAX_AXES],
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let m = machine;
+    let _ = writeln!(s, "job        {}", path.display());
+    let _ =
+        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
+    let _ = writeln!(
+        s,
+        "moves      {} ({} skipped: no steps after rounding)",
+        t.moves, t.skipped_moves
+    );
+    let _ = writeln!(
+        s,
+        "events     {} spindle, {} pause, {feed_commands} feed commands",
+        t.spindle_events, t.pauses,
+    );
+    let _ = writeln!(s, "segments   {} planned (host model not run: --no-model)", t.segments);
+    let _ = writeln!(
+        s,
+        "time       nominal {:.4} s ({} ticks)",
+        t.nominal_ticks as f64 / m.tick_hz.max(1) as f64,
+        t.nominal_ticks
+    );
+    let _ = writeln!(s, "{:<6} {:>12} {:>12}", "axis", "final_steps", "final_mm");
+    for (i, a) in m.axes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "{:<6} {:>12} {:>12.4}",
+            a.name,
+            final_steps[i],
+            final_steps[i] as f64 / a.steps_per_mm
+        );
+    }
+    s
+}
+
+/// A stream planned and run through the host model as the model takes its segments: nothing
+/// is kept but the counts. For jobs without feed commands (a G-code file): the model then never
+/// holds, so it runs until the last segment is done. `progress` is called now and then with the
+/// number of segments completed.
+///
+/// Returns the totals, the model's report, and the error that ended the stream early, if any (the
+/// report then covers the segments before it).
+pub fn simulate_stream<I, E>(
+    config: &MachineConfig,
+    stream: &mut Stream<I, E>,
+    mut progress: impl FnMut(u32),
+) -> Result<(Totals, Report, Option<E>), SimulateError>
+where
+    I: Iterator<Item = Result<ProgramItem, E>>,
+    E: From<PlanFailure>,
+{
+    let mut t = Totals::default();
+    let mut stopped = None;
+    let report = motion::model::run(
+        config,
+        || loop {
+            match stream.next()? {
+                Ok(Output::Segment(s)) => {
+                    t.segments += 1;
+                    t.nominal_ticks += s.duration_ticks as u64;
+                    return Some(s);
+                }
+                Ok(Output::Spindle(_)) => t.spindle_events += 1,
+                Ok(Output::Pause) => t.pauses += 1,
+                Err(e) => {
+                    stopped = Some(e);
+                    return None;
+                }
+            }
+        },
+        &[],
+        u64::MAX,
+        |dda, _| {
+            if dda.now() % 65_536 == 0 {
+                progress(dda.segments_done());
+            }
+        },
+    )
+    .map_err(SimulateError::Segment)?;
+    Ok((t, report, stopped))
 }
 
 /// Per-axis steps emitted by `segments` (net, signed).

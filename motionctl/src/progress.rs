@@ -1,5 +1,6 @@
-//! The operator's view of a run: a progress bar (segments executed, with acknowledged ones and
-//! an ETA) and a live state line, on stderr. Without a terminal, a plain line every few seconds.
+//! The operator's view of a run: a progress bar (segments executed, with acknowledged ones, the
+//! G-code line executing and the time left by the plan) and a live state line, on stderr.
+//! Without a terminal, a plain line every few seconds.
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motion::protocol::Status;
@@ -33,7 +34,7 @@ impl Progress {
         let multi = MultiProgress::with_draw_target(target);
         let bar = multi.add(ProgressBar::new(total));
         let style = ProgressStyle::with_template(
-            "{bar:40.cyan/blue} {pos}/{len} segments done, {msg} [{elapsed_precise}, ETA {eta}]",
+            "{bar:40.cyan/blue} {pos}/{len} segments done, {msg} [{elapsed_precise}]",
         )
         .map(|s| s.progress_chars("=> "));
         if let Ok(style) = style {
@@ -66,18 +67,32 @@ impl Progress {
         t
     }
 
-    pub fn update(&mut self, acked: u64, done: u64, status: Option<&Status>) {
+    /// `line`: the G-code line executing; `eta_s`: seconds left by the plan (none while the
+    /// override is 0).
+    pub fn update(
+        &mut self,
+        acked: u64,
+        done: u64,
+        status: Option<&Status>,
+        line: Option<usize>,
+        eta_s: Option<f64>,
+    ) {
+        if !(self.fancy || self.plain) {
+            return;
+        }
+        let mut msg = format!("{acked} acknowledged");
+        if let Some(l) = line {
+            msg.push_str(&format!(", line {l}"));
+        }
+        msg.push_str(&format!(", ETA {}", eta_text(eta_s)));
         self.bar.set_position(done.min(self.total));
-        self.bar.set_message(format!("{acked} acknowledged"));
         let state = status.map(|s| self.state_line(s)).unwrap_or_default();
         if self.fancy {
+            self.bar.set_message(msg);
             self.line.set_message(state);
-        } else if self.plain && self.last_plain.elapsed() >= PLAIN_EVERY {
+        } else if self.last_plain.elapsed() >= PLAIN_EVERY {
             self.last_plain = Instant::now();
-            eprintln!(
-                "motionctl: {done}/{} segments done, {acked} acknowledged; {state}",
-                self.total
-            );
+            eprintln!("motionctl: {done}/{} segments done, {msg}; {state}", self.total);
         }
     }
 
@@ -93,5 +108,33 @@ impl Progress {
     pub fn finish(&self) {
         self.line.finish_and_clear();
         self.bar.finish_and_clear();
+    }
+}
+
+/// "1:02:03", "4:05" or "-" (unknown).
+pub fn eta_text(seconds: Option<f64>) -> String {
+    let Some(s) = seconds.filter(|s| s.is_finite() && *s >= 0.0) else {
+        return "-".into();
+    };
+    let s = s.round().min(u32::MAX as f64) as u64;
+    let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
+    if h > 0 {
+        format!("{h}:{m:02}:{s:02}")
+    } else {
+        format!("{m}:{s:02}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::eta_text;
+
+    #[test]
+    fn eta_reads_as_hours_minutes_seconds() {
+        assert_eq!(eta_text(Some(0.4)), "0:00");
+        assert_eq!(eta_text(Some(65.0)), "1:05");
+        assert_eq!(eta_text(Some(3723.0)), "1:02:03");
+        assert_eq!(eta_text(None), "-");
+        assert_eq!(eta_text(Some(f64::NAN)), "-");
     }
 }

@@ -23,8 +23,8 @@ use motion::protocol::{
     SegmentBatch, Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::{order_hash, Segment};
-use motion::MAX_AXES;
-use std::collections::HashMap;
+use motion::{Rate, MAX_AXES};
+use std::collections::{HashMap, VecDeque};
 use std::fmt::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
@@ -500,6 +500,142 @@ impl IfEmpty for String {
     }
 }
 
+/// One output and the G-code line it came from, if any.
+type Tagged = (Output, Option<usize>);
+
+type Pull<'a> = Box<dyn FnMut() -> Option<Result<Tagged, String>> + 'a>;
+
+/// What a run sends, in order, pulled only as the link takes it: a planned slice, or a stream
+/// planned while it runs (a G-code file read a second time).
+pub struct Outputs<'a> {
+    pull: Pull<'a>,
+    peeked: Option<Tagged>,
+    ended: bool,
+    /// Segments in all, and the sum of their nominal durations (ticks at override 1.0).
+    segments: u32,
+    planned_ticks: u64,
+    /// The host model's length of the job, ticks (ramps make it longer than the nominal sum).
+    model_ticks: u64,
+}
+
+impl<'a> Outputs<'a> {
+    /// Everything already planned.
+    pub fn planned(outputs: &'a [Output]) -> Self {
+        let mut segments = 0u32;
+        let mut planned_ticks = 0u64;
+        for o in outputs {
+            if let Output::Segment(s) = o {
+                segments += 1;
+                planned_ticks += s.duration_ticks as u64;
+            }
+        }
+        let mut it = outputs.iter();
+        Outputs {
+            pull: Box::new(move || it.next().map(|o| Ok((*o, None)))),
+            peeked: None,
+            ended: false,
+            segments,
+            planned_ticks,
+            model_ticks: planned_ticks,
+        }
+    }
+
+    /// A stream planned as it is pulled; `segments`, `planned_ticks` and `model_ticks` from a
+    /// pass that planned the same job before. Each output's line from `next` (G-code's).
+    pub fn streamed(
+        next: impl FnMut() -> Option<Result<Tagged, String>> + 'a,
+        segments: u32,
+        planned_ticks: u64,
+        model_ticks: u64,
+    ) -> Self {
+        Outputs {
+            pull: Box::new(next),
+            peeked: None,
+            ended: false,
+            segments,
+            planned_ticks,
+            model_ticks,
+        }
+    }
+
+    pub fn segments(&self) -> u32 {
+        self.segments
+    }
+
+    /// The next output, not taken.
+    fn peek(&mut self) -> Result<Option<Tagged>, String> {
+        if self.peeked.is_none() && !self.ended {
+            match (self.pull)() {
+                Some(Ok(t)) => self.peeked = Some(t),
+                Some(Err(e)) => {
+                    self.ended = true;
+                    return Err(e);
+                }
+                None => self.ended = true,
+            }
+        }
+        Ok(self.peeked)
+    }
+
+    fn advance(&mut self) {
+        self.peeked = None;
+    }
+}
+
+/// Where a run is, for the operator: the line of the segment executing and the planned time
+/// left.
+struct Whereabouts {
+    /// Sent and not yet done, oldest first: (line, nominal ticks).
+    in_flight: VecDeque<(Option<usize>, u64)>,
+    done: u32,
+    done_ticks: u64,
+    planned_ticks: u64,
+    /// Machine ticks per nominal tick (the host model's length over the nominal sum).
+    stretch: f64,
+    tick_hz: f64,
+}
+
+impl Whereabouts {
+    fn sent(&mut self, line: Option<usize>, seg: &Segment) {
+        self.in_flight.push_back((line, seg.duration_ticks as u64));
+    }
+
+    fn update(&mut self, done: u32) {
+        while self.done < done {
+            let Some((_, ticks)) = self.in_flight.pop_front() else { break };
+            self.done += 1;
+            self.done_ticks += ticks;
+        }
+    }
+
+    /// The line being executed (or next) and seconds left at `override_factor`.
+    fn at(&self, override_factor: f64) -> (Option<usize>, Option<f64>) {
+        let line = self.in_flight.front().and_then(|f| f.0);
+        let left = self.planned_ticks.saturating_sub(self.done_ticks) as f64 * self.stretch;
+        let eta = (override_factor > 0.0).then(|| left / self.tick_hz / override_factor);
+        (line, eta)
+    }
+}
+
+/// The next output; a stream that cannot go on (its file changed since it was checked) aborts
+/// the board and ends the run.
+fn peek(
+    outputs: &mut Outputs<'_>,
+    s: &mut Session,
+    latest: &Status,
+    base: &Status,
+) -> Result<Option<Tagged>, RunError> {
+    outputs.peek().map_err(|e| {
+        let aborted = matches!(s.request(RequestBody::Abort), Ok(Ok(_)));
+        err(format!(
+            "{e}; {} sent to the board; {} of {} segments were done",
+            if aborted { "Abort" } else { "Abort could not be" },
+            latest.segments_done.wrapping_sub(base.segments_done),
+            outputs.segments
+        ))
+    })
+}
+
 /// Connects, configures and streams `outputs`; `expected_steps` = the host model's final
 /// positions (steps from the job's start).
 pub fn run(
@@ -508,12 +644,25 @@ pub fn run(
     program: &Program,
     outputs: &[Output],
     expected_steps: &[i64; MAX_AXES],
+    opts: RunOptions,
+) -> Result<RunReport, RunError> {
+    run_outputs(transport, job, program, Outputs::planned(outputs), expected_steps, opts)
+}
+
+/// [`run`] with the outputs pulled from `outputs` as the link takes them (a stream planned
+/// while it runs). `program` gives the machine and the feed commands; its items are not read.
+pub fn run_outputs(
+    transport: &mut dyn Transport,
+    job: &Job,
+    program: &Program,
+    mut outputs: Outputs<'_>,
+    expected_steps: &[i64; MAX_AXES],
     mut opts: RunOptions,
 ) -> Result<RunReport, RunError> {
     let t0 = Instant::now();
     let axes = axes_of(job);
     let n_axes = axes.len();
-    let total: u32 = outputs.iter().filter(|o| matches!(o, Output::Segment(_))).count() as u32;
+    let total: u32 = outputs.segments;
     let mut progress = Progress::new(total as u64, axes.clone(), opts.progress);
     let mut s = Session::new(transport, opts.host);
     s.interrupt = opts.interrupt.clone();
@@ -567,7 +716,18 @@ pub fn run(
         ..RunReport::default()
     };
     let mut pending: HashMap<u32, Pending> = HashMap::new();
-    let mut next_out = 0usize;
+    let mut whereabouts = Whereabouts {
+        in_flight: VecDeque::new(),
+        done: 0,
+        done_ticks: 0,
+        planned_ticks: outputs.planned_ticks,
+        stretch: if outputs.planned_ticks > 0 {
+            outputs.model_ticks as f64 / outputs.planned_ticks as f64
+        } else {
+            1.0
+        },
+        tick_hz: program.config.tick_hz.max(1) as f64,
+    };
     let mut sent_segs = 0u32;
     let mut last_batch_seq: Option<u32> = None;
     let mut start_seq: Option<u32> = None;
@@ -732,7 +892,7 @@ pub fn run(
         }
 
         // Events (spindle, pause) once the motion before them is done.
-        while let Some(out) = outputs.get(next_out) {
+        while let Some((out, _)) = peek(&mut outputs, &mut s, &latest, &base)? {
             if matches!(out, Output::Segment(_)) {
                 break;
             }
@@ -746,14 +906,14 @@ pub fn run(
                         &progress,
                         &format!(
                             "spindle {} (no spindle hardware yet: nothing switched)",
-                            if *on { "on (M3)" } else { "off (M5)" }
+                            if on { "on (M3)" } else { "off (M5)" }
                         ),
                     );
-                    next_out += 1;
+                    outputs.advance();
                 }
                 Output::Pause if !opts.interactive => {
                     say(&progress, "program pause (M0): not interactive, continuing at once");
-                    next_out += 1;
+                    outputs.advance();
                 }
                 Output::Pause => match &pause_wait {
                     None => {
@@ -776,7 +936,7 @@ pub fn run(
                         }
                         pause_wait = None;
                         say(&progress, "continuing");
-                        next_out += 1;
+                        outputs.advance();
                     }
                 },
                 Output::Segment(_) => unreachable!("checked above"),
@@ -789,12 +949,16 @@ pub fn run(
             let credits = s.host.segment_credits() as usize;
             let room = batch_limit.min(credits);
             while batch.len() < room {
-                let Some(Output::Segment(seg)) = outputs.get(next_out) else { break };
-                let seg: Segment = *seg;
+                let Some((Output::Segment(seg), line)) =
+                    peek(&mut outputs, &mut s, &latest, &base)?
+                else {
+                    break;
+                };
                 if batch.push(seg).is_err() {
                     break;
                 }
-                next_out += 1;
+                whereabouts.sent(line, &seg);
+                outputs.advance();
             }
             if batch.is_empty() {
                 break;
@@ -812,7 +976,8 @@ pub fn run(
         }
 
         // Starved of credits with segments to send: ask instead of waiting for the stream.
-        let more = matches!(outputs.get(next_out), Some(Output::Segment(_)));
+        let more =
+            matches!(peek(&mut outputs, &mut s, &latest, &base)?, Some((Output::Segment(_), _)));
         if more
             && !poll_in_flight
             && s.host.segment_credits() == 0
@@ -843,7 +1008,8 @@ pub fn run(
         // again whenever a fresh status shows the board idle with segments waiting.
         let waiting = report.acked > job_done(&latest);
         let fresh = last_start_seq.is_none_or(|ls| seq_at_or_after(latest.next_seq, ls + 1));
-        let nothing_more = !matches!(outputs.get(next_out), Some(Output::Segment(_)));
+        let nothing_more =
+            !matches!(peek(&mut outputs, &mut s, &latest, &base)?, Some((Output::Segment(_), _)));
         let ready = ever_started
             || (report.acked == sent_segs && (s.host.segment_credits() == 0 || nothing_more));
         if start_seq.is_none() && waiting && fresh && latest.machine == MachineState::Ready && ready
@@ -878,10 +1044,12 @@ pub fn run(
             }
         }
 
-        progress.update(report.acked as u64, job_done(&latest) as u64, Some(&latest));
+        whereabouts.update(job_done(&latest));
+        let (line, eta) = whereabouts.at(Rate::from_bits(latest.override_bits).to_num::<f64>());
+        progress.update(report.acked as u64, job_done(&latest) as u64, Some(&latest), line, eta);
 
         // Done?
-        let all_sent = next_out >= outputs.len()
+        let all_sent = peek(&mut outputs, &mut s, &latest, &base)?.is_none()
             && pending.values().all(|p| matches!(p, Pending::Poll | Pending::Feed(_)));
         let after_batches = last_batch_seq.is_none_or(|b| seq_at_or_after(latest.next_seq, b + 1));
         if all_sent
@@ -964,8 +1132,42 @@ pub fn run(
 
 #[cfg(test)]
 mod tests {
-    use super::{JobWatch, Overdue};
+    use super::{JobWatch, Overdue, Whereabouts};
+    use motion::segment::{Rate, Segment};
+    use std::collections::VecDeque;
     use std::time::Duration;
+
+    #[test]
+    fn whereabouts_give_the_executing_line_and_the_planned_time_left() {
+        let seg = |ticks: u32| Segment {
+            steps: [1, 0, 0, 0, 0, 0],
+            duration_ticks: ticks,
+            entry_rate: Rate::ONE,
+            exit_rate: Rate::ONE,
+            accel_per_tick: Rate::ONE,
+            id: 0,
+        };
+        let mut w = Whereabouts {
+            in_flight: VecDeque::new(),
+            done: 0,
+            done_ticks: 0,
+            planned_ticks: 6_000,
+            stretch: 1.5,
+            tick_hz: 1_000.0,
+        };
+        assert_eq!(w.at(1.0), (None, Some(9.0)));
+        w.sent(Some(7), &seg(1_000));
+        w.sent(Some(7), &seg(1_000));
+        w.sent(Some(9), &seg(2_000));
+        assert_eq!(w.at(1.0), (Some(7), Some(9.0)));
+        w.update(2);
+        // 4000 nominal ticks left, 1.5 machine ticks each, at 1 kHz.
+        assert_eq!(w.at(1.0), (Some(9), Some(6.0)));
+        assert_eq!(w.at(0.5), (Some(9), Some(12.0)));
+        assert_eq!(w.at(0.0), (Some(9), None));
+        w.update(3);
+        assert_eq!(w.at(1.0), (None, Some(3.0)));
+    }
 
     #[test]
     fn job_watch_bounds_board_time_not_wall_time() {

@@ -21,7 +21,7 @@ enum Target {
     Within(f64),
 }
 
-const TARGETS: [(&str, Target); 11] = [
+const TARGETS: [(&str, Target); 13] = [
     // The whole tick handler of the link firmware, modelled cycles (cargo xtask isr-profile).
     ("isr_cycles_cruise_4axes", Target::AtMost(168.0)),
     ("isr_instr_idle", Target::AtMost(40.0)),
@@ -39,6 +39,9 @@ const TARGETS: [(&str, Target); 11] = [
     ("polar_digitize_limacon_ms", Target::AtMost(50.0)),
     // Bhatti: the continuous circle -> complex job's time against 60 A / FR, within 1 %.
     ("wire_job_time_vs_60a_fr_ppm", Target::Within(10_000.0)),
+    // G-code streamed: `motionctl plan` of a 1 000 000-line surfacing file (bench_gcode.rs).
+    ("gcode_plan_segments_per_s", Target::AtLeast(1_000_000.0)),
+    ("gcode_plan_peak_rss_mb", Target::AtMost(64.0)),
 ];
 
 /// DDA tick rate of the force scenario, whose tick applies the override (src/force/scenario.rs).
@@ -154,6 +157,9 @@ pub fn run(root: &Path, quick: bool) -> Result<()> {
     figures.insert("polar_digitize_limacon_ms".into(), (ms * 100.0).round() / 100.0);
     figures.insert("polar_digitize_limacon_events".into(), events as f64);
 
+    println!("planning a 1 000 000-line G-code surfacing file (motionctl plan, streamed)");
+    figures.extend(crate::bench_gcode::bench(root)?.into_iter().map(|(k, v)| (k.into(), v)));
+
     println!("fuzzing the board's receive path with 10 million hostile inputs");
     for (k, v) in fuzz_decoder(root, 10_000_000)? {
         figures.insert(k.into(), v);
@@ -266,7 +272,7 @@ fn sizes(elf: &Path) -> Result<(u64, u64)> {
     Ok((flash, ram))
 }
 
-fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
+pub(crate) fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
     let mut obj = match std::fs::read_to_string(path) {
         Ok(s) => match serde_json::from_str::<serde_json::Value>(&s) {
             Ok(serde_json::Value::Object(o)) => o,

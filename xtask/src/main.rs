@@ -11,6 +11,7 @@
 //! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
+//! | `bench-gcode` | only the G-code planning figures of `bench`: `motionctl plan` (release) of a generated 1 000 000-line surfacing file, segments/s and peak RSS, merged into `target/bench.json` |
 //! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
 //! | `isr-cycles [JOB]...` | the isr-profile jobs on the link firmware built with `isr-cycles`: the board's own count of its tick handler (instructions under QEMU, DWT cycles on an F405) |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
@@ -19,6 +20,7 @@
 //! `qemu-system-arm` are installed.
 
 mod bench;
+mod bench_gcode;
 mod copy_e2e;
 mod divcheck;
 mod e2e;
@@ -56,6 +58,9 @@ commands:
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
+  bench-gcode                                           only the G-code planning figures: motionctl plan of a generated
+                                                        1 000 000-line surfacing file (segments/s, peak RSS), merged
+                                                        into target/bench.json
   isr-profile [JOB]...                                   trace every instruction of the link firmware's tick
                                                         interrupt on real jobs in QEMU; per-tick instructions
                                                         and modelled cycles by situation (ISR_PROFILE_PCS=DIR:
@@ -157,6 +162,10 @@ fn run() -> Result<()> {
             };
             setup::ensure(&root)?;
             bench::run(&root, quick)
+        }
+        "bench-gcode" => {
+            no_args(cmd, rest)?;
+            bench_gcode::run(&root)
         }
         "isr-profile" => {
             setup::ensure(&root)?;

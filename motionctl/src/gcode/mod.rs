@@ -9,6 +9,7 @@
 //! reported as a warning and not executed.
 
 pub mod cli;
+pub mod stream;
 
 use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};
 use motion_gcode::canon::{Canon, Pos};
@@ -30,17 +31,22 @@ const AXES: [&str; 6] = ["X", "Y", "Z", "A", "B", "C"];
 pub struct GcodeError {
     pub file: String,
     pub errors: Vec<Diagnostic>,
+    /// Errors beyond those listed (a stream keeps the first [`stream::KEEP`]).
+    pub omitted: usize,
 }
 
 impl fmt::Display for GcodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = self.errors.len();
+        let n = self.errors.len() + self.omitted;
         write!(f, "{n} error{} in the G-code: ", if n == 1 { "" } else { "s" })?;
         for (i, d) in self.errors.iter().enumerate() {
             if i > 0 {
                 write!(f, "; ")?;
             }
             write!(f, "{}", d.display_with_file(&self.file))?;
+        }
+        if self.omitted > 0 {
+            write!(f, "; and {} more", self.omitted)?;
         }
         Ok(())
     }
@@ -59,8 +65,11 @@ pub struct Loaded {
 /// Reads a G-code file for `machine`.
 pub fn load(path: &Path, machine: &Machine) -> Result<Loaded, GcodeError> {
     let name = path.display().to_string();
-    let interp = Interpreter::open(path, Options::default())
-        .map_err(|e| GcodeError { file: name.clone(), errors: vec![io_diag(&e.to_string())] })?;
+    let interp = Interpreter::open(path, Options::default()).map_err(|e| GcodeError {
+        file: name.clone(),
+        errors: vec![io_diag(&e.to_string())],
+        omitted: 0,
+    })?;
     to_items(interp, &name, machine)
 }
 
@@ -115,7 +124,7 @@ fn to_items<S: LineSource>(
     if errors.is_empty() {
         Ok(loaded)
     } else {
-        Err(GcodeError { file: file.to_string(), errors })
+        Err(GcodeError { file: file.to_string(), errors, omitted: 0 })
     }
 }
 
@@ -130,6 +139,9 @@ pub(crate) struct Converter<'a> {
     pub frame: Frame,
     /// (line, message) of what runs without being executed.
     pub notes: Vec<(u32, String)>,
+    /// Most notes kept; the rest are only counted in `notes_omitted`.
+    pub note_limit: usize,
+    pub notes_omitted: usize,
     ended: bool,
     /// The last `F` and its line: rs274 sets the feed before the block's G20/G21, but a feed is
     /// in the units of its own block (as grbl reads it: `G20 G1 X1 F10` is 10 in/min).
@@ -143,30 +155,41 @@ impl<'a> Converter<'a> {
             map: axis_map(machine),
             frame: Frame::default(),
             notes: Vec::new(),
+            note_limit: usize::MAX,
+            notes_omitted: 0,
             ended: false,
             last_feed: None,
         }
     }
 
     fn note(&mut self, line: u32, m: impl Into<String>) {
-        self.notes.push((line, m.into()));
+        if self.notes.len() < self.note_limit {
+            self.notes.push((line, m.into()));
+        } else {
+            self.notes_omitted += 1;
+        }
     }
 
     /// One call; an error names what the board cannot do.
     pub fn call(&mut self, line: u32, c: &Canon, out: &mut Loaded) -> Result<(), String> {
+        self.call_into(line, c, &mut out.items)
+    }
+
+    /// [`Converter::call`], the items appended to `out`.
+    pub fn call_into(&mut self, line: u32, c: &Canon, out: &mut Vec<Item>) -> Result<(), String> {
         if self.ended {
             return Ok(());
         }
         match c {
-            Canon::StartSpindleClockwise(_) => out.items.push(Item::Spindle(true)),
-            Canon::StopSpindleTurning(_) => out.items.push(Item::Spindle(false)),
+            Canon::StartSpindleClockwise(_) => out.push(Item::Spindle(true)),
+            Canon::StopSpindleTurning(_) => out.push(Item::Spindle(false)),
             Canon::StartSpindleCounterclockwise(_) => {
                 return Err("M4 (spindle counterclockwise): the board has no spindle direction output yet".into())
             }
-            Canon::ProgramStop | Canon::OptionalProgramStop => out.items.push(Item::Pause),
+            Canon::ProgramStop | Canon::OptionalProgramStop => out.push(Item::Pause),
             Canon::ChangeTool(t) => {
                 self.note(line, format!("tool change (pocket {t}): the job pauses for the operator"));
-                out.items.push(Item::Pause);
+                out.push(Item::Pause);
             }
             Canon::ProgramEnd => self.ended = true,
             Canon::Dwell(s) => self.note(line, format!("G4 dwell {s} s not executed: the job pipeline has no dwell yet")),
@@ -205,11 +228,17 @@ impl<'a> Converter<'a> {
         Ok(())
     }
 
-    fn motion(&mut self, line: u32, m: &Motion, out: &mut Loaded) -> Result<(), String> {
+    fn motion(&mut self, line: u32, m: &Motion, out: &mut Vec<Item>) -> Result<(), String> {
         let source = Source::Gcode { line: line as usize };
+        let mut point = |p: &Pos, feed: Feed| -> Result<(), String> {
+            let target = self.target(p)?;
+            out.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
+            Ok(())
+        };
         let (points, feed) = match m {
-            Motion::Rapid { to, .. } => (vec![*to], Feed::Rapid),
-            Motion::Feed { to, feed_mm_min, .. } => (vec![*to], Feed::MmPerMin(*feed_mm_min)),
+            // One point: no list of them (the common case, once per line of a CAM file).
+            Motion::Rapid { to, .. } => return point(to, Feed::Rapid),
+            Motion::Feed { to, feed_mm_min, .. } => return point(to, Feed::MmPerMin(*feed_mm_min)),
             Motion::Arc { feed_mm_min, .. } | Motion::Nurbs { feed_mm_min, .. } => {
                 (curves::flatten(m, self.machine.arc_tolerance_mm), Feed::MmPerMin(*feed_mm_min))
             }
@@ -223,9 +252,8 @@ impl<'a> Converter<'a> {
                 return Err("G33.1 rigid tapping needs spindle synchronisation".into())
             }
         };
-        for p in points {
-            let target = self.target(&p)?;
-            out.items.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
+        for p in &points {
+            point(p, feed)?;
         }
         Ok(())
     }

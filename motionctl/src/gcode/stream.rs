@@ -1,0 +1,429 @@
+//! G-code planned as a stream, in memory bounded whatever the file's length: the interpreter
+//! reads the file line by line, each call becomes job items ([`Converter`]) and planner items
+//! ([`Stepper`]) as the planner's window asks for them, and nothing is kept but counts and the
+//! first [`KEEP`] errors and warnings.
+//!
+//! `plan` and `run` read a file twice. The first pass checks all of it, plans it and runs the
+//! plan through the host model ([`check_and_plan`]): a file with any error is refused here,
+//! before anything moves, with the same messages as the whole-program path ([`super::load`]);
+//! otherwise the pass yields the totals a run needs (segments, planned time, where the job must
+//! end). The second pass ([`items`]) reads the file again and streams it to the board.
+
+use super::{io_diag, machine_diag, Converter, GcodeError};
+use crate::convert::{ConvertError, Program, ProgramItem, Stepper};
+use crate::job::{Item, Machine};
+use crate::plan::{self, PlanFailure, SimulateError, Stream, Totals};
+use motion::report::Report;
+use motion::MAX_AXES;
+use motion_gcode::source::{LineSource, SeekSource};
+use motion_gcode::{Diagnostic, Event, Interpreter, Options};
+use std::fmt;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+/// Most errors, and most warnings, a stream keeps; beyond that they are only counted.
+pub const KEEP: usize = 1000;
+
+/// The stream ended early: see [`Items::verdict`] for why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// The file has an error (the stream then reads on to the end to list every one).
+    Refused,
+    Plan(PlanFailure),
+}
+
+impl From<PlanFailure> for Stop {
+    fn from(p: PlanFailure) -> Self {
+        Stop::Plan(p)
+    }
+}
+
+/// Why a G-code file is refused, as the whole-program path says it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Refusal {
+    /// Errors of the G-code or of what the board cannot do (listed, file:line:column).
+    Gcode(GcodeError),
+    /// The first move the machine cannot take (a soft limit, a move too long).
+    Convert(ConvertError),
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Refusal::Gcode(e) => e.fmt(f),
+            Refusal::Convert(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for Refusal {}
+
+/// A G-code file's planner items, read as they are asked for.
+pub struct Items<'m, S> {
+    interp: Interpreter<S>,
+    conv: Converter<'m>,
+    stepper: Result<Stepper, ConvertError>,
+    file: String,
+    /// Items of the last call, handed out from `next_pending` on.
+    pending: Vec<Item>,
+    next_pending: usize,
+    errors: Vec<Diagnostic>,
+    errors_total: usize,
+    warnings: Vec<String>,
+    warnings_total: usize,
+    convert_error: Option<ConvertError>,
+    failed: bool,
+    moves: usize,
+}
+
+/// The items of the G-code file `path` for `machine`.
+pub fn items<'m>(
+    path: &Path,
+    machine: &'m Machine,
+) -> Result<Items<'m, SeekSource<BufReader<File>>>, GcodeError> {
+    let name = path.display().to_string();
+    let interp = Interpreter::open(path, Options::default()).map_err(|e| GcodeError {
+        file: name.clone(),
+        errors: vec![io_diag(&e.to_string())],
+        omitted: 0,
+    })?;
+    Ok(Items::new(interp, &name, machine))
+}
+
+impl<'m, S: LineSource> Items<'m, S> {
+    /// `file` names the program in messages.
+    pub fn new(interp: Interpreter<S>, file: &str, machine: &'m Machine) -> Self {
+        let mut conv = Converter::new(machine);
+        conv.note_limit = KEEP;
+        let stepper = Stepper::new(machine);
+        Items {
+            interp: interp.keep_going(true),
+            conv,
+            failed: stepper.is_err(),
+            stepper,
+            file: file.to_string(),
+            pending: Vec::new(),
+            next_pending: 0,
+            errors: Vec::new(),
+            errors_total: 0,
+            warnings: Vec::new(),
+            warnings_total: 0,
+            convert_error: None,
+            moves: 0,
+        }
+    }
+
+    fn error(&mut self, d: Diagnostic) {
+        self.errors_total += 1;
+        if self.errors.len() < KEEP {
+            self.errors.push(d);
+        }
+    }
+
+    /// Planner items handed out so far that move.
+    pub fn moves(&self) -> usize {
+        self.moves
+    }
+
+    /// Moves dropped so far because they round to no steps.
+    pub fn skipped_moves(&self) -> usize {
+        self.stepper.as_ref().map_or(0, |s| s.skipped_moves())
+    }
+
+    /// Where the items so far leave each axis, steps from the start.
+    pub fn final_steps(&self) -> [i64; MAX_AXES] {
+        self.stepper.as_ref().map_or([0; MAX_AXES], |s| s.final_steps())
+    }
+
+    /// Reads the rest of the file, items dropped, so that every error is found.
+    pub fn drain(&mut self) {
+        for _ in self.by_ref() {}
+    }
+
+    /// After the stream has ended: the file's errors (every one, when it was read to the end),
+    /// else the first move the machine cannot take.
+    pub fn verdict(&self) -> Result<(), Refusal> {
+        if self.errors_total > 0 {
+            return Err(Refusal::Gcode(GcodeError {
+                file: self.file.clone(),
+                errors: self.errors.clone(),
+                omitted: self.errors_total - self.errors.len(),
+            }));
+        }
+        match (&self.stepper, &self.convert_error) {
+            (Err(e), _) | (Ok(_), Some(e)) => Err(Refusal::Convert(e.clone())),
+            _ => Ok(()),
+        }
+    }
+
+    /// Warnings, one line each (`FILE:LINE:COL: warning: ...`), the first [`KEEP`] of each kind,
+    /// and how many more there were.
+    pub fn warnings(&self) -> (Vec<String>, usize) {
+        let mut w = self.warnings.clone();
+        for (line, m) in &self.conv.notes {
+            w.push(format!("{}:{line}: warning: {m}", self.file));
+        }
+        let shown = w.len();
+        let total = self.warnings_total + self.conv.notes.len() + self.conv.notes_omitted;
+        (w, total - shown)
+    }
+
+    fn fail(&mut self) -> Option<Result<ProgramItem, Stop>> {
+        self.pending.clear();
+        self.next_pending = 0;
+        if self.failed {
+            return None;
+        }
+        self.failed = true;
+        Some(Err(Stop::Refused))
+    }
+}
+
+impl<S: LineSource> Iterator for Items<'_, S> {
+    type Item = Result<ProgramItem, Stop>;
+
+    /// The next planner item; `Err(Stop::Refused)` once, at the first error, and after that
+    /// `None` once the rest of the file has been read for its errors.
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if self.next_pending < self.pending.len() {
+                let i = self.next_pending;
+                self.next_pending += 1;
+                let Ok(stepper) = self.stepper.as_mut() else { continue };
+                match stepper.item(&self.pending[i]) {
+                    Ok(Some(p)) => {
+                        self.moves += matches!(p, ProgramItem::Move { .. }) as usize;
+                        return Some(Ok(p));
+                    }
+                    Ok(None) => continue,
+                    Err(e) => {
+                        self.convert_error = Some(e);
+                        if let Some(r) = self.fail() {
+                            return Some(r);
+                        }
+                        continue;
+                    }
+                }
+            }
+            self.pending.clear();
+            self.next_pending = 0;
+            match self.interp.next_event()? {
+                Event::Diagnostic(d) if d.is_error() => {
+                    self.error(d);
+                    if let Some(r) = self.fail() {
+                        return Some(r);
+                    }
+                }
+                Event::Diagnostic(d) => {
+                    self.warnings_total += 1;
+                    if self.warnings.len() < KEEP {
+                        self.warnings.push(d.display_with_file(&self.file).to_string());
+                    }
+                }
+                Event::Call(c) => {
+                    if let Err(m) = self.conv.call_into(c.line, &c.canon, &mut self.pending) {
+                        self.error(machine_diag(c.line, m));
+                        if let Some(r) = self.fail() {
+                            return Some(r);
+                        }
+                    }
+                    if self.failed {
+                        self.pending.clear();
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// What the checking pass learnt about a file it accepted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checked {
+    /// The job in the planner's terms, without its items (they are streamed): config, scale,
+    /// where it ends.
+    pub program: Program,
+    pub totals: Totals,
+    /// The host model's run of every segment.
+    pub report: Report,
+    pub warnings: Vec<String>,
+    pub warnings_omitted: usize,
+}
+
+/// Why the checking pass refused a file.
+#[derive(Debug)]
+pub enum CheckError {
+    Refused(Refusal),
+    Plan(PlanFailure),
+    Model(SimulateError),
+    /// The model did not end where the job does (a planner or model bug if it happens).
+    Mismatch(String),
+}
+
+impl fmt::Display for CheckError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CheckError::Refused(r) => r.fmt(f),
+            CheckError::Plan(p) => p.fmt(f),
+            CheckError::Model(m) => m.fmt(f),
+            CheckError::Mismatch(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for CheckError {}
+
+/// The first pass: checks the whole of `items`, plans it and runs the plan through the host
+/// model, keeping only counts. Errors come in the whole-program path's order: the G-code's
+/// (every one), else the first move the machine cannot take, else the planner's refusal.
+pub fn check_and_plan<S: LineSource>(
+    items: Items<'_, S>,
+    progress: impl FnMut(u32),
+) -> Result<Checked, CheckError> {
+    let (planned, report) = check(items, Some(progress))?;
+    let Some(report) = report else {
+        return Err(CheckError::Mismatch("the host model did not run".into()));
+    };
+    let (totals, n) = (planned.totals, planned.program.config.axis_count as usize);
+    if report.segments as usize != totals.segments {
+        return Err(CheckError::Mismatch(format!(
+            "the model ran {} of {} segments",
+            report.segments, totals.segments
+        )));
+    }
+    if report.positions[..n] != planned.program.final_steps[..n] {
+        return Err(CheckError::Mismatch(format!(
+            "the model ended at {:?} steps but the job ends at {:?}",
+            &report.positions[..n],
+            &planned.program.final_steps[..n]
+        )));
+    }
+    Ok(Checked {
+        program: planned.program,
+        totals,
+        report,
+        warnings: planned.warnings,
+        warnings_omitted: planned.warnings_omitted,
+    })
+}
+
+/// What a pass that plans without the host model learnt ([`check_and_plan_only`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Planned {
+    pub program: Program,
+    pub totals: Totals,
+    pub warnings: Vec<String>,
+    pub warnings_omitted: usize,
+}
+
+/// [`check_and_plan`] without the host model's tick-by-tick run: check and plan only.
+pub fn check_and_plan_only<S: LineSource>(items: Items<'_, S>) -> Result<Planned, CheckError> {
+    check(items, None::<fn(u32)>).map(|(p, _)| p)
+}
+
+fn check<S: LineSource>(
+    mut items: Items<'_, S>,
+    model: Option<impl FnMut(u32)>,
+) -> Result<(Planned, Option<Report>), CheckError> {
+    let config = match &items.stepper {
+        Ok(s) => Some(*s.config()),
+        Err(_) => None,
+    };
+    let mut run = None;
+    if let Some(config) = config {
+        let mut stream: Stream<_, Stop> = Stream::over(&config, items.by_ref());
+        run = Some(match model {
+            Some(progress) => plan::simulate_stream(&config, &mut stream, progress)
+                .map(|(t, r, stopped)| (t, Some(r), stopped)),
+            None => {
+                let (mut t, mut stopped) = (Totals::default(), None);
+                for out in stream.by_ref() {
+                    match out {
+                        Ok(crate::plan::Output::Segment(s)) => {
+                            t.segments += 1;
+                            t.nominal_ticks += s.duration_ticks as u64;
+                        }
+                        Ok(crate::plan::Output::Spindle(_)) => t.spindle_events += 1,
+                        Ok(crate::plan::Output::Pause) => t.pauses += 1,
+                        Err(e) => stopped = Some(e),
+                    }
+                }
+                Ok((t, None, stopped))
+            }
+        });
+    }
+    items.drain();
+    items.verdict().map_err(CheckError::Refused)?;
+    let (Some(config), Some(run)) = (config, run) else {
+        // verdict() refuses a machine the stepper refused.
+        return Err(CheckError::Mismatch("no machine configuration".into()));
+    };
+    let (mut totals, report, stopped) = run.map_err(CheckError::Model)?;
+    match stopped {
+        Some(Stop::Plan(p)) => return Err(CheckError::Plan(p)),
+        // verdict() found the error that stopped the stream.
+        Some(Stop::Refused) => return Err(CheckError::Mismatch("stopped without an error".into())),
+        None => {}
+    }
+    totals.moves = items.moves();
+    totals.skipped_moves = items.skipped_moves();
+    let final_steps = items.final_steps();
+    let (warnings, warnings_omitted) = items.warnings();
+    let steps_per_mm =
+        items.stepper.as_ref().map(|s| s.steps_per_mm().to_vec()).unwrap_or_default();
+    let program = Program {
+        config,
+        steps_per_mm,
+        items: Vec::new(),
+        commands: Vec::new(),
+        final_steps,
+        skipped_moves: totals.skipped_moves,
+    };
+    Ok((Planned { program, totals, warnings, warnings_omitted }, report))
+}
+
+/// The second pass: `items` (the file read again) planned as the board takes the segments, each
+/// with its G-code line, for [`crate::runner::run_outputs`]. The file must give what the first
+/// pass checked: an error, or another number of segments than `segments`, ends the run (the file
+/// changed in between).
+pub fn outputs<'a, S: LineSource + 'a>(
+    items: Items<'a, S>,
+    checked: &Checked,
+    label: &str,
+    segments: u32,
+) -> crate::runner::Outputs<'a> {
+    let label = label.to_string();
+    let mut stream: Stream<_, Stop> = Stream::over(&checked.program.config, items);
+    let mut given = 0u32;
+    let changed = format!("{label} changed since it was checked");
+    let next = move || {
+        let Some(out) = stream.next() else {
+            return (given != segments)
+                .then(|| Err(format!("{changed}: {given} segments instead of {segments}")));
+        };
+        let line = match stream.source() {
+            Some(crate::job::Source::Gcode { line }) => Some(line),
+            _ => None,
+        };
+        Some(match out {
+            Ok(crate::plan::Output::Segment(_)) if given >= segments => {
+                Err(format!("{changed}: more than {segments} segments"))
+            }
+            Ok(o) => {
+                given += matches!(o, crate::plan::Output::Segment(_)) as u32;
+                Ok((o, line))
+            }
+            Err(Stop::Plan(p)) => Err(format!("{label}: {p}")),
+            Err(Stop::Refused) => Err(match stream.items().verdict() {
+                Err(r) => format!("{changed}: {r}"),
+                Ok(()) => changed.clone(),
+            }),
+        })
+    };
+    crate::runner::Outputs::streamed(
+        next,
+        segments,
+        checked.totals.nominal_ticks,
+        checked.report.ticks,
+    )
+}
