@@ -272,7 +272,21 @@ fn sizes(elf: &Path) -> Result<(u64, u64)> {
     Ok((flash, ram))
 }
 
-pub(crate) fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
+/// `cargo xtask bench-gcode`: the G-code figures alone ([`crate::bench_gcode::bench`]), merged
+/// into `target/bench.json`.
+pub fn gcode_only(root: &Path) -> Result<()> {
+    let mut map = BTreeMap::new();
+    for (k, v) in crate::bench_gcode::bench(root)? {
+        println!("{k:<32} {v}");
+        map.insert(k.to_string(), v);
+    }
+    let json = root.join("target/bench.json");
+    write_json(&json, &map)?;
+    println!("wrote {}", json.display());
+    Ok(())
+}
+
+fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
     let mut obj = match std::fs::read_to_string(path) {
         Ok(s) => match serde_json::from_str::<serde_json::Value>(&s) {
             Ok(serde_json::Value::Object(o)) => o,

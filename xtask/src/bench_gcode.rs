@@ -159,17 +159,3 @@ pub fn bench(root: &Path) -> Result<Vec<(&'static str, f64)>> {
         ("gcode_plan_with_model_segments_per_s", (segments / best).round()),
     ])
 }
-
-/// `cargo xtask bench-gcode`: [`bench`] alone, merged into `target/bench.json`.
-pub fn run(root: &Path) -> Result<()> {
-    let figures = bench(root)?;
-    let mut map = std::collections::BTreeMap::new();
-    for (k, v) in &figures {
-        println!("{k:<32} {v}");
-        map.insert(k.to_string(), *v);
-    }
-    let json = root.join("target/bench.json");
-    crate::bench::write_json(&json, &map)?;
-    println!("wrote {}", json.display());
-    Ok(())
-}

@@ -165,7 +165,7 @@ fn run() -> Result<()> {
         }
         "bench-gcode" => {
             no_args(cmd, rest)?;
-            bench_gcode::run(&root)
+            bench::gcode_only(&root)
         }
         "isr-profile" => {
             setup::ensure(&root)?;
