@@ -268,6 +268,8 @@ fn plan_without_model(args: &JobArgs) -> Result<String> {
             segments: planned.segments.len(),
             spindle_events: planned.spindle_events,
             pauses: planned.pauses,
+            dwells: planned.dwells,
+            dwell_ms: planned.dwell_ms,
             nominal_ticks: planned.nominal_ticks,
         };
         (job.machine, program.commands.len(), totals, program.final_steps)

@@ -30,9 +30,14 @@ pub struct Program {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ProgramItem {
-    Move { mv: Move, source: Source },
+    Move {
+        mv: Move,
+        source: Source,
+    },
     Spindle(bool),
     Pause,
+    /// Seconds at rest.
+    Dwell(f64),
 }
 
 impl Program {
@@ -176,6 +181,7 @@ impl Stepper {
         let m = match item {
             Item::Spindle(on) => return Ok(Some(ProgramItem::Spindle(*on))),
             Item::Pause => return Ok(Some(ProgramItem::Pause)),
+            Item::Dwell(s) => return Ok(Some(ProgramItem::Dwell(*s))),
             Item::Move(m) => m,
         };
         let n = self.axes.len();

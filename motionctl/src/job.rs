@@ -97,6 +97,8 @@ pub enum Item {
     Spindle(bool),
     /// Program pause (M0): motion before it completes, then the runner holds until resumed.
     Pause,
+    /// Dwell (G4): motion before it completes, then the machine stands still this many seconds.
+    Dwell(f64),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -343,6 +345,8 @@ struct RawMove {
     rapid: Option<bool>,
     spindle: Option<SpindleState>,
     pause: Option<bool>,
+    /// Seconds at rest (G4), at most an hour.
+    dwell_s: Option<NonNegative<3600>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -479,12 +483,23 @@ fn moves_to_items(moves: &[RawMove], machine: &Machine) -> Result<Vec<Item>, Job
     let mut items = Vec::with_capacity(moves.len());
     for (index, m) in moves.iter().enumerate() {
         let field = |f: &str| format!("moves[{index}]{f}");
-        let kinds = [m.to.is_some(), m.by.is_some(), m.spindle.is_some(), m.pause.is_some()];
+        let kinds = [
+            m.to.is_some(),
+            m.by.is_some(),
+            m.spindle.is_some(),
+            m.pause.is_some(),
+            m.dwell_s.is_some(),
+        ];
         if kinds.iter().filter(|&&k| k).count() != 1 {
             return Err(JobError::new(
                 field(""),
-                "needs exactly one of `to`, `by`, `spindle` or `pause`",
+                "needs exactly one of `to`, `by`, `spindle`, `pause` or `dwell_s`",
             ));
+        }
+        if let Some(d) = m.dwell_s {
+            no_motion_fields(m, &field)?;
+            items.push(Item::Dwell(d.0));
+            continue;
         }
         if let Some(s) = m.spindle {
             no_motion_fields(m, &field)?;
@@ -552,7 +567,7 @@ fn no_motion_fields(m: &RawMove, field: &dyn Fn(&str) -> String) -> Result<(), J
     if m.feed_mm_min.is_some() || m.rapid.is_some() {
         return Err(JobError::new(
             field(""),
-            "`spindle` and `pause` entries take no feed_mm_min or rapid",
+            "`spindle`, `pause` and `dwell_s` entries take no feed_mm_min or rapid",
         ));
     }
     Ok(())

@@ -21,6 +21,8 @@ pub enum Output {
     Spindle(bool),
     /// Hold once every earlier segment has completed, until the operator resumes.
     Pause,
+    /// Stand still this many seconds once every earlier segment has completed.
+    Dwell(f64),
 }
 
 /// The planner refused a move.
@@ -161,6 +163,11 @@ where
                         self.event = Some(Output::Pause);
                         continue;
                     }
+                    Some(Ok(ProgramItem::Dwell(s))) => {
+                        self.planner.finish();
+                        self.event = Some(Output::Dwell(s));
+                        continue;
+                    }
                     Some(Err(e)) => {
                         self.failed = true;
                         return Some(Err(e));
@@ -202,8 +209,16 @@ pub struct Plan {
     pub segments: Vec<Segment>,
     pub spindle_events: usize,
     pub pauses: usize,
+    /// Dwells, and their time at rest in milliseconds.
+    pub dwells: usize,
+    pub dwell_ms: u64,
     /// Sum of the segments' nominal durations (at full speed, override 1.0).
     pub nominal_ticks: u64,
+}
+
+/// A dwell's time, ms (a dwell the interpreter passed is finite and >= 0).
+pub fn dwell_ms(seconds: f64) -> u64 {
+    (seconds.max(0.0) * 1000.0).round() as u64
 }
 
 pub fn plan(program: &Program) -> Result<Plan, PlanFailure> {
@@ -216,6 +231,10 @@ pub fn plan(program: &Program) -> Result<Plan, PlanFailure> {
             }
             Output::Spindle(_) => p.spindle_events += 1,
             Output::Pause => p.pauses += 1,
+            Output::Dwell(s) => {
+                p.dwells += 1;
+                p.dwell_ms += dwell_ms(s);
+            }
         }
     }
     Ok(p)
@@ -313,6 +332,8 @@ pub struct Totals {
     pub segments: usize,
     pub spindle_events: usize,
     pub pauses: usize,
+    pub dwells: usize,
+    pub dwell_ms: u64,
     /// Sum of the segments' nominal durations (at full speed, override 1.0).
     pub nominal_ticks: u64,
 }
@@ -325,6 +346,8 @@ impl Summary {
             segments: self.plan.segments.len(),
             spindle_events: self.plan.spindle_events,
             pauses: self.plan.pauses,
+            dwells: self.plan.dwells,
+            dwell_ms: self.plan.dwell_ms,
             nominal_ticks: self.plan.nominal_ticks,
         }
     }
@@ -354,6 +377,14 @@ pub fn summary_text(
         "events     {} spindle, {} pause, {feed_commands} feed commands",
         t.spindle_events, t.pauses,
     );
+    if t.dwells > 0 {
+        let _ = writeln!(
+            s,
+            "dwells     {} (G4), {:.3} s at rest",
+            t.dwells,
+            t.dwell_ms as f64 / 1000.0
+        );
+    }
     let _ = writeln!(
         s,
         "segments   {} planned, {} run by the model, {} underruns",
@@ -410,6 +441,14 @@ pub fn plan_text(
         "events     {} spindle, {} pause, {feed_commands} feed commands",
         t.spindle_events, t.pauses,
     );
+    if t.dwells > 0 {
+        let _ = writeln!(
+            s,
+            "dwells     {} (G4), {:.3} s at rest",
+            t.dwells,
+            t.dwell_ms as f64 / 1000.0
+        );
+    }
     let _ = writeln!(s, "segments   {} planned (host model not run: --no-model)", t.segments);
     let _ = writeln!(
         s,
@@ -459,6 +498,10 @@ where
                 }
                 Ok(Output::Spindle(_)) => t.spindle_events += 1,
                 Ok(Output::Pause) => t.pauses += 1,
+                Ok(Output::Dwell(s)) => {
+                    t.dwells += 1;
+                    t.dwell_ms += dwell_ms(s);
+                }
                 Err(e) => {
                     stopped = Some(e);
                     return None;

@@ -748,6 +748,8 @@ pub fn run_outputs(
     let mut rate_last: Option<(Instant, u64)> = None;
     let mut rate_count = 0u64;
     let mut pause_wait: Option<mpsc::Receiver<()>> = None;
+    // A dwell under way: when it ends.
+    let mut dwell_until: Option<Instant> = None;
     let mut finished_at: Option<Instant> = None;
     let mut poll_in_flight = false;
     let mut last_tx = (s.host.sent_frames, Instant::now());
@@ -939,6 +941,17 @@ pub fn run_outputs(
                         outputs.advance();
                     }
                 },
+                Output::Dwell(seconds) => {
+                    let until = *dwell_until.get_or_insert_with(|| {
+                        say(&progress, &format!("dwell (G4) {seconds:.3} s at rest"));
+                        Instant::now() + Duration::from_millis(crate::plan::dwell_ms(seconds))
+                    });
+                    if Instant::now() < until {
+                        break;
+                    }
+                    dwell_until = None;
+                    outputs.advance();
+                }
                 Output::Segment(_) => unreachable!("checked above"),
             }
         }

@@ -162,8 +162,8 @@ fn errors_and_warnings_kept_are_bounded_and_counted() {
     let n = stream::KEEP + 500;
     let mut src = String::from("G21 G90 F600\n");
     for i in 0..n {
-        // An unknown word: an error on every line; a dwell: a warning on every line.
-        src.push_str(&format!("G1 X{} Q1\nG4 P0.1\n", i % 10));
+        // An unknown word: an error on every line; coolant on: a warning on every line.
+        src.push_str(&format!("G1 X{} Q1\nM8\n", i % 10));
     }
     src.push_str("M2\n");
     let p = temp_file("many-errors.ngc", &src);
@@ -178,14 +178,18 @@ fn errors_and_warnings_kept_are_bounded_and_counted() {
 
     let mut src = String::from("G21 G90 F600\n");
     for i in 0..n {
-        src.push_str(&format!("G1 X{}\nG4 P0.1\n", i % 10));
+        src.push_str(&format!("G1 X{}\nM8\n", i % 10));
     }
     src.push_str("M2\n");
     let p = temp_file("many-warnings.ngc", &src);
     let c = stream::check_and_plan(stream::items(&p, &m).unwrap(), |_| {}).unwrap();
     assert_eq!(c.warnings.len(), stream::KEEP);
     assert_eq!(c.warnings_omitted, 500);
-    assert!(c.warnings[0].contains("many-warnings.ngc:3: warning: G4 dwell"), "{}", c.warnings[0]);
+    assert!(
+        c.warnings[0].contains("many-warnings.ngc:3: warning: coolant on"),
+        "{}",
+        c.warnings[0]
+    );
 }
 
 fn sim_opts() -> motionctl::runner::RunOptions {

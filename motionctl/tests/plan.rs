@@ -68,6 +68,8 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
         mv(3, 5.0, Feed::Rapid),
         Item::Pause,
         mv(5, 5.0, Feed::Rapid),
+        Item::Dwell(0.25),
+        mv(7, 2.0, Feed::Rapid),
         Item::Spindle(false),
     ]);
     let out: Vec<Output> = Stream::new(&p).map(Result::unwrap).collect();
@@ -78,12 +80,18 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
             Output::Spindle(true) => 'M',
             Output::Spindle(false) => 'm',
             Output::Pause => 'P',
+            Output::Dwell(s) => {
+                assert_eq!(*s, 0.25);
+                'D'
+            }
         })
         .collect();
-    assert_eq!(kinds.iter().collect::<String>(), "ssMsPsm");
+    assert_eq!(kinds.iter().collect::<String>(), "ssMsPsDsm");
     // The segment before each event ends at rest; the first ones meet at speed.
     for w in out.windows(2) {
-        if let (Output::Segment(s), Output::Spindle(_) | Output::Pause) = (w[0], w[1]) {
+        if let (Output::Segment(s), Output::Spindle(_) | Output::Pause | Output::Dwell(_)) =
+            (w[0], w[1])
+        {
             assert_eq!(s.exit_rate, motion::Rate::ZERO);
         }
     }

@@ -5,8 +5,8 @@
 //!
 //! A program with any error is refused as a whole, before anything moves; every error is listed.
 //! What the board cannot do yet (probe moves, spindle direction, spindle-synchronised motion) is
-//! refused with a message saying so; what it cannot switch yet (coolant, dwell, outputs) is
-//! reported as a warning and not executed.
+//! refused with a message saying so; what it cannot switch yet (coolant, outputs) is reported
+//! as a warning and not executed; a dwell (G4) is a stop at rest the runner times.
 
 pub mod cli;
 pub mod stream;
@@ -192,7 +192,7 @@ impl<'a> Converter<'a> {
                 out.push(Item::Pause);
             }
             Canon::ProgramEnd => self.ended = true,
-            Canon::Dwell(s) => self.note(line, format!("G4 dwell {s} s not executed: the job pipeline has no dwell yet")),
+            Canon::Dwell(s) => out.push(Item::Dwell(*s)),
             Canon::FloodOn | Canon::MistOn => self.note(line, "coolant on: the board has no coolant output yet; not switched"),
             Canon::SetFeedMode { mode: 1, .. } => {
                 return Err("G95 (feed per revolution) needs spindle feedback the board does not have".into())

@@ -345,6 +345,10 @@ fn check<S: LineSource>(
                         }
                         Ok(crate::plan::Output::Spindle(_)) => t.spindle_events += 1,
                         Ok(crate::plan::Output::Pause) => t.pauses += 1,
+                        Ok(crate::plan::Output::Dwell(s)) => {
+                            t.dwells += 1;
+                            t.dwell_ms += crate::plan::dwell_ms(s);
+                        }
                         Err(e) => stopped = Some(e),
                     }
                 }

@@ -61,9 +61,8 @@ pub struct Block {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Step {
+    /// A move, a spindle event, a pause or a dwell (G4), as `motionctl run` reads them.
     Item(Item),
-    /// G4, seconds.
-    Dwell(f64),
 }
 
 /// Why a block was refused: grbl's error number and the interpreter's words.
@@ -232,10 +231,8 @@ impl Program {
                 code: super::protocol::error::UNSUPPORTED_COMMAND,
                 message: m,
             })?;
-            match &c.canon {
-                Canon::Dwell(s) => block.steps.push(Step::Dwell(*s)),
-                Canon::Message(m) => block.messages.push(m.clone()),
-                _ => {}
+            if let Canon::Message(m) = &c.canon {
+                block.messages.push(m.clone());
             }
             block.steps.extend(loaded.items.into_iter().map(Step::Item));
         }
@@ -293,7 +290,7 @@ mod tests {
         assert_eq!(p.run("G1 X1..2").unwrap_err().code, 2);
         assert_eq!(p.run("o100 sub").unwrap_err().code, 20);
         let b = p.run("G4 P0.5").unwrap();
-        assert_eq!(b.steps, vec![Step::Dwell(0.5)]);
+        assert_eq!(b.steps, vec![Step::Item(Item::Dwell(0.5))]);
         // Still usable after errors.
         let b = p.run("X1").unwrap();
         assert_eq!(target(&b.steps[0]), vec![Some(12.0), Some(5.0), Some(0.0)]);

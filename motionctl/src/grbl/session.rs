@@ -791,7 +791,7 @@ impl<'a> Bridge<'a> {
                     self.motion.push_event(Out::Spindle(on))
                 }
                 Step::Item(Item::Pause) if !self.check => self.motion.push_event(Out::Pause),
-                Step::Dwell(d) if !self.check => self.motion.push_event(Out::Dwell(d)),
+                Step::Item(Item::Dwell(d)) if !self.check => self.motion.push_event(Out::Dwell(d)),
                 _ => {}
             }
         }
