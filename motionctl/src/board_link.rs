@@ -139,7 +139,7 @@ pub fn stream(
     status_ms: u16,
 ) -> Result<()> {
     let outputs = runner::Outputs::planned(outputs);
-    stream_outputs(label, parsed, program, outputs, expected, link, log_csv, yes, status_ms)
+    stream_outputs(label, parsed, program, outputs, expected, link, log_csv, yes, status_ms, None)
 }
 
 /// [`stream`] with the outputs pulled as the board takes them (a job planned while it runs).
@@ -154,6 +154,7 @@ pub fn stream_outputs(
     log_csv: Option<&Path>,
     yes: bool,
     status_ms: u16,
+    journal: Option<crate::journal::Writer>,
 ) -> Result<()> {
     if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
         bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
@@ -182,11 +183,25 @@ pub fn stream_outputs(
         progress: true,
         interrupt: Some(interrupt),
         home: link.home || link.qemu || link.sim,
+        journal,
     };
+    let journal_path = opts.journal.as_ref().map(|j| j.path().to_path_buf());
     let segments = outputs.segments();
     crate::outln!("job        {label} ({segments} segments) on {target}");
     let result = runner::run_outputs(&mut t, parsed, program, outputs, expected, opts);
-    let report = crate::qemu::finish(qemu_guard, result)?;
+    let report = crate::qemu::finish(qemu_guard, result).map_err(|e| {
+        // A journal left behind: the job can go on from where it stopped.
+        let line = journal_path
+            .filter(|p| p.exists())
+            .and_then(|_| crate::journal::read(Path::new(label)).ok().map(|j| j.line));
+        match line {
+            Some(line) => anyhow::anyhow!(
+                "{e:#}; the job can go on from line {line}, where it stopped: home the board, \
+                 then `motionctl run {label} --resume`"
+            ),
+            None => e,
+        }
+    })?;
     crate::out!("{}", report.text(&axes));
     crate::outln!("{}", report.machine_line());
     if !report.ok() {

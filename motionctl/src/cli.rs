@@ -38,6 +38,13 @@ pub enum Cmd {
         /// Board status report period, ms (0 = off; else >= 10).
         #[arg(long, value_name = "MS", default_value_t = runner::DEFAULT_STATUS_PERIOD_MS)]
         status_ms: u16,
+        /// G-code: go on from where the last run of this file stopped (its `FILE.journal`):
+        /// Z up to the safe height, across, Z down, then the program from that line.
+        #[arg(long, conflicts_with = "resume_line")]
+        resume: bool,
+        /// G-code: run from this line (as --resume, the line given).
+        #[arg(long, value_name = "LINE")]
+        resume_line: Option<usize>,
     },
     /// Polar contouring (Fahim): digitize contours into step-event streams, dump streams,
     /// place the machine pole.
@@ -208,8 +215,19 @@ fn is_gcode(args: &JobArgs) -> Result<bool> {
 /// The first pass over a G-code job, streamed: every error, the plan and the host model's run,
 /// in bounded memory (nothing of the job kept but counts). Warnings are printed.
 pub fn check_gcode(args: &JobArgs) -> Result<(Job, gcode::stream::Checked)> {
+    check_gcode_from(args, None)
+}
+
+/// [`check_gcode`] of the job run from `resume_line` (with the approach to it).
+pub fn check_gcode_from(
+    args: &JobArgs,
+    resume_line: Option<usize>,
+) -> Result<(Job, gcode::stream::Checked)> {
     let machine = gcode_machine(&args.job, args.machine.as_deref())?;
-    let items = gcode::stream::items(&args.job, &machine)?;
+    let mut items = gcode::stream::items(&args.job, &machine)?;
+    if let Some(line) = resume_line {
+        items = items.resume_from(gcode::resume::ResumeAt::new(&machine, line)?);
+    }
     // A bar for long files only; indicatif draws nothing when stderr is not a terminal.
     let long = std::fs::metadata(&args.job).is_ok_and(|m| m.len() > 1 << 20);
     let bar = if long {
@@ -226,6 +244,9 @@ pub fn check_gcode(args: &JobArgs) -> Result<(Job, gcode::stream::Checked)> {
     let checked = gcode::stream::check_and_plan(items, |done| bar.set_position(done as u64));
     bar.finish_and_clear();
     let checked = accepted(args, checked)?;
+    if let Some(line) = resume_line.filter(|_| checked.totals.segments == 0) {
+        bail!("{}: nothing to resume: no move at or after line {line}", args.job.display());
+    }
     print_warnings(args, &checked.warnings, checked.warnings_omitted);
     Ok((Job { machine, items: Vec::new(), feed_commands: Vec::new() }, checked))
 }
@@ -340,8 +361,12 @@ pub fn execute(cli: Cli) -> Result<()> {
             crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
             Ok(())
         }
-        Cmd::Run { job, link, log_csv, yes, status_ms } => {
-            run_job(&job, &link, log_csv.as_deref(), yes, status_ms)
+        Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line } => {
+            let from = match (resume, resume_line) {
+                (true, _) => Some(crate::journal::read(&job.job)?.line),
+                (false, line) => line,
+            };
+            run_job(&job, &link, log_csv.as_deref(), yes, status_ms, from)
         }
         Cmd::Check(args) => crate::gcode::cli::check(args),
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
@@ -371,9 +396,13 @@ fn run_job(
     log_csv: Option<&Path>,
     yes: bool,
     status_ms: u16,
+    resume_line: Option<usize>,
 ) -> Result<()> {
     if is_gcode(job)? {
-        return run_gcode(job, link, log_csv, yes, status_ms);
+        return run_gcode(job, link, log_csv, yes, status_ms, resume_line);
+    }
+    if resume_line.is_some() {
+        bail!("--resume and --resume-line take G-code jobs (a TOML job runs from its start)");
     }
     // Check the whole job, and learn where it must end, before touching the link.
     let (parsed, program, summary) = plan_job(job)?;
@@ -397,14 +426,27 @@ fn run_gcode(
     log_csv: Option<&Path>,
     yes: bool,
     status_ms: u16,
+    resume_line: Option<usize>,
 ) -> Result<()> {
-    let (parsed, checked) = check_gcode(job)?;
+    let (parsed, checked) = check_gcode_from(job, resume_line)?;
     let label = job.job.display().to_string();
     let segments = u32::try_from(checked.totals.segments).map_err(|_| {
         anyhow!("{label}: {} segments, more than a run counts", checked.totals.segments)
     })?;
-    let items = gcode::stream::items(&job.job, &parsed.machine)?;
+    let mut items = gcode::stream::items(&job.job, &parsed.machine)?;
+    if let Some(line) = resume_line {
+        let at = gcode::resume::ResumeAt::new(&parsed.machine, line)?;
+        let z = parsed.machine.axis_index("Z").map(|i| &parsed.machine.axes[i]);
+        crate::outln!(
+            "resume     from line {line}: Z up to {:.3} mm, across, down at {:.0} mm/min, then \
+             the program (the machine must stand at the job's origin: home it first)",
+            z.map_or(0.0, |a| a.max_mm),
+            z.map_or(0.0, |a| a.max_rate_mm_s * 60.0 * gcode::resume::PLUNGE_FRACTION_OF_Z_MAX)
+        );
+        items = items.resume_from(at);
+    }
     let outputs = gcode::stream::outputs(items, &checked, &label, segments);
+    let journal = crate::journal::Writer::new(&job.job, segments)?;
     let mut expected = [0i64; motion::MAX_AXES];
     expected.copy_from_slice(&checked.report.positions[..motion::MAX_AXES]);
     board_link::stream_outputs(
@@ -417,6 +459,7 @@ fn run_gcode(
         log_csv,
         yes,
         status_ms,
+        Some(journal),
     )
 }
 

@@ -14,6 +14,7 @@ pub mod fourier;
 pub mod gcode;
 pub mod grbl;
 pub mod job;
+pub mod journal;
 pub mod link;
 pub mod milling;
 pub mod noise;

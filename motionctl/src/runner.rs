@@ -46,6 +46,8 @@ pub struct RunOptions {
     pub interrupt: Option<Arc<AtomicBool>>,
     /// Home the board first if it is not homed (else such a board refuses the job).
     pub home: bool,
+    /// Keep the run journal (the line executing, for `run --resume`).
+    pub journal: Option<crate::journal::Writer>,
 }
 
 impl Default for RunOptions {
@@ -59,6 +61,7 @@ impl Default for RunOptions {
             progress: false,
             interrupt: None,
             home: false,
+            journal: None,
         }
     }
 }
@@ -1059,6 +1062,10 @@ pub fn run_outputs(
 
         whereabouts.update(job_done(&latest));
         let (line, eta) = whereabouts.at(Rate::from_bits(latest.override_bits).to_num::<f64>());
+        if let Some(warning) = opts.journal.as_mut().and_then(|j| j.update(line, job_done(&latest)))
+        {
+            say(&progress, &warning);
+        }
         progress.update(report.acked as u64, job_done(&latest) as u64, Some(&latest), line, eta);
 
         // Done?
@@ -1140,6 +1147,11 @@ pub fn run_outputs(
     }
     report.min_credits = report.min_credits.min(report.max_credits);
     opts.csv = None;
+    if report.ok() {
+        if let Some(j) = &opts.journal {
+            j.finished();
+        }
+    }
     Ok(report)
 }
 

@@ -107,7 +107,7 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
     assert_eq!(plan::net_steps(&segs)[0], p.final_steps[0]);
     let s = plan::simulate(&p, |_| {}).unwrap();
     assert!(s.finished);
-    assert_eq!(s.report.positions[0], 30 * 80);
+    assert_eq!(s.report.positions[0], 32 * 80);
 }
 
 #[test]

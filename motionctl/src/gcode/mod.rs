@@ -9,6 +9,7 @@
 //! as a warning and not executed; a dwell (G4) is a stop at rest the runner times.
 
 pub mod cli;
+pub mod resume;
 pub mod stream;
 
 use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};

@@ -75,6 +75,9 @@ pub struct Items<'m, S> {
     convert_error: Option<ConvertError>,
     failed: bool,
     moves: usize,
+    /// Running from a line: the filter, and what it gave that is not handed out yet.
+    resume: Option<super::resume::Resume>,
+    resumed: std::collections::VecDeque<ProgramItem>,
 }
 
 /// The items of the G-code file `path` for `machine`.
@@ -111,7 +114,20 @@ impl<'m, S: LineSource> Items<'m, S> {
             warnings_total: 0,
             convert_error: None,
             moves: 0,
+            resume: None,
+            resumed: std::collections::VecDeque::new(),
         }
+    }
+
+    /// The job from `at`'s line on, with the approach to it ([`super::resume`]).
+    pub fn resume_from(mut self, at: super::resume::ResumeAt) -> Self {
+        self.resume = Some(super::resume::Resume::new(at));
+        self
+    }
+
+    /// With [`Items::resume_from`]: whether the resume line was reached (check once drained).
+    pub fn resume_reached(&self) -> bool {
+        self.resume.as_ref().is_none_or(|r| r.started())
     }
 
     fn error(&mut self, d: Diagnostic) {
@@ -133,6 +149,10 @@ impl<'m, S: LineSource> Items<'m, S> {
 
     /// Where the items so far leave each axis, steps from the start.
     pub fn final_steps(&self) -> [i64; MAX_AXES] {
+        // Resuming past the last move: nothing was handed out, the machine stays at the origin.
+        if !self.resume_reached() {
+            return [0; MAX_AXES];
+        }
         self.stepper.as_ref().map_or([0; MAX_AXES], |s| s.final_steps())
     }
 
@@ -187,11 +207,22 @@ impl<S: LineSource> Iterator for Items<'_, S> {
     /// `None` once the rest of the file has been read for its errors.
     fn next(&mut self) -> Option<Self::Item> {
         loop {
+            if let Some(p) = self.resumed.pop_front() {
+                self.moves += matches!(p, ProgramItem::Move { .. }) as usize;
+                return Some(Ok(p));
+            }
             if self.next_pending < self.pending.len() {
                 let i = self.next_pending;
                 self.next_pending += 1;
                 let Ok(stepper) = self.stepper.as_mut() else { continue };
                 match stepper.item(&self.pending[i]) {
+                    Ok(Some(p)) if self.resume.is_some() => {
+                        let (pos, cfg) = (stepper.final_steps(), *stepper.config());
+                        if let Some(r) = self.resume.as_mut() {
+                            r.filter(p, pos, &cfg, &mut self.resumed);
+                        }
+                        continue;
+                    }
                     Ok(Some(p)) => {
                         self.moves += matches!(p, ProgramItem::Move { .. }) as usize;
                         return Some(Ok(p));
