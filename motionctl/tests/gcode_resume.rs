@@ -189,9 +189,7 @@ fn a_job_interrupted_on_the_board_goes_on_with_resume_and_ends_where_the_job_end
     // A journal for another version of the file is refused.
     std::fs::write(
         &journal,
-        format!(
-            "version = 1\njob = \"x\"\njob_crc = 1\nline = 7\nsegments_done = 1\nsegments = 9\n"
-        ),
+        "version = 1\njob = \"x\"\njob_crc = 1\nline = 7\nsegments_done = 1\nsegments = 9\n",
     )
     .unwrap();
     let out = run(&file, &machine, &["--resume"]);
