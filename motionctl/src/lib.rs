@@ -28,4 +28,5 @@ pub mod runner;
 pub mod sample_job;
 pub mod sim_board;
 pub mod transport;
+pub mod units;
 pub mod wire;

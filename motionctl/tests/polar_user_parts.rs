@@ -197,3 +197,73 @@ fn a_users_part_plays_on_the_simulated_board_in_its_cut_time() {
     assert!((board - stream).abs() < 0.05, "board {board} s vs stream {stream} s");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_same_part_in_millimetres_gives_the_same_stream() {
+    let inch = json(&[
+        "polar",
+        "digitize",
+        "limacon:2,1.2",
+        "--tool-radius",
+        "0.1",
+        "--vt",
+        "0.75",
+        "--pole-c",
+        "5.1935",
+        "--pole-beta",
+        "3.6443",
+    ]);
+    let mm = json(&[
+        "polar",
+        "digitize",
+        "limacon:50.8,30.48",
+        "--tool-radius",
+        "2.54",
+        "--vt",
+        "19.05",
+        "--pole-c",
+        "131.9149",
+        "--pole-beta",
+        "3.6443",
+        "--units",
+        "mm",
+    ]);
+    assert_eq!(mm["units"], "mm");
+    assert_eq!((&mm["events"], &mm["radial_events"]), (&inch["events"], &inch["radial_events"]));
+    assert!((num(&mm, "duration_s") - num(&inch, "duration_s")).abs() < 1e-3, "{mm} vs {inch}");
+    for key in ["contact_path", "path", "min_radius_of_curvature"] {
+        let (a, b) = (num(&mm, &format!("{key}_mm")), num(&inch, &format!("{key}_in")));
+        assert!((a / (b * 25.4) - 1.0).abs() < 1e-9, "{key}: {a} mm vs {b} in");
+    }
+    // The radial resolution stays the machine's (0.001 in) unless --dr is given, in mm then.
+    let fine = json(&[
+        "polar",
+        "digitize",
+        "circle:50",
+        "--vt",
+        "10",
+        "--pole-c",
+        "200",
+        "--pole-beta",
+        "4.5",
+        "--units",
+        "mm",
+        "--dr",
+        "0.0127",
+    ]);
+    let coarse = json(&[
+        "polar",
+        "digitize",
+        "circle:50",
+        "--vt",
+        "10",
+        "--pole-c",
+        "200",
+        "--pole-beta",
+        "4.5",
+        "--units",
+        "mm",
+    ]);
+    let (f, c) = (num(&fine, "radial_events"), num(&coarse, "radial_events"));
+    assert!((f / c - 2.0).abs() < 0.01, "half the dR, twice the radial events: {f} vs {c}");
+}

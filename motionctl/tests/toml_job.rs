@@ -163,7 +163,7 @@ fn every_error_names_its_field() {
         (
             "spindle = \"on\"",
             "spindle = \"on\"\nrapid = true",
-            &["moves[1]: `spindle` and `pause` entries take no"],
+            &["moves[1]: `spindle`, `pause` and `dwell_s` entries take no"],
         ),
         ("pause = true", "pause = false", &["moves[8].pause: only `pause = true`"]),
         (

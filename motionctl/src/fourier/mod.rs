@@ -32,7 +32,7 @@ pub mod profile;
 pub mod run;
 pub mod table;
 pub mod table_file;
-pub mod units;
+pub use crate::units;
 
 pub use accurate::{AccurateOptions, ToolNoseModel};
 pub use fit::{CartesianGrid, Harmonics};

@@ -2,11 +2,12 @@
 //! optimise the machine pole. Lengths in inches, angles in radians (the thesis's listing units).
 //! The lead wires [`PolarCmd`] into the main command line.
 
-use super::contour::{serpentine, witch, Circle, Contour, Limacon, Polar, Spline};
+use super::contour::{serpentine, witch, Circle, Contour, Limacon, Polar, Scaled, Spline};
 use super::digitize::{digitize, DigitizeError, FeedAt, Setup};
 use super::pole::{self, Constraints, HookeJeeves, Pole, MM2_PER_IN2};
 use super::work_area::WorkArea;
 use super::{Resolution, DR_IN, DTHETA_RAD};
+use crate::units::Units;
 use anyhow::{bail, Context};
 use motion::polar::playback::SizeScale;
 use motion::polar::stream::BlockEncoder;
@@ -90,9 +91,10 @@ impl From<FeedAtArg> for FeedAt {
 /// Machine resolutions and pole options shared by the subcommands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ResArgs {
-    /// Radial resolution dR, in.
-    #[arg(long, default_value_t = DR_IN)]
-    pub dr: f64,
+    /// Radial resolution dR, in --units where the command has them, else in [default: the
+    /// machine's 0.001 in].
+    #[arg(long)]
+    pub dr: Option<f64>,
     /// Angular resolution dTheta, rad (default 2 pi / 16000).
     #[arg(long, default_value_t = DTHETA_RAD)]
     pub dtheta: f64,
@@ -100,10 +102,16 @@ pub struct ResArgs {
 
 impl ResArgs {
     fn res(&self) -> anyhow::Result<Resolution> {
-        if !(self.dr > 0.0 && self.dtheta > 0.0) {
-            bail!("resolutions must be > 0");
+        self.res_in(Units::In)
+    }
+
+    /// With `--dr` given in `units`.
+    fn res_in(&self, units: Units) -> anyhow::Result<Resolution> {
+        let dr_in = self.dr.map_or(DR_IN, |d| units.to_in(d));
+        if !(dr_in > 0.0 && self.dtheta > 0.0) {
+            bail!("resolutions must be > 0 (--dr {:?}, --dtheta {})", self.dr, self.dtheta);
         }
-        Ok(Resolution { dr_in: self.dr, dtheta_rad: self.dtheta })
+        Ok(Resolution { dr_in, dtheta_rad: self.dtheta })
     }
 }
 
@@ -112,20 +120,24 @@ impl ResArgs {
 pub enum PolarCmd {
     /// Digitize a contour into timed single-axis step events and write the stream file.
     Digitize {
-        /// circle:A | limacon:B,A | witch:A,X0,X1 | serpentine:A,B,X0,X1 | points.csv (in).
+        /// circle:A | limacon:B,A | witch:A,X0,X1 | serpentine:A,B,X0,X1 | points.csv (lengths
+        /// in --units).
         contour: String,
-        /// Machine pole distance C from the contour pole, in (Table 4.1's C).
+        /// Machine pole distance C from the contour pole (Table 4.1's C), in --units.
         #[arg(long)]
         pole_c: f64,
         /// Machine pole angle beta in the contour frame, rad (Table 4.1's beta).
         #[arg(long)]
         pole_beta: f64,
-        /// Tool radius, in.
+        /// Tool radius, in --units.
         #[arg(long, default_value_t = 0.0)]
         tool_radius: f64,
-        /// Tangential speed Vt, in/s, held where --feed-at says.
+        /// Tangential speed Vt, --units per second, held where --feed-at says.
         #[arg(long)]
         vt: f64,
+        /// Unit of every length given and printed: `in` (the thesis's) or `mm`; --dr too.
+        #[arg(long, value_enum, default_value_t = Units::In)]
+        units: Units,
         /// Where Vt is held: `contact` (the cutting point on the contour: the thesis's Vt) or
         /// `centre` (the tool centre, a machine's programmed feed).
         #[arg(long, value_enum, default_value_t = FeedAtArg::Contact)]
@@ -415,7 +427,7 @@ fn work_area(machine: Option<&std::path::Path>) -> anyhow::Result<WorkArea> {
 
 /// For a contour that leaves the work area: a machine pole (from the pole optimiser, checked by
 /// digitizing with it) that keeps it inside, as the flags to give, or why there is none.
-fn suggest_pole(contour: &dyn Contour, setup: &Setup) -> String {
+fn suggest_pole(contour: &dyn Contour, setup: &Setup, units: Units) -> String {
     // The contour must stay a tool radius inside for the tool centre to be inside.
     let opt = setup.area.inset(setup.tool_radius_in).and_then(|inner| {
         pole::optimise(contour, &setup.res, Constraints::WorkArea(inner), &HookeJeeves::default())
@@ -428,7 +440,7 @@ fn suggest_pole(contour: &dyn Contour, setup: &Setup) -> String {
         Some(o) => format!(
             "a pole that fits: --pole-c {:.4} --pole-beta {:.4} (C {:.2} mm; least area error \
              F1 {:.4})",
-            o.pole.c_in,
+            units.from_in(o.pole.c_in),
             o.pole.beta_rad,
             o.pole.c_in * 25.4,
             o.f1.f1
@@ -448,6 +460,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             pole_beta,
             tool_radius,
             vt,
+            units,
             feed_at,
             res,
             tick_hz,
@@ -457,24 +470,25 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             plot,
             json,
         } => {
-            let c = parse_contour(&contour)?;
+            let c = Scaled::new(parse_contour(&contour)?, units.to_in(1.0));
             let area = work_area(machine.as_deref())?;
             let (pole_r_in, pole_angle_rad) =
-                Pole { c_in: pole_c, beta_rad: pole_beta }.digitizer_pole();
+                Pole { c_in: units.to_in(pole_c), beta_rad: pole_beta }.digitizer_pole();
+            let res = res.res_in(units)?;
             let setup = Setup {
                 pole_r_in,
                 pole_angle_rad,
-                tool_radius_in: tool_radius,
-                vt_in_per_s: vt,
+                tool_radius_in: units.to_in(tool_radius),
+                vt_in_per_s: units.to_in(vt),
                 feed_at: feed_at.into(),
-                res: res.res()?,
+                res,
                 tick_hz,
                 cap_speed: !no_cap,
                 area,
             };
-            let d = match digitize(c.as_ref(), &setup) {
+            let d = match digitize(&c, &setup) {
                 Err(e @ DigitizeError::OutsideWorkArea { .. }) => {
-                    bail!("{e}; {}", suggest_pole(c.as_ref(), &setup))
+                    bail!("{e}; {}", suggest_pole(&c, &setup, units))
                 }
                 r => r?,
             };
@@ -491,60 +505,66 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 FeedAt::Contact => "contact",
                 FeedAt::Centre => "centre",
             };
+            let u = units.name();
+            let len = |v_in: f64| units.from_in(v_in);
             if json {
-                crate::outln!(
-                    "{{\"events\":{},\"radial_events\":{radial},\"angular_events\":{},\
-                     \"path_in\":{:.6},\"contact_path_in\":{:.6},\"feed_at\":\"{}\",\
-                     \"duration_s\":{duration_s:.6},\"expected_s\":{expected_s:.6},\
-                     \"vt_in_per_s\":{:.6},\
-                     \"start_r_in\":{start_r_in:.6},\"start_theta_deg\":{start_theta_deg:.6},\
-                     \"min_radius_of_curvature_in\":{:.6},\"warnings\":{}}}",
-                    d.events.len(),
-                    d.events.len() - radial,
-                    d.length_in,
-                    d.contact_length_in,
-                    feed_name,
-                    d.vt_in_per_s,
-                    d.min_rho_in,
-                    d.warnings.len()
-                );
+                let mut v = serde_json::json!({
+                    "units": u,
+                    "events": d.events.len(),
+                    "radial_events": radial,
+                    "angular_events": d.events.len() - radial,
+                    "feed_at": feed_name,
+                    "duration_s": duration_s,
+                    "expected_s": expected_s,
+                    "start_theta_deg": start_theta_deg,
+                    "warnings": d.warnings.len(),
+                });
+                for (key, v_in) in [
+                    ("path", d.length_in),
+                    ("contact_path", d.contact_length_in),
+                    ("start_r", start_r_in),
+                    ("min_radius_of_curvature", d.min_rho_in),
+                ] {
+                    v[format!("{key}_{u}")] = serde_json::json!(len(v_in));
+                }
+                v[format!("vt_{u}_per_s")] = serde_json::json!(len(d.vt_in_per_s));
+                crate::outln!("{v}");
             } else {
                 crate::outln!(
-                    "start      r {start_r_in:.4} in, theta {start_theta_deg:.3} deg (tool centre \
-                     about the machine pole)"
+                    "start      r {:.4} {u}, theta {start_theta_deg:.3} deg (tool centre about the \
+                     machine pole)",
+                    len(start_r_in)
                 );
-            }
-            let text = !json;
-            if text {
                 crate::outln!(
-                    "{} events ({radial} radial, {} angular), min radius of curvature {:.4} in",
+                    "{} events ({radial} radial, {} angular), min radius of curvature {:.4} {u}",
                     d.events.len(),
                     d.events.len() - radial,
-                    d.min_rho_in
+                    len(d.min_rho_in)
                 );
                 crate::outln!(
-                    "path       contact {:.4} in, tool centre {:.4} in; Vt {:.4} in/s held at the \
-                     {}",
-                    d.contact_length_in,
-                    d.length_in,
-                    d.vt_in_per_s,
+                    "path       contact {:.4} {u}, tool centre {:.4} {u}; Vt {:.4} {u}/s held at \
+                     the {}",
+                    len(d.contact_length_in),
+                    len(d.length_in),
+                    len(d.vt_in_per_s),
                     if setup.feed_at == FeedAt::Contact { "contact point" } else { "tool centre" }
                 );
                 crate::outln!(
-                    "time       {duration_s:.4} s ({:.4} in / {:.4} in/s = {expected_s:.4} s)",
-                    d.feed_length_in,
-                    d.vt_in_per_s
+                    "time       {duration_s:.4} s ({:.4} {u} / {:.4} {u}/s = {expected_s:.4} s)",
+                    len(d.feed_length_in),
+                    len(d.vt_in_per_s)
                 );
             }
             for w in &d.warnings {
                 eprintln!("motionctl: warning: {w}");
             }
             if let Some(p) = &plot {
+                let u = units.name();
                 let title = format!(
-                    "polar digitize {contour}: tool radius {tool_radius} in, Vt {vt} in/s, pole C \
-                     {pole_c} in at beta {pole_beta} rad"
+                    "polar digitize {contour} ({u}): tool radius {tool_radius} {u}, Vt {vt} {u}/s, \
+                     pole C {pole_c} {u} at beta {pole_beta} rad"
                 );
-                let w = super::figure::digitized_figure(c.as_ref(), &setup, &d, &title).write(p)?;
+                let w = super::figure::digitized_figure(&c, &setup, &d, &title).write(p)?;
                 eprintln!(
                     "motionctl: wrote {}{}",
                     p.display(),

@@ -208,3 +208,29 @@ impl Contour for Spline {
         false
     }
 }
+
+/// A contour scaled by `k` about its pole (a user's contour in mm, with `k` = 1 / 25.4, is the
+/// same contour in the digitizer's inches). The parameter is unchanged.
+pub struct Scaled {
+    inner: Box<dyn Contour>,
+    k: f64,
+}
+
+impl Scaled {
+    pub fn new(inner: Box<dyn Contour>, k: f64) -> Self {
+        Scaled { inner, k }
+    }
+}
+
+impl Contour for Scaled {
+    fn jet(&self, u: f64) -> Jet {
+        let k = self.k;
+        self.inner.jet(u).map(|v| [v[0] * k, v[1] * k])
+    }
+    fn range(&self) -> (f64, f64) {
+        self.inner.range()
+    }
+    fn closed(&self) -> bool {
+        self.inner.closed()
+    }
+}

@@ -1,7 +1,8 @@
-//! Length units of the turning commands: the library computes in inches (the thesis's unit and
-//! the board's: X in inches Q24, Z in inches Q32); a user may give and read everything in mm.
+//! Length units of the commands that work in inches (turning and polar contouring, the theses'
+//! unit and, for turning, the board's: X in inches Q24, Z in inches Q32): `--units in|mm`, so a
+//! user may give and read everything in mm.
 
-/// The unit of every length a turning command takes and prints.
+/// The unit of every length a command takes and prints.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Units {
     #[default]
