@@ -244,8 +244,9 @@ pub enum WireCmd {
         plan: WirePlanArgs,
         #[command(flatten)]
         link: crate::board_link::LinkArgs,
-        /// Write every board status report to this CSV file (plain-segment runs only).
-        #[arg(long, value_name = "FILE")]
+        /// Write every board status report to this CSV file (plain-segment runs only; also
+        /// `--log-csv`).
+        #[arg(long = "csv", alias = "log-csv", value_name = "FILE")]
         log_csv: Option<PathBuf>,
         /// Run the job as plain segments even on a board with wire jobs (no stall handling).
         #[arg(long)]

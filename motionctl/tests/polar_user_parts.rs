@@ -267,3 +267,25 @@ fn the_same_part_in_millimetres_gives_the_same_stream() {
     let (f, c) = (num(&fine, "radial_events"), num(&coarse, "radial_events"));
     assert!((f / c - 2.0).abs() < 0.01, "half the dR, twice the radial events: {f} vs {c}");
 }
+
+#[test]
+fn the_pole_search_answers_in_json_with_the_flags_to_use() {
+    let v = json(&["polar", "pole", "limacon:3,2"]);
+    let (c, beta) = (num(&v, "pole_c_in"), num(&v, "pole_beta_rad"));
+    assert_eq!(v["in_work_area"], true, "{v}");
+    assert!((num(&v, "pole_c_mm") / (c * 25.4) - 1.0).abs() < 1e-12);
+    // The pole it finds digitizes the contour inside the work area.
+    let (c, beta) = (format!("{c:.4}"), format!("{beta:.4}"));
+    let d = json(&[
+        "polar",
+        "digitize",
+        "limacon:3,2",
+        "--vt",
+        "0.5",
+        "--pole-c",
+        &c,
+        "--pole-beta",
+        &beta,
+    ]);
+    assert!(num(&d, "events") > 0.0, "{d}");
+}

@@ -184,6 +184,9 @@ pub enum PolarCmd {
         /// Machine file whose `[polar]` table gives the work area (default: Fahim's machine).
         #[arg(long, value_name = "FILE")]
         machine: Option<std::path::PathBuf>,
+        /// Print the result as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Play a stream file on the board as an event job (through the host link), then check
     /// the events fired and the final (theta, r) steps against the host model.
@@ -608,7 +611,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
         PolarCmd::Copy { link, size, teach, template, seconds } => {
             run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds)
         }
-        PolarCmd::Pole { contour, res, box_only, machine } => {
+        PolarCmd::Pole { contour, res, box_only, machine, json } => {
             let c = parse_contour(&contour)?;
             let res = res.res()?;
             let work = work_area(machine.as_deref())?;
@@ -621,6 +624,23 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 bail!("no feasible pole found for {contour}");
             };
             let area = pole::area_error_in2(c.as_ref(), o.pole.xy(), &res, 4);
+            let fits = pole::check(c.as_ref(), o.pole.xy(), &work);
+            if json {
+                let v = serde_json::json!({
+                    "pole_c_in": o.pole.c_in,
+                    "pole_c_mm": o.pole.c_in * 25.4,
+                    "pole_beta_rad": o.pole.beta_rad,
+                    "f1": o.f1.f1,
+                    "f_dif": o.f1.f_dif,
+                    "f_sum": o.f1.f_sum,
+                    "evaluations": o.evals,
+                    "area_error_in2": area,
+                    "area_error_mm2": area * MM2_PER_IN2,
+                    "in_work_area": fits.is_ok(),
+                });
+                crate::outln!("{v}");
+                return Ok(());
+            }
             crate::outln!(
                 "pole C = {:.4} in ({:.3} cm), beta = {:.4} rad; F1 = {:.5} (F_dif {:.1}, F_sum {:.1}, {} evaluations)",
                 o.pole.c_in,
@@ -635,7 +655,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                 "area error {:.6} in^2 = {:.3} mm^2; constraints: {:?}",
                 area,
                 area * MM2_PER_IN2,
-                pole::check(c.as_ref(), o.pole.xy(), &work)
+                fits
             );
             crate::outln!(
                 "digitize with --pole-c {:.4} --pole-beta {:.4} (work area {work})",
