@@ -75,6 +75,10 @@ pub enum Cmd {
         /// of the time on a long file); the summary then has the planned figures only.
         #[arg(long)]
         no_model: bool,
+        /// Draw the programmed toolpath (3-D and from above, rapids apart from feeds, mm):
+        /// FILE.svg or FILE.png.
+        #[arg(long, value_name = "FILE")]
+        plot: Option<PathBuf>,
     },
     /// Show the board's motion state.
     Status {
@@ -343,23 +347,42 @@ pub fn summary_text(path: &Path, job: &Job, program: &Program, s: &Summary) -> S
     plan::summary_text(path, &job.machine, program.commands.len(), &s.totals(), &s.report)
 }
 
+/// `plan --plot FILE`: the job's programmed toolpath (the job was checked already).
+fn plot_toolpath(args: &JobArgs, plot: Option<&Path>) -> Result<()> {
+    let Some(p) = plot else { return Ok(()) };
+    let job = load_job(&args.job, args.format, args.machine.as_deref())?;
+    let title = format!(
+        "plan {}: toolpath on {} axes ({})",
+        args.job.display(),
+        job.machine.axes.len(),
+        job.machine.axis_names()
+    );
+    let w = crate::plan_figure::toolpath_figure(&job.machine, &job.items, &title).write(p)?;
+    eprintln!(
+        "motionctl: wrote {}{}",
+        p.display(),
+        if w == crate::plot::Written::Unlabelled { " (no system font: unlabelled)" } else { "" }
+    );
+    Ok(())
+}
+
 /// Runs a parsed command line.
 pub fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Cmd::Plan { job, no_model: true } => {
+        Cmd::Plan { job, no_model: true, plot } => {
             crate::out!("{}", plan_without_model(&job)?);
-            Ok(())
+            plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Plan { job, .. } if is_gcode(&job)? => {
+        Cmd::Plan { job, plot, .. } if is_gcode(&job)? => {
             let (parsed, c) = check_gcode(&job)?;
             let text = plan::summary_text(&job.job, &parsed.machine, 0, &c.totals, &c.report);
             crate::out!("{text}");
-            Ok(())
+            plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Plan { job, .. } => {
+        Cmd::Plan { job, plot, .. } => {
             let (parsed, program, summary) = plan_job(&job)?;
             crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
-            Ok(())
+            plot_toolpath(&job, plot.as_deref())
         }
         Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line } => {
             let from = match (resume, resume_line) {

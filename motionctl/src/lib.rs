@@ -20,6 +20,7 @@ pub mod milling;
 pub mod noise;
 pub mod out;
 pub mod plan;
+pub mod plan_figure;
 pub mod plot;
 pub mod polar;
 pub mod progress;
