@@ -4,6 +4,8 @@
 use crate::job::{Feed, Item, Machine, Target};
 use crate::plot::{Figure, Panel, Panel3d, Series};
 
+type Polyline = Vec<[f64; 3]>;
+
 /// Most points drawn; a longer path is thinned evenly (every k-th point of each polyline).
 const MAX_POINTS: usize = 200_000;
 
@@ -17,7 +19,8 @@ pub fn toolpath_figure(machine: &Machine, items: &[Item], title: &str) -> Figure
         [get(ix), get(iy), get(iz)]
     };
     // Polylines of consecutive moves of one kind.
-    let (mut feeds, mut rapids): (Vec<Vec<[f64; 3]>>, Vec<Vec<[f64; 3]>>) = (vec![], vec![]);
+    let mut feeds: Vec<Polyline> = Vec::new();
+    let mut rapids: Vec<Polyline> = Vec::new();
     let mut last_rapid: Option<bool> = None;
     let mut path: Vec<[f64; 3]> = vec![at(&pos)];
     for item in items {
