@@ -124,9 +124,19 @@ impl LinkArgs {
     }
 }
 
+/// How a streamed run reports: the status CSV, whether to wait for the operator at a pause,
+/// the status period, the summary as JSON, the run journal.
+#[derive(Default)]
+pub struct Reporting<'a> {
+    pub log_csv: Option<&'a Path>,
+    pub yes: bool,
+    pub status_ms: u16,
+    pub json: bool,
+    pub journal: Option<crate::journal::Writer>,
+}
+
 /// Streams planned `outputs` to the board and checks the result against `expected` (the host
 /// model's final positions): the end of `motionctl run` and of the capability `run` commands.
-#[allow(clippy::too_many_arguments)]
 pub fn stream(
     label: &str,
     parsed: &Job,
@@ -134,16 +144,13 @@ pub fn stream(
     outputs: &[plan::Output],
     expected: &[i64; motion::MAX_AXES],
     link: &LinkArgs,
-    log_csv: Option<&Path>,
-    yes: bool,
-    status_ms: u16,
+    how: Reporting<'_>,
 ) -> Result<()> {
     let outputs = runner::Outputs::planned(outputs);
-    stream_outputs(label, parsed, program, outputs, expected, link, log_csv, yes, status_ms, None)
+    stream_outputs(label, parsed, program, outputs, expected, link, how)
 }
 
 /// [`stream`] with the outputs pulled as the board takes them (a job planned while it runs).
-#[allow(clippy::too_many_arguments)]
 pub fn stream_outputs(
     label: &str,
     parsed: &Job,
@@ -151,11 +158,9 @@ pub fn stream_outputs(
     outputs: runner::Outputs<'_>,
     expected: &[i64; motion::MAX_AXES],
     link: &LinkArgs,
-    log_csv: Option<&Path>,
-    yes: bool,
-    status_ms: u16,
-    journal: Option<crate::journal::Writer>,
+    how: Reporting<'_>,
 ) -> Result<()> {
+    let Reporting { log_csv, yes, status_ms, json, journal } = how;
     if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
         bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
     }
@@ -187,7 +192,12 @@ pub fn stream_outputs(
     };
     let journal_path = opts.journal.as_ref().map(|j| j.path().to_path_buf());
     let segments = outputs.segments();
-    crate::outln!("job        {label} ({segments} segments) on {target}");
+    let intro = format!("job        {label} ({segments} segments) on {target}");
+    if json {
+        eprintln!("motionctl: {}", intro.split_whitespace().collect::<Vec<_>>().join(" "));
+    } else {
+        crate::outln!("{intro}");
+    }
     let result = runner::run_outputs(&mut t, parsed, program, outputs, expected, opts);
     let report = crate::qemu::finish(qemu_guard, result).map_err(|e| {
         // A journal left behind: the job can go on from where it stopped.
@@ -202,13 +212,19 @@ pub fn stream_outputs(
             None => e,
         }
     })?;
-    crate::out!("{}", report.text(&axes));
-    crate::outln!("{}", report.machine_line());
+    if json {
+        crate::outln!("{}", report.json(&axes));
+    } else {
+        crate::out!("{}", report.text(&axes));
+        crate::outln!("{}", report.machine_line());
+    }
     if !report.ok() {
         bail!("verification failed: {}", report.problems.join("; "));
     }
-    crate::outln!(
-        "result     OK: every segment executed once, in order; positions match the host model"
-    );
+    if !json {
+        crate::outln!(
+            "result     OK: every segment executed once, in order; positions match the host model"
+        );
+    }
     Ok(())
 }

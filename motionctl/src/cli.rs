@@ -45,6 +45,9 @@ pub enum Cmd {
         /// G-code: run from this line (as --resume, the line given).
         #[arg(long, value_name = "LINE")]
         resume_line: Option<usize>,
+        /// Print the summary as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Polar contouring (Fahim): digitize contours into step-event streams, dump streams,
     /// place the machine pole.
@@ -384,12 +387,19 @@ pub fn execute(cli: Cli) -> Result<()> {
             crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
             plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line } => {
+        Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line, json } => {
             let from = match (resume, resume_line) {
                 (true, _) => Some(crate::journal::read(&job.job)?.line),
                 (false, line) => line,
             };
-            run_job(&job, &link, log_csv.as_deref(), yes, status_ms, from)
+            let how = board_link::Reporting {
+                log_csv: log_csv.as_deref(),
+                yes,
+                status_ms,
+                json,
+                journal: None,
+            };
+            run_job(&job, &link, how, from)
         }
         Cmd::Check(args) => crate::gcode::cli::check(args),
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
@@ -416,13 +426,11 @@ pub fn execute(cli: Cli) -> Result<()> {
 fn run_job(
     job: &JobArgs,
     link: &LinkArgs,
-    log_csv: Option<&Path>,
-    yes: bool,
-    status_ms: u16,
+    how: board_link::Reporting<'_>,
     resume_line: Option<usize>,
 ) -> Result<()> {
     if is_gcode(job)? {
-        return run_gcode(job, link, log_csv, yes, status_ms, resume_line);
+        return run_gcode(job, link, how, resume_line);
     }
     if resume_line.is_some() {
         bail!("--resume and --resume-line take G-code jobs (a TOML job runs from its start)");
@@ -435,9 +443,7 @@ fn run_job(
     let mut expected = [0i64; motion::MAX_AXES];
     expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
     let label = job.job.display().to_string();
-    board_link::stream(
-        &label, &parsed, &program, &outputs, &expected, link, log_csv, yes, status_ms,
-    )
+    board_link::stream(&label, &parsed, &program, &outputs, &expected, link, how)
 }
 
 /// `run` for G-code, in two streamed passes: the first checks the whole file, plans it and runs
@@ -446,9 +452,7 @@ fn run_job(
 fn run_gcode(
     job: &JobArgs,
     link: &LinkArgs,
-    log_csv: Option<&Path>,
-    yes: bool,
-    status_ms: u16,
+    how: board_link::Reporting<'_>,
     resume_line: Option<usize>,
 ) -> Result<()> {
     let (parsed, checked) = check_gcode_from(job, resume_line)?;
@@ -460,12 +464,17 @@ fn run_gcode(
     if let Some(line) = resume_line {
         let at = gcode::resume::ResumeAt::new(&parsed.machine, line)?;
         let z = parsed.machine.axis_index("Z").map(|i| &parsed.machine.axes[i]);
-        crate::outln!(
+        let say = format!(
             "resume     from line {line}: Z up to {:.3} mm, across, down at {:.0} mm/min, then \
              the program (the machine must stand at the job's origin: home it first)",
             z.map_or(0.0, |a| a.max_mm),
             z.map_or(0.0, |a| a.max_rate_mm_s * 60.0 * gcode::resume::PLUNGE_FRACTION_OF_Z_MAX)
         );
+        if how.json {
+            eprintln!("motionctl: {}", say.split_whitespace().collect::<Vec<_>>().join(" "));
+        } else {
+            crate::outln!("{say}");
+        }
         items = items.resume_from(at);
     }
     let outputs = gcode::stream::outputs(items, &checked, &label, segments);
@@ -479,10 +488,7 @@ fn run_gcode(
         outputs,
         &expected,
         link,
-        log_csv,
-        yes,
-        status_ms,
-        Some(journal),
+        board_link::Reporting { journal: Some(journal), ..how },
     )
 }
 

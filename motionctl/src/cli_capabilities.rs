@@ -509,9 +509,13 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
         &outputs,
         &final_steps,
         &link,
-        log_csv.as_deref(),
-        true,
-        crate::runner::DEFAULT_STATUS_PERIOD_MS,
+        crate::board_link::Reporting {
+            log_csv: log_csv.as_deref(),
+            yes: true,
+            status_ms: crate::runner::DEFAULT_STATUS_PERIOD_MS,
+            json: false,
+            journal: None,
+        },
     )
 }
 

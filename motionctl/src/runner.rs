@@ -106,6 +106,49 @@ impl RunReport {
         self.problems.is_empty()
     }
 
+    /// The summary as one JSON object: positions per axis in mm and steps (`axes` = name and
+    /// steps per mm), the checks, the times and the link's and the board's counts.
+    pub fn json(&self, axes: &[(String, f64)]) -> serde_json::Value {
+        let mut pos = serde_json::Map::new();
+        for (i, (name, spm)) in axes.iter().enumerate() {
+            let steps = self.positions.get(i).copied().unwrap_or(0);
+            pos.insert(
+                name.clone(),
+                serde_json::json!({
+                    "mm": steps as f64 / spm,
+                    "steps": steps,
+                    "model_steps": self.expected_positions.get(i).copied().unwrap_or(0),
+                }),
+            );
+        }
+        serde_json::json!({
+            "ok": self.ok(),
+            "segments": self.segments,
+            "acked": self.acked,
+            "done": self.done,
+            "order_hash_ok": self.done_hash == self.expected_hash,
+            "positions_ok": self.positions == self.expected_positions,
+            "positions": pos,
+            "seconds": self.seconds,
+            "stream_seconds": self.stream_seconds,
+            "frames_out": self.frames_out,
+            "retransmissions": self.retransmissions,
+            "link_naks": self.link_naks,
+            "bad_frames_in": self.bad_frames_in,
+            "reconnects": self.reconnects,
+            "statuses": self.statuses,
+            "board": {
+                "usart_overruns": self.board.usart_overruns,
+                "frames_bad": self.board.frames_bad,
+                "responses_dropped": self.board.responses_dropped,
+                "tick_overruns": self.board.tick_overruns,
+                "steps_deferred": self.board.steps_deferred,
+                "starve_holds": self.board.starve_holds,
+            },
+            "problems": self.problems,
+        })
+    }
+
     /// One `key=value` line for scripts (the xtask end-to-end test and bench parse it).
     pub fn machine_line(&self) -> String {
         format!(

@@ -1,6 +1,6 @@
 //! G4 dwell in a G-code job, and `dwell_s` in a TOML job: planned as a stop at rest, counted in
 //! the plan's summary, and executed by `run`: the machine stands still at the end of the motion
-//! before it for at least the dwell, then carries on.
+//! before it for at least the dwell, then carries on (and `run --json` reports the run).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -58,6 +58,14 @@ fn a_dwell_stops_the_machine_at_rest_for_its_time_between_the_moves() {
     // At least the dwell, less one status period (the log's resolution, 40 ms).
     assert!(left - arrived >= 700.0 - 40.0, "stood {} ms at X 10", left - arrived);
     assert!((rows.last().unwrap().1 - 20.0).abs() < 1e-9);
+    // The same run's summary for scripts: one JSON object on stdout, positions in mm.
+    let (ok, out, err) = motionctl(&["run", f, "--machine", &m, "--sim", "--yes", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("{e}: {out}"));
+    assert_eq!((v["ok"].as_bool(), v["positions_ok"].as_bool()), (Some(true), Some(true)), "{v}");
+    assert_eq!(v["positions"]["X"]["mm"].as_f64(), Some(20.0), "{v}");
+    assert_eq!(v["positions"]["X"]["steps"], v["positions"]["X"]["model_steps"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
