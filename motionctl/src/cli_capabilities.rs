@@ -261,6 +261,9 @@ pub enum WireCmd {
         /// ... for this many seconds.
         #[arg(long, value_name = "S", requires = "stall_at")]
         stall_for: Option<f64>,
+        /// Print the run's summary as one JSON object instead of text (mm, deg, s).
+        #[arg(long = "json")]
+        run_json: bool,
     },
     /// Bhatti Table 11 (circle -> complex, ZT 39, FR 800) side by side: per row the thesis's IK
     /// values (alpha, beta, trapezoid area, time, totals) and the corrected IK's (ZB1, XB1,
@@ -327,7 +330,9 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             return Ok(());
         }
     };
-    let json = matches!(cmd, WireCmd::Plan { json: true, .. });
+    // A JSON summary (plan's, or run's at the end) keeps stdout for itself.
+    let json =
+        matches!(cmd, WireCmd::Plan { json: true, .. } | WireCmd::Run { run_json: true, .. });
     // The text report, unless JSON was asked for.
     macro_rules! say {
         ($($t:tt)*) => {
@@ -469,11 +474,11 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             }
         );
     }
-    if json {
+    if matches!(cmd, WireCmd::Plan { json: true, .. }) {
         let j = plan_json(&die, contours.as_ref(), &job, &prm, &bound, t, thesis_time_s, plan);
         crate::outln!("{}", serde_json::to_string_pretty(&j)?);
     }
-    let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, .. } = cmd else {
+    let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, run_json, .. } = cmd else {
         return Ok(());
     };
     let origin = continuous::joints_from_steps(job.point_steps[0]);
@@ -498,7 +503,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             at_ticks: (at * cfg.tick_hz as f64).round() as u64,
             for_ticks: (len * cfg.tick_hz as f64).round() as u64,
         });
-        return run_wire_job(&parsed, &program, &job.segments, &report, &link, stall);
+        return run_wire_job(&parsed, &program, &job.segments, &report, &link, stall, run_json);
     }
     let outputs: Vec<crate::plan::Output> =
         job.segments.iter().map(|s| crate::plan::Output::Segment(*s)).collect();
@@ -513,7 +518,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             log_csv: log_csv.as_deref(),
             yes: true,
             status_ms: crate::runner::DEFAULT_STATUS_PERIOD_MS,
-            json: false,
+            json: run_json,
             journal: None,
         },
     )
@@ -648,6 +653,7 @@ fn run_wire_job(
     model: &motion::report::Report,
     link: &crate::board_link::LinkArgs,
     stall: Option<crate::wire::run::SimStall>,
+    json: bool,
 ) -> Result<()> {
     use motion::wire::scenario::STALL_PARAMS as P;
     let (mut t, qemu_guard) = link.open()?;
@@ -672,6 +678,52 @@ fn run_wire_job(
     let cfg = crate::runner::wire_config(parsed, program);
     let result = crate::wire::run::run(&mut *t, cfg, segments, expected, model.ticks, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
+    // X, Y in mm, beta and alpha in degrees: the job machine's axes.
+    let units = |steps: &[i64]| -> Vec<(String, f64)> {
+        parsed
+            .machine
+            .axes
+            .iter()
+            .zip(steps)
+            .map(|(a, &s)| (a.name.clone(), s as f64 / a.steps_per_mm))
+            .collect()
+    };
+    if json {
+        let pos: serde_json::Map<String, serde_json::Value> =
+            units(&r.positions).into_iter().map(|(n, v)| (n, serde_json::json!(v))).collect();
+        let v = serde_json::json!({
+            "ok": r.ok(),
+            "segments": r.segments,
+            "wall_s": r.seconds,
+            "board_s": r.board_ticks as f64 / program.config.tick_hz.max(1) as f64,
+            "positions_mm_deg": pos,
+            "positions_steps": r.positions,
+            "model_positions_steps": r.expected_positions,
+            "stalls": r.stalls,
+            "retraces": r.retraces,
+            "returns": r.returns,
+            "max_retrace_steps": r.max_retrace_steps,
+            "problems": r.problems,
+        });
+        crate::outln!("{v}");
+        if !r.ok() {
+            anyhow::bail!("the wire job failed {} check(s)", r.problems.len());
+        }
+        return Ok(());
+    }
+    let shown: Vec<String> = units(&r.positions)
+        .iter()
+        .zip(&parsed.machine.axes)
+        .map(|((n, v), a)| {
+            let unit = if a.name.eq_ignore_ascii_case("X") || a.name.eq_ignore_ascii_case("Y") {
+                "mm"
+            } else {
+                "deg"
+            };
+            format!("{n} {v:.4} {unit}")
+        })
+        .collect();
+    crate::outln!("moved      {} (from the job's start)", shown.join(", "));
     crate::outln!(
         "wire job   {} segments, {:.2} s wall, {} board ticks",
         r.segments,

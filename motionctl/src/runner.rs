@@ -106,20 +106,20 @@ impl RunReport {
         self.problems.is_empty()
     }
 
-    /// The summary as one JSON object: positions per axis in mm and steps (`axes` = name and
-    /// steps per mm), the checks, the times and the link's and the board's counts.
+    /// The summary as one JSON object: positions per axis in steps and in mm (`"mm"`), or in
+    /// degrees (`"deg"`) for the rotary axes A, B, C (`axes` = name and steps per unit), the
+    /// checks, the times and the link's and the board's counts.
     pub fn json(&self, axes: &[(String, f64)]) -> serde_json::Value {
         let mut pos = serde_json::Map::new();
         for (i, (name, spm)) in axes.iter().enumerate() {
             let steps = self.positions.get(i).copied().unwrap_or(0);
-            pos.insert(
-                name.clone(),
-                serde_json::json!({
-                    "mm": steps as f64 / spm,
-                    "steps": steps,
-                    "model_steps": self.expected_positions.get(i).copied().unwrap_or(0),
-                }),
-            );
+            let rotary = ["A", "B", "C"].iter().any(|r| name.eq_ignore_ascii_case(r));
+            let mut axis = serde_json::json!({
+                "steps": steps,
+                "model_steps": self.expected_positions.get(i).copied().unwrap_or(0),
+            });
+            axis[if rotary { "deg" } else { "mm" }] = serde_json::json!(steps as f64 / spm);
+            pos.insert(name.clone(), axis);
         }
         serde_json::json!({
             "ok": self.ok(),

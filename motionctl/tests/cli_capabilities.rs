@@ -28,3 +28,22 @@ fn wire_plan_runs_the_job_through_the_model() {
     assert!(!ok);
     assert!(err.contains("fr"), "{err}");
 }
+
+#[test]
+fn wire_run_reports_in_json_with_mm_and_degrees() {
+    let out = Command::new(env!("CARGO_BIN_EXE_motionctl"))
+        .args(["wire", "run", "--segments", "1..3", "--sim", "--json"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // stdout is the JSON object alone.
+    let v: serde_json::Value =
+        serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"));
+    assert_eq!(v["ok"], true, "{v}");
+    for (axis, unit) in [("X", "mm"), ("Y", "mm"), ("B", "deg"), ("A", "deg")] {
+        let a = &v["positions"][axis];
+        assert!(a[unit].is_f64(), "{axis} in {unit}: {v}");
+        assert_eq!(a["steps"], a["model_steps"], "{axis}");
+    }
+}
