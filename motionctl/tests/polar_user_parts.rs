@@ -289,3 +289,13 @@ fn the_pole_search_answers_in_json_with_the_flags_to_use() {
     ]);
     assert!(num(&d, "events") > 0.0, "{d}");
 }
+
+#[test]
+fn copy_mode_reports_in_json_with_degrees_and_inches() {
+    let v = json(&["polar", "copy", "--sim", "--template", "limacon:0.6"]);
+    assert_eq!(v["ok"], true, "{v}");
+    let (th, r) = (num(&v, "theta_steps"), num(&v, "r_steps"));
+    assert!(th != 0.0 && r != 0.0, "the arm moved: {v}");
+    assert!((num(&v, "theta_deg") - th * 360.0 / 16000.0).abs() < 1e-9, "{v}");
+    assert!((num(&v, "r_in") - r / 1000.0).abs() < 1e-12, "{v}");
+}

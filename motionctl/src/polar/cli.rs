@@ -223,6 +223,9 @@ pub enum PolarCmd {
         /// On a real board: how long to copy (the operator moves the arm meanwhile).
         #[arg(long, default_value_t = 30.0)]
         seconds: f64,
+        /// Print the summary as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -364,6 +367,7 @@ fn run_copy(
     teach: Option<&std::path::Path>,
     template_spec: Option<&str>,
     seconds: f64,
+    json: bool,
 ) -> anyhow::Result<()> {
     use crate::transport::Transport;
     let target = link.target()?;
@@ -390,6 +394,32 @@ fn run_copy(
     };
     let result = super::copy::copy(&mut t, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
+    if let Some(path) = teach {
+        std::fs::write(path, &r.stream).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if json {
+        let v = serde_json::json!({
+            "ok": r.ok(),
+            "waypoints": r.waypoints,
+            "encoder_moves": r.encoder_moves,
+            "theta_deg": deg(r.positions[0]),
+            "r_in": inches(r.positions[1]),
+            "theta_steps": r.positions[0],
+            "r_steps": r.positions[1],
+            "model_theta_steps": r.model.positions[0],
+            "model_r_steps": r.model.positions[1],
+            "size": format!("{}:{}", size.m, size.k),
+            "taught_events": teach.map(|_| r.stream_events),
+            "taught_blocks": teach.map(|_| r.blocks),
+            "lost_events": r.lost_events,
+            "problems": r.problems,
+        });
+        crate::outln!("{v}");
+        if !r.ok() {
+            bail!("verification failed: {}", r.problems.join("; "));
+        }
+        return Ok(());
+    }
     crate::outln!(
         "copy       {} waypoints; encoders moved arm {} carriage {} counts",
         r.waypoints,
@@ -397,7 +427,10 @@ fn run_copy(
         r.encoder_moves[1]
     );
     crate::outln!(
-        "positions  theta {} r {} steps (size {}:{}); host model theta {} r {}",
+        "positions  theta {:.3} deg, r {:.4} in ({} and {} steps, size {}:{}); host model {} and {} \
+         steps",
+        deg(r.positions[0]),
+        inches(r.positions[1]),
         r.positions[0],
         r.positions[1],
         size.m,
@@ -406,7 +439,6 @@ fn run_copy(
         r.model.positions[1]
     );
     if let Some(path) = teach {
-        std::fs::write(path, &r.stream).with_context(|| format!("writing {}", path.display()))?;
         crate::outln!(
             "teach      {} events in {} blocks -> {} ({} lost)",
             r.stream_events,
@@ -608,8 +640,8 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
         PolarCmd::Run { file, link, speed, size, json } => {
             run_stream(&file, &link, speed, size, json)
         }
-        PolarCmd::Copy { link, size, teach, template, seconds } => {
-            run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds)
+        PolarCmd::Copy { link, size, teach, template, seconds, json } => {
+            run_copy(&link, size, teach.as_deref(), template.as_deref(), seconds, json)
         }
         PolarCmd::Pole { contour, res, box_only, machine, json } => {
             let c = parse_contour(&contour)?;
