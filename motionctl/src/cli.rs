@@ -82,6 +82,9 @@ pub enum Cmd {
         /// FILE.svg or FILE.png.
         #[arg(long, value_name = "FILE")]
         plot: Option<PathBuf>,
+        /// Print the summary as one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Show the board's motion state.
     Status {
@@ -280,7 +283,7 @@ fn print_warnings(args: &JobArgs, warnings: &[String], omitted: usize) {
 
 /// `plan --no-model`: check and plan, without the host model's tick-by-tick run (G-code
 /// streamed as for `plan`). The summary says what was planned and where the job ends.
-fn plan_without_model(args: &JobArgs) -> Result<String> {
+fn plan_without_model(args: &JobArgs, json: bool) -> Result<String> {
     let (machine, commands, totals, final_steps) = if is_gcode(args)? {
         let machine = gcode_machine(&args.job, args.machine.as_deref())?;
         let items = gcode::stream::items(&args.job, &machine)?;
@@ -302,6 +305,10 @@ fn plan_without_model(args: &JobArgs) -> Result<String> {
         };
         (job.machine, program.commands.len(), totals, program.final_steps)
     };
+    if json {
+        let v = plan::summary_json(&args.job, &machine, &totals, None, &final_steps);
+        return Ok(format!("{v}\n"));
+    }
     Ok(plan::plan_text(&args.job, &machine, commands, &totals, &final_steps))
 }
 
@@ -372,19 +379,41 @@ fn plot_toolpath(args: &JobArgs, plot: Option<&Path>) -> Result<()> {
 /// Runs a parsed command line.
 pub fn execute(cli: Cli) -> Result<()> {
     match cli.command {
-        Cmd::Plan { job, no_model: true, plot } => {
-            crate::out!("{}", plan_without_model(&job)?);
+        Cmd::Plan { job, no_model: true, plot, json } => {
+            crate::out!("{}", plan_without_model(&job, json)?);
             plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Plan { job, plot, .. } if is_gcode(&job)? => {
+        Cmd::Plan { job, plot, json, .. } if is_gcode(&job)? => {
             let (parsed, c) = check_gcode(&job)?;
-            let text = plan::summary_text(&job.job, &parsed.machine, 0, &c.totals, &c.report);
-            crate::out!("{text}");
+            if json {
+                let v = plan::summary_json(
+                    &job.job,
+                    &parsed.machine,
+                    &c.totals,
+                    Some(&c.report),
+                    &c.program.final_steps,
+                );
+                crate::outln!("{v}");
+            } else {
+                let text = plan::summary_text(&job.job, &parsed.machine, 0, &c.totals, &c.report);
+                crate::out!("{text}");
+            }
             plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Plan { job, plot, .. } => {
+        Cmd::Plan { job, plot, json, .. } => {
             let (parsed, program, summary) = plan_job(&job)?;
-            crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
+            if json {
+                let v = plan::summary_json(
+                    &job.job,
+                    &parsed.machine,
+                    &summary.totals(),
+                    Some(&summary.report),
+                    &program.final_steps,
+                );
+                crate::outln!("{v}");
+            } else {
+                crate::out!("{}", summary_text(&job.job, &parsed, &program, &summary));
+            }
             plot_toolpath(&job, plot.as_deref())
         }
         Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line, json } => {

@@ -353,6 +353,44 @@ impl Summary {
     }
 }
 
+/// The `plan` summary as one JSON object (`plan --json`): what was planned and, when the host
+/// model ran (`report`), what it did; per axis the final position in steps and mm and the peak
+/// rate.
+pub fn summary_json(
+    path: &std::path::Path,
+    machine: &crate::job::Machine,
+    t: &Totals,
+    report: Option<&Report>,
+    final_steps: &[i64; motion::MAX_AXES],
+) -> serde_json::Value {
+    let mut axes = serde_json::Map::new();
+    for (i, a) in machine.axes.iter().enumerate() {
+        let steps = report.map_or(final_steps[i], |r| r.positions[i]);
+        let mut v =
+            serde_json::json!({ "final_steps": steps, "final_mm": steps as f64 / a.steps_per_mm });
+        if let Some(r) = report {
+            v["peak_mm_s"] = serde_json::json!(r.peak_rate_hz[i] as f64 / a.steps_per_mm);
+        }
+        axes.insert(a.name.clone(), v);
+    }
+    let hz = machine.tick_hz.max(1) as f64;
+    serde_json::json!({
+        "job": path.display().to_string(),
+        "tick_hz": machine.tick_hz,
+        "moves": t.moves,
+        "skipped_moves": t.skipped_moves,
+        "segments": t.segments,
+        "spindle_events": t.spindle_events,
+        "pauses": t.pauses,
+        "dwells": t.dwells,
+        "dwell_s": t.dwell_ms as f64 / 1000.0,
+        "nominal_s": t.nominal_ticks as f64 / hz,
+        "model_s": report.map(|r| r.ticks as f64 / r.tick_hz.max(1) as f64),
+        "model_underruns": report.map(|r| r.underruns),
+        "axes": axes,
+    })
+}
+
 /// The `plan` summary as text: the job, what was planned and what the host model did.
 pub fn summary_text(
     path: &std::path::Path,

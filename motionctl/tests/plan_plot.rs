@@ -50,3 +50,33 @@ fn a_cam_file_and_a_toml_job_are_drawn_with_rapids_apart() {
     assert!(String::from_utf8_lossy(&o.stderr).contains(".svg or .png"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn plan_json_gives_the_totals_and_the_final_position_in_mm() {
+    let dir = std::env::temp_dir().join(format!("plan_json_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("part.ngc");
+    std::fs::write(&file, "G21 G90\nG0 Z5\nG1 X12.5 Y-3 F900\nG4 P1.5\nG1 Z-1\nM2\n").unwrap();
+    let machine = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/corpus-machine.toml");
+    for extra in [&[][..], &["--no-model"][..]] {
+        let o = Command::new(env!("CARGO_BIN_EXE_motionctl"))
+            .arg("plan")
+            .arg(&file)
+            .args(["--machine", machine, "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
+        assert_eq!((v["moves"].as_u64(), v["dwells"].as_u64()), (Some(3), Some(1)), "{v}");
+        assert_eq!(v["dwell_s"].as_f64(), Some(1.5));
+        let end = [("X", 12.5), ("Y", -3.0), ("Z", -1.0)];
+        for (axis, mm) in end {
+            assert_eq!(v["axes"][axis]["final_mm"].as_f64(), Some(mm), "{axis}: {v}");
+        }
+        // The model's time only when it ran.
+        assert_eq!(v["model_s"].is_f64(), extra.is_empty(), "{v}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
