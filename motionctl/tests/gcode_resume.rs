@@ -123,6 +123,29 @@ fn the_resumed_program_is_the_approach_then_the_program_from_the_line() {
     assert_eq!(at[..], end[..3]);
 }
 
+#[test]
+fn resumed_at_ten_points_each_run_ends_where_the_job_ends_along_the_same_path() {
+    let d = dir("ten");
+    let file = d.join("job.ngc");
+    std::fs::write(&file, program(40)).unwrap();
+    let (whole, end) = items(&file, None);
+    let whole_moves = moves(&whole);
+    // Ten resume lines spread over the passes (lines 6..=45), from a fixed LCG.
+    let mut x = 12345u32;
+    for _ in 0..10 {
+        x = x.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+        let line = 6 + (x >> 16) as usize % 40;
+        let (resumed, end_resumed) = items(&file, Some(line));
+        assert_eq!(end_resumed, end, "line {line}");
+        let m = moves(&resumed);
+        // The approach (up, across, down: at most three moves), then the whole program's moves
+        // of lines `line` and after (46 - line passes and the final Z up).
+        let n = 46 - line + 1;
+        assert!(m.len() >= n && m.len() - n <= 3, "line {line}: {} moves", m.len());
+        assert_eq!(m[m.len() - n..], whole_moves[whole_moves.len() - n..], "line {line}");
+    }
+}
+
 fn motionctl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_motionctl"))
 }
