@@ -367,13 +367,7 @@ fn plot_toolpath(args: &JobArgs, plot: Option<&Path>) -> Result<()> {
         job.machine.axes.len(),
         job.machine.axis_names()
     );
-    let w = crate::plan_figure::toolpath_figure(&job.machine, &job.items, &title).write(p)?;
-    eprintln!(
-        "motionctl: wrote {}{}",
-        p.display(),
-        if w == crate::plot::Written::Unlabelled { " (no system font: unlabelled)" } else { "" }
-    );
-    Ok(())
+    crate::plan_figure::toolpath_figure(&job.machine, &job.items, &title).save(p)
 }
 
 /// Runs a parsed command line.

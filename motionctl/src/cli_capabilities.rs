@@ -462,17 +462,7 @@ pub fn run_wire(cmd: WireCmd) -> Result<()> {
             die.label,
             die.die.zt_mm
         );
-        let fig = crate::wire::figure::figure(&title, &die.die, &joints);
-        let w = fig.write(p)?;
-        eprintln!(
-            "motionctl: wrote {}{}",
-            p.display(),
-            if w == crate::plot::Written::Unlabelled {
-                " (no system font: unlabelled)"
-            } else {
-                ""
-            }
-        );
+        crate::wire::figure::figure(&title, &die.die, &joints).save(p)?;
     }
     if matches!(cmd, WireCmd::Plan { json: true, .. }) {
         let j = plan_json(&die, contours.as_ref(), &job, &prm, &bound, t, thesis_time_s, plan);

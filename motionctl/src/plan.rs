@@ -391,6 +391,19 @@ pub fn summary_json(
     })
 }
 
+/// The summaries' dwell line, when the job has dwells.
+fn dwell_line(s: &mut String, t: &Totals) {
+    use std::fmt::Write;
+    if t.dwells > 0 {
+        let _ = writeln!(
+            s,
+            "dwells     {} (G4), {:.3} s at rest",
+            t.dwells,
+            t.dwell_ms as f64 / 1000.0
+        );
+    }
+}
+
 /// The `plan` summary as text: the job, what was planned and what the host model did.
 pub fn summary_text(
     path: &std::path::Path,
@@ -415,14 +428,7 @@ pub fn summary_text(
         "events     {} spindle, {} pause, {feed_commands} feed commands",
         t.spindle_events, t.pauses,
     );
-    if t.dwells > 0 {
-        let _ = writeln!(
-            s,
-            "dwells     {} (G4), {:.3} s at rest",
-            t.dwells,
-            t.dwell_ms as f64 / 1000.0
-        );
-    }
+    dwell_line(&mut s, t);
     let _ = writeln!(
         s,
         "segments   {} planned, {} run by the model, {} underruns",
@@ -479,14 +485,7 @@ pub fn plan_text(
         "events     {} spindle, {} pause, {feed_commands} feed commands",
         t.spindle_events, t.pauses,
     );
-    if t.dwells > 0 {
-        let _ = writeln!(
-            s,
-            "dwells     {} (G4), {:.3} s at rest",
-            t.dwells,
-            t.dwell_ms as f64 / 1000.0
-        );
-    }
+    dwell_line(&mut s, t);
     let _ = writeln!(s, "segments   {} planned (host model not run: --no-model)", t.segments);
     let _ = writeln!(
         s,

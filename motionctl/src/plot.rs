@@ -172,6 +172,15 @@ impl Figure {
         self
     }
 
+    /// [`Figure::write`], then says on stderr where it went (and if it lacks labels): what the
+    /// subcommands' `--plot` does.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let w = self.write(path)?;
+        let note = if w == Written::Unlabelled { " (no system font: unlabelled)" } else { "" };
+        eprintln!("motionctl: wrote {}{note}", path.display());
+        Ok(())
+    }
+
     /// Renders to `path`: `.svg` or `.png` (any other extension is refused).
     pub fn write(&self, path: &Path) -> Result<Written> {
         if self.charts.is_empty() {

@@ -381,17 +381,7 @@ fn write_outputs(
         eprintln!("motionctl: wrote {}", p.display());
     }
     if let Some(p) = &a.plot {
-        let fig = table_figure(built, error, a.units, title);
-        let w = fig.write(p)?;
-        eprintln!(
-            "motionctl: wrote {}{}",
-            p.display(),
-            if w == crate::plot::Written::Unlabelled {
-                " (no system font: unlabelled)"
-            } else {
-                ""
-            }
-        );
+        table_figure(built, error, a.units, title).save(p)?;
     }
     if let Some(p) = &a.firmware_rust {
         let defaults = a.mode == Mode::Accurate

@@ -63,11 +63,5 @@ pub fn figure(job: &MillingJob, what: &str, traces: &[Trace<'_>]) -> Figure {
 
 /// Writes the figure, saying on stderr where (and if it lacks labels).
 pub fn write(fig: &Figure, path: &std::path::Path) -> anyhow::Result<()> {
-    let w = fig.write(path)?;
-    eprintln!(
-        "motionctl: wrote {}{}",
-        path.display(),
-        if w == crate::plot::Written::Unlabelled { " (no system font: unlabelled)" } else { "" }
-    );
-    Ok(())
+    fig.save(path)
 }

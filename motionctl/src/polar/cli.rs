@@ -599,16 +599,7 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
                     "polar digitize {contour} ({u}): tool radius {tool_radius} {u}, Vt {vt} {u}/s, \
                      pole C {pole_c} {u} at beta {pole_beta} rad"
                 );
-                let w = super::figure::digitized_figure(&c, &setup, &d, &title).write(p)?;
-                eprintln!(
-                    "motionctl: wrote {}{}",
-                    p.display(),
-                    if w == crate::plot::Written::Unlabelled {
-                        " (no system font: unlabelled)"
-                    } else {
-                        ""
-                    }
-                );
+                super::figure::digitized_figure(&c, &setup, &d, &title).save(p)?;
             }
             if let Some(path) = out {
                 let mut bytes = Vec::new();
