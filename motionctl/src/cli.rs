@@ -488,9 +488,11 @@ fn run_gcode(
         let at = gcode::resume::ResumeAt::new(&parsed.machine, line)?;
         let z = parsed.machine.axis_index("Z").map(|i| &parsed.machine.axes[i]);
         let say = format!(
-            "resume     from line {line}: Z up to {:.3} mm, across, down at {:.0} mm/min, then \
-             the program (the machine must stand at the job's origin: home it first)",
+            "resume     from line {line}: Z up to {:.3} mm, across, down to {} mm above, the \
+             rest at {:.0} mm/min, then the program (the machine must stand at the job's origin: \
+             home it first)",
             z.map_or(0.0, |a| a.max_mm),
+            gcode::resume::PLUNGE_CLEARANCE_MM,
             z.map_or(0.0, |a| a.max_rate_mm_s * 60.0 * gcode::resume::PLUNGE_FRACTION_OF_Z_MAX)
         );
         if how.json {

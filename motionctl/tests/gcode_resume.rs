@@ -1,6 +1,6 @@
 //! Going on with a G-code job from where it stopped: the program read from its top with nothing
 //! sent before the resume line, an approach from the origin in its place (Z up to the safe
-//! height, across, spindle and spin-up, Z down), then the program as written to its end; the run
+//! height, across, spindle and spin-up, Z down and the plunge), then the program as written to its end; the run
 //! journal `FILE.journal` that `run` keeps and `run --resume` reads; a job interrupted on the
 //! simulated board and resumed ends where the whole job ends.
 
@@ -102,7 +102,9 @@ fn the_resumed_program_is_the_approach_then_the_program_from_the_line() {
     let z_safe = 5 * 400;
     assert_eq!(m[0][..3], [0, 0, z_safe], "Z up first");
     assert_eq!(m[1][..3], [10 * 80, 9 * 80, 0], "across at the safe height");
-    assert_eq!(m[2][..3], [0, 0, -400 - z_safe], "down to the resume point");
+    // Down in a rapid to 5 mm above the resume point (Z 4), the last 5 mm at the plunge feed.
+    assert_eq!(m[2][..3], [0, 0, 4 * 400 - z_safe], "rapid down to the clearance");
+    assert_eq!(m[3][..3], [0, 0, -400 - 4 * 400], "plunge to the resume point");
     // Spindle on and its spin-up between the traverse and the plunge (the program had M3).
     let events: Vec<&ProgramItem> =
         resumed.iter().filter(|i| !matches!(i, ProgramItem::Move { .. })).collect();
@@ -110,8 +112,8 @@ fn the_resumed_program_is_the_approach_then_the_program_from_the_line() {
     assert_eq!(events[1], &ProgramItem::Dwell(SPIN_UP_S));
     // Then exactly the whole program's moves from that line on.
     let whole_moves = moves(&whole);
-    let from = whole_moves.len() - (m.len() - 3);
-    assert_eq!(m[3..], whole_moves[from..]);
+    let from = whole_moves.len() - (m.len() - 4);
+    assert_eq!(m[4..], whole_moves[from..]);
     assert_eq!(whole_moves[from][..2], [-10 * 80, 80], "the 11th pass");
     // The sum of the resumed moves lands where the whole program does.
     let mut at = [0i64; 3];
@@ -138,10 +140,10 @@ fn resumed_at_ten_points_each_run_ends_where_the_job_ends_along_the_same_path() 
         let (resumed, end_resumed) = items(&file, Some(line));
         assert_eq!(end_resumed, end, "line {line}");
         let m = moves(&resumed);
-        // The approach (up, across, down: at most three moves), then the whole program's moves
-        // of lines `line` and after (46 - line passes and the final Z up).
+        // The approach (up, across, down, plunge: at most four moves), then the whole program's
+        // moves of lines `line` and after (46 - line passes and the final Z up).
         let n = 46 - line + 1;
-        assert!(m.len() >= n && m.len() - n <= 3, "line {line}: {} moves", m.len());
+        assert!(m.len() >= n && m.len() - n <= 4, "line {line}: {} moves", m.len());
         assert_eq!(m[m.len() - n..], whole_moves[whole_moves.len() - n..], "line {line}");
     }
 }

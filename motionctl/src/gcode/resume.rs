@@ -6,7 +6,8 @@
 //! its place the machine, standing at the job's origin (homed, as `run` expects), makes the
 //! approach: Z up to the safe height (the Z axis's upper soft limit), a rapid across to where the
 //! resume line's move starts, the spindle on with a spin-up dwell if the program had it on
-//! there, and Z down to that point at the plunge feed. From there the program runs as written.
+//! there, Z down in a rapid to 5 mm above that point and the rest at the plunge feed. From there
+//! the program runs as written.
 //! Program pauses and dwells before the resume line are skipped; so is the part of that line's
 //! move that was already cut (it is cut again: the same path).
 
@@ -19,8 +20,10 @@ use std::collections::VecDeque;
 
 /// Seconds the resumed job waits after switching the spindle on, before the plunge.
 pub const SPIN_UP_S: f64 = 2.0;
-/// The plunge to the resume point runs at this fraction of the Z axis's top speed.
+/// The plunge to the resume point runs at this fraction of the Z axis's top speed ...
 pub const PLUNGE_FRACTION_OF_Z_MAX: f64 = 0.1;
+/// ... over this last stretch above it; the way down to there is a rapid.
+pub const PLUNGE_CLEARANCE_MM: f64 = 5.0;
 
 /// Where and how to resume.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +34,7 @@ pub struct ResumeAt {
     /// Safe height and plunge speed, Z steps from the job's origin and steps per second.
     safe_z_steps: i64,
     plunge_hz: u32,
+    clearance_steps: i64,
 }
 
 impl ResumeAt {
@@ -53,6 +57,7 @@ impl ResumeAt {
             z_axis: z,
             safe_z_steps: (a.max_mm * a.steps_per_mm).floor() as i64,
             plunge_hz: plunge_hz.min(u32::MAX as f64) as u32,
+            clearance_steps: (PLUNGE_CLEARANCE_MM * a.steps_per_mm).round() as i64,
         })
     }
 }
@@ -142,6 +147,9 @@ impl Resume {
             out.push_back(ProgramItem::Spindle(true));
             out.push_back(ProgramItem::Dwell(SPIN_UP_S));
         }
+        let mut clear = start;
+        clear[z] = (start[z] + self.at.clearance_steps).min(safe);
+        go(clear, None, out);
         go(start, Some(self.at.plunge_hz), out);
         out.push_back(item);
     }
