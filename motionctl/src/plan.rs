@@ -391,6 +391,32 @@ pub fn summary_json(
     })
 }
 
+/// The lines both `plan` summaries open with: the job, the machine, moves, events, dwells.
+fn header(
+    path: &std::path::Path,
+    m: &crate::job::Machine,
+    feed_commands: usize,
+    t: &Totals,
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(s, "job        {}", path.display());
+    let _ =
+        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
+    let _ = writeln!(
+        s,
+        "moves      {} ({} skipped: no steps after rounding)",
+        t.moves, t.skipped_moves
+    );
+    let _ = writeln!(
+        s,
+        "events     {} spindle, {} pause, {feed_commands} feed commands",
+        t.spindle_events, t.pauses,
+    );
+    dwell_line(&mut s, t);
+    s
+}
+
 /// The summaries' dwell line, when the job has dwells.
 fn dwell_line(s: &mut String, t: &Totals) {
     use std::fmt::Write;
@@ -413,22 +439,8 @@ pub fn summary_text(
     r: &Report,
 ) -> String {
     use std::fmt::Write;
-    let mut s = String::new();
+    let mut s = header(path, machine, feed_commands, t);
     let m = machine;
-    let _ = writeln!(s, "job        {}", path.display());
-    let _ =
-        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
-    let _ = writeln!(
-        s,
-        "moves      {} ({} skipped: no steps after rounding)",
-        t.moves, t.skipped_moves
-    );
-    let _ = writeln!(
-        s,
-        "events     {} spindle, {} pause, {feed_commands} feed commands",
-        t.spindle_events, t.pauses,
-    );
-    dwell_line(&mut s, t);
     let _ = writeln!(
         s,
         "segments   {} planned, {} run by the model, {} underruns",
@@ -470,22 +482,8 @@ pub fn plan_text(
     final_steps: &[i64; MAX_AXES],
 ) -> String {
     use std::fmt::Write;
-    let mut s = String::new();
+    let mut s = header(path, machine, feed_commands, t);
     let m = machine;
-    let _ = writeln!(s, "job        {}", path.display());
-    let _ =
-        writeln!(s, "machine    {} axes ({}), tick {} Hz", m.axes.len(), m.axis_names(), m.tick_hz);
-    let _ = writeln!(
-        s,
-        "moves      {} ({} skipped: no steps after rounding)",
-        t.moves, t.skipped_moves
-    );
-    let _ = writeln!(
-        s,
-        "events     {} spindle, {} pause, {feed_commands} feed commands",
-        t.spindle_events, t.pauses,
-    );
-    dwell_line(&mut s, t);
     let _ = writeln!(s, "segments   {} planned (host model not run: --no-model)", t.segments);
     let _ = writeln!(
         s,

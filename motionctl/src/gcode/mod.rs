@@ -63,15 +63,25 @@ pub struct Loaded {
     pub warnings: Vec<String>,
 }
 
+/// The interpreter reading a file.
+pub(crate) type FileInterpreter = Interpreter<SeekSource<std::io::BufReader<std::fs::File>>>;
+
 /// Reads a G-code file for `machine`.
 pub fn load(path: &Path, machine: &Machine) -> Result<Loaded, GcodeError> {
+    let (interp, name) = open(path)?;
+    to_items(interp, &name, machine)
+}
+
+/// The interpreter over the file `path`, and its name for messages; a file that cannot be read
+/// is a [`GcodeError`] naming it.
+pub(crate) fn open(path: &Path) -> Result<(FileInterpreter, String), GcodeError> {
     let name = path.display().to_string();
     let interp = Interpreter::open(path, Options::default()).map_err(|e| GcodeError {
         file: name.clone(),
         errors: vec![io_diag(&e.to_string())],
         omitted: 0,
     })?;
-    to_items(interp, &name, machine)
+    Ok((interp, name))
 }
 
 /// Parses G-code held in memory (`source` names it in messages).

@@ -9,14 +9,14 @@
 //! otherwise the pass yields the totals a run needs (segments, planned time, where the job must
 //! end). The second pass ([`items`]) reads the file again and streams it to the board.
 
-use super::{io_diag, machine_diag, Converter, GcodeError};
+use super::{machine_diag, Converter, GcodeError};
 use crate::convert::{ConvertError, Program, ProgramItem, Stepper};
 use crate::job::{Item, Machine};
 use crate::plan::{self, PlanFailure, SimulateError, Stream, Totals};
 use motion::report::Report;
 use motion::MAX_AXES;
 use motion_gcode::source::{LineSource, SeekSource};
-use motion_gcode::{Diagnostic, Event, Interpreter, Options};
+use motion_gcode::{Diagnostic, Event, Interpreter};
 use std::fmt;
 use std::fs::File;
 use std::io::BufReader;
@@ -85,12 +85,7 @@ pub fn items<'m>(
     path: &Path,
     machine: &'m Machine,
 ) -> Result<Items<'m, SeekSource<BufReader<File>>>, GcodeError> {
-    let name = path.display().to_string();
-    let interp = Interpreter::open(path, Options::default()).map_err(|e| GcodeError {
-        file: name.clone(),
-        errors: vec![io_diag(&e.to_string())],
-        omitted: 0,
-    })?;
+    let (interp, name) = super::open(path)?;
     Ok(Items::new(interp, &name, machine))
 }
 
