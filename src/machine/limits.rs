@@ -36,6 +36,18 @@ impl SoftLimits {
         None
     }
 
+    /// The same limits in the frame of raw step counts whose machine position is
+    /// `raw + offset`: the tick then compares a stepped axis's counter with its bound, with no
+    /// add. Saturating, as machine positions are.
+    pub fn minus(&self, offset: &[i64; MAX_AXES]) -> SoftLimits {
+        let mut l = *self;
+        for i in 0..MAX_AXES {
+            l.min_steps[i] = self.min_steps[i].saturating_sub(offset[i]);
+            l.max_steps[i] = self.max_steps[i].saturating_sub(offset[i]);
+        }
+        l
+    }
+
     /// The end of a straight move from `from` by `steps`, or the first axis it would leave its
     /// limits on. A straight segment between two points inside the box stays inside (the box is
     /// convex), so checking its end is enough.

@@ -29,6 +29,10 @@ use crate::segment::{Segment, SegmentError};
 /// from which the hold still stops within the running segment (the hold acts from the next tick).
 pub const STARVE_MARGIN_VTICKS: u32 = 64;
 
+/// The job bookkeeping (end of job, underrun, a late host) runs every this many ticks of a
+/// running job: far inside [`STARVE_MARGIN_VTICKS`] (at most two virtual ticks pass per tick).
+pub const JOB_WATCH_TICKS: u8 = 8;
+
 /// What the board reads every tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Inputs {
@@ -237,6 +241,8 @@ pub struct Machine {
     cfg: BoardConfig,
     config_set: bool,
     limits: SoftLimits,
+    /// `limits` in the frame of `raw` (minus `offset`): what the per-step check compares.
+    raw_limits: SoftLimits,
     latch: FaultLatch,
     /// Fault causes present now (levels: e-stop, switches, sensors, link, missing config).
     active: u32,
@@ -263,6 +269,8 @@ pub struct Machine {
     switches: (u8, u8),
     last_dir: u8,
     ticks: u64,
+    /// Ticks until the job bookkeeping runs again (every [`JOB_WATCH_TICKS`]).
+    job_watch_in: u8,
     /// Events were admitted for an event job that has not ended.
     events_queued: bool,
     /// An event job runs (or holds): the tick's source is the playback, and the job ends when
@@ -300,6 +308,7 @@ impl Machine {
         Machine {
             state: MachineState::Boot,
             limits: SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count),
+            raw_limits: SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count),
             cfg,
             config_set: false,
             latch: FaultLatch::new(),
@@ -321,6 +330,7 @@ impl Machine {
             switches: (0, 0),
             last_dir: 0,
             ticks: 0,
+            job_watch_in: 1,
             events_queued: false,
             event_job: false,
             paused: false,
@@ -378,6 +388,7 @@ impl Machine {
 
     fn install(&mut self, cfg: BoardConfig) {
         self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
+        self.raw_limits = self.limits.minus(&self.offset);
         self.switch_filter.set_ticks(cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz));
         self.cfg = cfg;
         self.config_set = true;
@@ -653,7 +664,16 @@ impl Machine {
             MachineState::Homing => self.watch_homing(dda, raw),
             MachineState::Running if self.event_job => self.watch_events(dda, source),
             MachineState::Running if self.z_job => self.watch_z_job(dda, source),
-            MachineState::Running => self.watch_job(dda),
+            MachineState::Running => {
+                // The bookkeeping looks ahead by more than these ticks (the starve margin), so
+                // a divided rate loses nothing but a few ticks of latency at the job's end. A
+                // starved job resumes on the tick its successor arrives.
+                self.job_watch_in = self.job_watch_in.wrapping_sub(1);
+                if self.job_watch_in == 0 || self.starved {
+                    self.job_watch_in = JOB_WATCH_TICKS;
+                    self.watch_job(dda);
+                }
+            }
             MachineState::Fault if self.jog.is_some() => self.watch_jog(dda, inp),
             _ => {}
         }
@@ -759,15 +779,24 @@ impl Machine {
     #[cold]
     fn count(&mut self, step: StepOutput) {
         let (rise, dir) = (step.rise(), step.dir());
-        for i in 0..MAX_AXES {
-            if rise & (1 << i) != 0 {
-                self.raw[i] += if dir & (1 << i) != 0 { -1 } else { 1 };
-            }
+        let armed = self.homed && self.state != MachineState::Homing;
+        let mut outside = false;
+        // Only the axes that stepped: the others cannot have crossed a limit.
+        let mut bits = rise as u32;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (Some(p), Some(&min), Some(&max)) = (
+                self.raw.get_mut(i),
+                self.raw_limits.min_steps.get(i),
+                self.raw_limits.max_steps.get(i),
+            ) else {
+                break;
+            };
+            *p += if dir & (1 << i) != 0 { -1 } else { 1 };
+            outside |= *p < min || *p > max;
         }
-        if self.homed
-            && self.state != MachineState::Homing
-            && self.limits.outside(&self.positions()).is_some()
-        {
+        if armed && outside {
             self.raise(FaultCode::SoftLimit);
         }
     }
@@ -788,6 +817,7 @@ impl Machine {
                 // Saturating: a validated home position and a raw count from real travel are far
                 // from i64's range, and a wrapped offset would be a wrong position.
                 self.offset[a] = self.cfg.home[a].home_pos_steps.saturating_sub(self.raw[a]);
+                self.raw_limits = self.limits.minus(&self.offset);
                 self.freeze();
             }
             HomeEvent::NotFound { .. } | HomeEvent::Stuck { .. } => {

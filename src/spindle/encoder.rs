@@ -78,6 +78,13 @@ impl QuadratureEncoder {
         })
     }
 
+    /// A whole speed window of still updates has passed: an update with the same count and
+    /// no index changes nothing (the caller may skip it).
+    #[inline]
+    pub fn is_still(&self) -> bool {
+        self.still >= 1 << self.cfg.window_log2
+    }
+
     /// One tick: the timer's count now and, if an index pulse came since the last tick, the
     /// count the timer latched on it. Bounded, division-free, never panics.
     #[inline]

@@ -28,6 +28,10 @@ impl SimSpindle {
         }
     }
 
+    /// The last [`SimSpindle::advance`] crossed the zero angle (an index pulse is due).
+    pub const fn crossed_zero(&self) -> bool {
+        self.crossed_zero
+    }
     pub const fn angle_turn_q32(&self) -> u32 {
         self.frac_turn_q32
     }

@@ -427,21 +427,28 @@ impl ZJob {
 
     /// The spindle reading for this tick from `spindle`, reading its angle and speed (a few
     /// dozen instructions) only when they are used: on the generator's update ticks during a
-    /// run, and every [`SENSE_REFRESH_TICKS`] ticks; its fault every tick. Interrupt rate.
+    /// run, and every [`SENSE_REFRESH_TICKS`] ticks; its fault every tick of a run. Interrupt
+    /// rate; a decrement on the ticks between without a run.
     #[inline]
     pub fn sense_from<S: SpindleSource>(&mut self, spindle: &S) {
-        let update_tick = self.run.as_ref().is_some_and(|r| r.update_phase == 0);
-        self.refresh_in = self.refresh_in.saturating_sub(1);
-        if update_tick || self.refresh_in == 0 {
-            self.refresh_in = SENSE_REFRESH_TICKS;
-            self.sense(
-                spindle.angle_turn_q32(),
-                spindle.speed_turn_q32_per_tick(),
-                spindle.fault(),
-            );
-        } else {
-            self.source_fault = spindle.fault();
+        if self.refresh_in > 1 {
+            match &self.run {
+                // Nothing reads the spindle between refreshes without a run.
+                None => {
+                    self.refresh_in -= 1;
+                    return;
+                }
+                // The generator reacts to a spindle fault on any tick of a run.
+                Some(r) if r.update_phase != 0 => {
+                    self.refresh_in -= 1;
+                    self.source_fault = spindle.fault();
+                    return;
+                }
+                Some(_) => {}
+            }
         }
+        self.refresh_in = SENSE_REFRESH_TICKS;
+        self.sense(spindle.angle_turn_q32(), spindle.speed_turn_q32_per_tick(), spindle.fault());
     }
 
     /// Checks `spec` against the table and the last sensed spindle speed, and engages (setup

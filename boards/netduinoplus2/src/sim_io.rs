@@ -91,6 +91,8 @@ pub struct CopyEncoders {
     slew: SimEncoderSlew,
     arm: SimEncoder,
     carriage: SimEncoder,
+    /// The decoded counts of the last tick.
+    decoded: [i32; 2],
 }
 
 impl CopyEncoders {
@@ -99,6 +101,7 @@ impl CopyEncoders {
             slew: SimEncoderSlew::new(),
             arm: SimEncoder::new(),
             carriage: SimEncoder::new(),
+            decoded: [0; 2],
         }
     }
 }
@@ -121,11 +124,18 @@ impl board_contract::CopyEncoders for CopyEncoders {
         true
     }
 
-    /// One tick: (arm, carriage) counts. Two loads, a countdown, two clamped adds, two decodes.
+    /// One tick: (arm, carriage) counts. Two loads, a countdown, two clamped adds, two decodes;
+    /// two loads and four compares while the encoders rest on their target.
     #[inline]
     fn read(&mut self) -> [i32; 2] {
         let target = [SIM_ENCODER_TARGET[0].load(Relaxed), SIM_ENCODER_TARGET[1].load(Relaxed)];
+        // Encoders at rest on their target (a hardware counter that does not count): nothing
+        // to drive or decode.
+        if target == self.slew.counts && self.decoded == target {
+            return self.decoded;
+        }
         let [arm, carriage] = self.slew.tick(target);
-        [self.arm.follow(arm), self.carriage.follow(carriage)]
+        self.decoded = [self.arm.follow(arm), self.carriage.follow(carriage)];
+        self.decoded
     }
 }

@@ -50,10 +50,18 @@ impl board_contract::SpindleEncoder for Spindle {
         true
     }
 
-    /// Once per tick: turn the sim, read its encoder. Bounded, multiplies only.
+    /// Once per tick: turn the sim, read its encoder. Bounded, multiplies only; a few loads
+    /// while the spindle stands still.
     #[inline]
     fn update(&mut self) {
-        self.sim.advance(SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed));
+        let speed = SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed);
+        // A still sim spindle whose encoder has seen a whole window of still counts: nothing
+        // would change (as a real timer encoder's count would not).
+        if speed == 0 && !self.sim.crossed_zero() && self.enc.as_ref().is_none_or(|e| e.is_still())
+        {
+            return;
+        }
+        self.sim.advance(speed);
         if let Some(e) = self.enc.as_mut() {
             let (count, index) = self.sim.encoder(e.config().counts_per_rev);
             e.update(count, if SIM_INDEX.load(Relaxed) { index } else { None });

@@ -46,6 +46,9 @@ mod app {
     #[shared]
     struct Shared {
         motion: Motion,
+        // Only the priority-3 tasks (tick, e-stop) touch the port: they never preempt each other,
+        // so the tick writes it without a lock.
+        #[lock_free]
         step_port: board::StepPort,
         link: Link,
         host_port: link::HostPort,
@@ -195,7 +198,7 @@ mod app {
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true])]
-    fn tick(cx: tick::Context) {
+    fn tick(mut cx: tick::Context) {
         let l = cx.local;
         #[cfg(feature = "isr-cycles")]
         let entry = board_contract::CycleCounter::now(&*l.cycles);
@@ -210,7 +213,8 @@ mod app {
             link_ok: LINK_OK.load(Relaxed),
             tick_overrun: *l.overran,
         };
-        (cx.shared.motion, cx.shared.step_port).lock(|m, port| {
+        let port = cx.shared.step_port;
+        cx.shared.motion.lock(|m| {
             link::zslide::sense(l.spindle, &mut m.z);
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
@@ -238,12 +242,14 @@ mod app {
                     port.disable();
                 }
             }
-            let room = FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0;
-            let events = EVENTS_WAITING.load(Relaxed)
-                && m.machine.event_job()
-                && m.playback.free() >= EVENT_REFILL;
-            let wire = link::wire::wants_feed(m);
-            if room || events || wire || m.machine.wants_background() {
+            // Cheapest first: most ticks stop at the first test that says "no work".
+            let wake = (FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0)
+                || m.machine.wants_background()
+                || (EVENTS_WAITING.load(Relaxed)
+                    && m.machine.event_job()
+                    && m.playback.free() >= EVENT_REFILL)
+                || link::wire::wants_feed(m);
+            if wake {
                 FEEDER_BLOCKED.store(false, Relaxed);
                 l.tick_wakes_feeder.write(());
             }
@@ -283,10 +289,10 @@ mod app {
     /// E-stop edge: drivers off at once; the tick latches the fault (even if the loop closed
     /// again meanwhile) and stops the machine.
     #[task(binds = EXTI15_10, priority = 3, shared = [step_port], local = [estop])]
-    fn estop(mut cx: estop::Context) {
+    fn estop(cx: estop::Context) {
         if cx.local.estop.clear() {
             ESTOP_EDGE.store(true, Relaxed);
-            cx.shared.step_port.lock(|port| port.disable());
+            cx.shared.step_port.disable();
         }
     }
 
