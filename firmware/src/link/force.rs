@@ -18,7 +18,7 @@ use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 
-use super::Motion;
+use super::{LastJob, Motion};
 
 /// The board has a force sample source the link can run a force job from: the simulator's
 /// plant, or the real board's force ADC (a job is refused while [`ADC_SAMPLE_HZ`] is 0).
@@ -31,17 +31,15 @@ pub static ADC_SAMPLE_HZ: AtomicU32 = AtomicU32::new(0);
 /// Rate the real board starts its force ADC at: the chain's 10 kHz (2 kHz control).
 pub const ADC_START_HZ: u32 = 10_000;
 
-/// The force job (the last one, for its telemetry, until the next `ArmForce`) and the
-/// simulated plant the next one samples.
+/// The simulated plant the next force job samples (the job itself is in [`Motion::job`]).
 #[derive(Default)]
 pub struct ForceSlot {
-    pub job: Option<ForceJob>,
     pub sim: Option<SimMillingParams>,
 }
 
 /// The force job is armed or running.
 pub fn live(m: &Motion) -> bool {
-    m.force.job.as_ref().is_some_and(|j| j.is_live())
+    m.job.force().is_some_and(|j| j.is_live())
 }
 
 /// One tick with a running force job (`None`: none, the caller ticks as usual). Interrupt
@@ -49,8 +47,8 @@ pub fn live(m: &Motion) -> bool {
 /// `tick_hz / sample_hz` ticks and one control update every fifth of those; division-free.
 #[inline]
 pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
-    let Motion { dda, machine, force, .. } = m;
-    let job = force.job.as_mut().filter(|j| j.is_running())?;
+    let Motion { dda, machine, job, .. } = m;
+    let job = job.force_mut().filter(|j| j.is_running())?;
     Some(link_job::link_tick(machine, dda, inputs, job))
 }
 
@@ -84,7 +82,7 @@ pub fn arm(
     let tick_hz = m.machine.config().wire.machine.tick_hz;
     let job = ForceJob::new(p, tick_hz, TICK_SAMPLED, m.force.sim.as_ref())
         .map_err(|_| ErrorCode::OutOfRange)?;
-    m.force.job = Some(job);
+    m.job = LastJob::Force(job);
     Ok(())
 }
 
@@ -99,14 +97,14 @@ pub fn set_sim(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
 
 /// An armed (not yet started) force job waits for this `Start`.
 pub fn armed(m: &Motion) -> bool {
-    m.force.job.as_ref().is_some_and(|j| j.is_armed())
+    m.job.force().is_some_and(|j| j.is_armed())
 }
 
 /// After the machine accepted `Start`: the loop runs from the next tick, positions counted
 /// from the feed axis's position now (same critical section as the start).
 pub fn start(m: &mut Motion) {
-    let Motion { machine, force, .. } = m;
-    if let Some(j) = force.job.as_mut() {
+    let Motion { machine, job, .. } = m;
+    if let Some(j) = job.force_mut() {
         let pos = machine.positions().get(j.axis()).copied().unwrap_or(0);
         j.start(pos);
     }
@@ -114,14 +112,14 @@ pub fn start(m: &mut Motion) {
 
 /// The link dropped the job (Abort, ClearFault, SetConfig, Home).
 pub fn drop_job(m: &mut Motion) {
-    if let Some(j) = m.force.job.as_mut() {
+    if let Some(j) = m.job.force_mut() {
         j.end();
     }
 }
 
 /// The force job's telemetry, into `s`.
 pub fn status(m: &Motion, s: &mut Status) {
-    if let Some(j) = m.force.job.as_ref() {
+    if let Some(j) = m.job.force() {
         let t = j.telemetry();
         s.force_mn = t.force_mn;
         s.force_peak_mn = t.peak_mn;
@@ -138,8 +136,8 @@ pub fn status(m: &Motion, s: &mut Status) {
 /// and one control update; division-free, bounded (the frames slice is one half buffer).
 #[inline]
 pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>, overrun: bool) {
-    let Motion { dda, machine, force, z, .. } = m;
-    let Some(job) = force.job.as_mut().filter(|j| j.is_running()) else { return };
+    let Motion { dda, machine, job, z, .. } = m;
+    let Some(job) = job.force_mut().filter(|j| j.is_running()) else { return };
     if overrun {
         job.source_fault(FaultCode::SensorFault);
         return;

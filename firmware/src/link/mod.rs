@@ -36,7 +36,6 @@ use motion::protocol::{
     CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
-use motion::wire::link_job::WireJob;
 use motion::zslide::link_job::ZJob;
 use motion::Dda;
 
@@ -49,6 +48,7 @@ mod feed;
 /// Constant-force milling jobs (`ArmForce`).
 pub mod force;
 mod host_port;
+mod last_job;
 mod session;
 mod target;
 /// Wire-manipulator jobs (`ArmWire`).
@@ -57,6 +57,7 @@ pub mod wire;
 pub mod zslide;
 
 pub use host_port::{encode, HostPort};
+pub use last_job::LastJob;
 pub use session::Link;
 pub use target::Target;
 
@@ -116,13 +117,13 @@ pub struct Motion {
     pub machine: Machine,
     /// The event job's playback (the last job's, for its counts, until the next start).
     pub playback: Playback,
-    /// The wire job (the last one, for its counts, until the next `ArmWire`).
-    pub wire: Option<WireJob>,
+    /// The last wire or force job (for its counts, until the next `ArmWire` or `ArmForce`).
+    pub job: LastJob,
     /// The Z-slide job: the active table and the current (or last) run.
     pub z: ZJob,
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: copy::CopyState,
-    /// The force job and the simulated plant (issue 4).
+    /// The simulated plant the next force job samples.
     pub force: force::ForceSlot,
 }
 
@@ -151,7 +152,7 @@ impl Motion {
                 dda,
                 machine,
                 playback: Playback::new(SizeScale::ONE),
-                wire: None,
+                job: LastJob::None,
                 z: ZJob::new(),
                 copy: copy::CopyState::new(),
                 force: force::ForceSlot::default(),

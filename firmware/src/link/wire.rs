@@ -16,33 +16,33 @@ use motion::segment::{Rate, Segment};
 use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
 
-use super::Motion;
+use super::{LastJob, Motion};
 
 /// The wire job is live (armed, or started and not yet ended).
 pub fn live(m: &Motion) -> bool {
-    m.wire.as_ref().is_some_and(|w| w.is_live())
+    m.job.wire().is_some_and(|w| w.is_live())
 }
 
 /// One tick with a live wire job (`None`: no wire job, the caller ticks as usual). Interrupt
 /// rate: see `motion::wire::link_job::tick`.
 #[inline]
 pub fn tick(m: &mut Motion, inputs: &Inputs, wire_stall: bool) -> Option<TickOut> {
-    let Motion { dda, machine, wire, .. } = m;
-    let w = wire.as_mut().filter(|w| w.is_live())?;
+    let Motion { dda, machine, job, .. } = m;
+    let w = job.wire_mut().filter(|w| w.is_live())?;
     Some(link_job::tick(machine, dda, inputs, w, wire_stall))
 }
 
 /// The feeder has wire work (division-free; asked by the tick).
 #[inline]
 pub fn wants_feed(m: &Motion) -> bool {
-    m.wire.as_ref().is_some_and(|w| w.wants_feed(&m.dda))
+    m.job.wire().is_some_and(|w| w.wants_feed(&m.dda))
 }
 
 /// The feeder's wire work (divides; control task). A refused segment cannot happen (every one
 /// was checked when queued); it stops the job like an abort would.
 pub fn feed(m: &mut Motion) {
-    let Motion { dda, machine, wire, .. } = m;
-    let Some(w) = wire.as_mut() else { return };
+    let Motion { dda, machine, job, .. } = m;
+    let Some(w) = job.wire_mut() else { return };
     if w.feed(dda).is_err() {
         w.drop_job();
         let _ = machine.command(MachineCommand::Abort, dda);
@@ -68,20 +68,20 @@ pub fn arm(m: &mut Motion, plain_queue_empty: bool, p: &WireJobParams) -> Result
     };
     let cfg = m.machine.config().wire.machine;
     let job = WireJob::new(&cfg, params, p.segments).map_err(|_| ErrorCode::InvalidConfig)?;
-    m.wire = Some(job);
+    m.job = LastJob::Wire(job);
     Ok(())
 }
 
 /// Free segment slots of the live wire job.
 pub fn credits(m: &Motion) -> Option<u16> {
-    m.wire.as_ref().filter(|w| w.is_live()).map(|w| w.credits().min(u16::MAX as usize) as u16)
+    m.job.wire().filter(|w| w.is_live()).map(|w| w.credits().min(u16::MAX as usize) as u16)
 }
 
 /// Queues one segment into the live wire job: the machine's checks first (a refusal changes
 /// nothing), then the job's queue.
 pub fn queue(m: &mut Motion, seg: &Segment) -> Result<MachineState, ErrorCode> {
-    let Motion { dda, machine, wire, .. } = m;
-    let Some(w) = wire.as_mut().filter(|w| w.is_live()) else {
+    let Motion { dda, machine, job, .. } = m;
+    let Some(w) = job.wire_mut().filter(|w| w.is_live()) else {
         return Err(ErrorCode::Internal);
     };
     if w.credits() == 0 {
@@ -97,8 +97,8 @@ pub fn queue(m: &mut Motion, seg: &Segment) -> Result<MachineState, ErrorCode> {
 /// `Start` with a live wire job: the machine's `StartWire`, then the first segments into the DDA
 /// in the same critical section (the first tick of the job already moves).
 pub fn start(m: &mut Motion) -> Result<(), ErrorCode> {
-    let Motion { dda, machine, wire, .. } = m;
-    let Some(w) = wire.as_mut().filter(|w| w.is_live()) else {
+    let Motion { dda, machine, job, .. } = m;
+    let Some(w) = job.wire_mut().filter(|w| w.is_live()) else {
         return Err(ErrorCode::Internal);
     };
     machine.command(MachineCommand::StartWire, dda).map_err(|e| e.error_code())?;
@@ -112,14 +112,14 @@ pub fn start(m: &mut Motion) -> Result<(), ErrorCode> {
 
 /// The link dropped the job (Abort, ClearFault, SetConfig, Home).
 pub fn drop_job(m: &mut Motion) {
-    if let Some(w) = m.wire.as_mut() {
+    if let Some(w) = m.job.wire_mut() {
         w.drop_job();
     }
 }
 
 /// The wire job's counters and the wire power output, into `s`.
 pub fn status(m: &Motion, s: &mut Status) {
-    if let Some(w) = m.wire.as_ref() {
+    if let Some(w) = m.job.wire() {
         let st = w.stats();
         s.wire_stalls = st.stalls;
         s.wire_retraces = st.retrace_segments;
