@@ -141,7 +141,7 @@ fn all_requests() -> Vec<Request> {
             resume_segments: 2,
             segments: 91,
         }),
-        RequestBody::SimInject { wire_stall: true },
+        RequestBody::Sim(SimRequest::Inject { wire_stall: true }),
     ]
     .into_iter()
     .enumerate()

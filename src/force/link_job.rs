@@ -1,6 +1,6 @@
 //! A force job on the link firmware (`ArmForce`, issue 4): the force chain and the control law
 //! around one segment job, fed per ADC sample, with the simulated milling plant of a simulator
-//! board (`SimMilling`) as the sample source where the board has no real ADC.
+//! board (`Sim(Milling)`) as the sample source where the board has no real ADC.
 //!
 //! The firmware calls [`ForceJob::tick_sim`] from the DDA tick (simulator board: one plant
 //! sample every `ticks_per_sample` ticks, stepped from the feed axis's position) or
@@ -187,7 +187,7 @@ pub fn check_job(p: &ForceJobParams) -> Result<(), &'static str> {
     Ok(())
 }
 
-/// The checks `SimMilling` makes on its own; `Err` names the field. (The tooth delay, which
+/// The checks `Sim(Milling)` makes on its own; `Err` names the field. (The tooth delay, which
 /// also depends on the job's sample rate and flutes, is checked when both are known.)
 pub fn check_sim(s: &SimMillingParams) -> Result<(), &'static str> {
     if s.nm_per_step == 0 {
@@ -310,7 +310,7 @@ pub fn case_a_job() -> ForceJobParams {
     job_params(&s, &super::scenario::chain_config(), 0)
 }
 
-/// The Case A plant of `super::scenario` as `SimMilling` parameters, with `fault` injected
+/// The Case A plant of `super::scenario` as `Sim(Milling)` parameters, with `fault` injected
 /// 5 mm into the cut (the scenario's fault variants' point).
 pub fn case_a_sim(fault: SimForceFault) -> SimMillingParams {
     sim_params(&super::scenario::plant_params(), fault, 5_000)

@@ -1,9 +1,11 @@
-//! Session tests of the force-job requests (issue 4): `ArmForce`, `SimMilling`, the Status
+//! Session tests of the force-job requests (issue 4): `ArmForce`, `Sim(Milling)`, the Status
 //! force fields.
 
 use super::tests::config;
 use super::*;
-use crate::force::link_job::{case_a_job, case_a_sim};
+use crate::force::link_job::case_a_job;
+#[cfg(feature = "sim-inputs")]
+use crate::force::link_job::case_a_sim;
 use crate::machine::MachineState;
 use crate::segment::Rate;
 
@@ -44,6 +46,7 @@ pub(crate) fn extreme_force_params() -> ForceJobParams {
     }
 }
 
+#[cfg(feature = "sim-inputs")]
 pub(crate) fn extreme_sim_params() -> SimMillingParams {
     SimMillingParams {
         kc_mn_per_mm2: u32::MAX,
@@ -103,24 +106,25 @@ fn named(field: &str) -> Option<(ErrorCode, NakDetail)> {
 
 #[test]
 fn force_requests_round_trip_and_keep_their_kinds() {
-    for body in [
-        RequestBody::ArmForce(case_a_job()),
-        RequestBody::ArmForce(extreme_force_params()),
-        RequestBody::SimMilling(case_a_sim(SimForceFault::SpindleStop)),
-        RequestBody::SimMilling(extreme_sim_params()),
-    ] {
+    #[allow(unused_mut)]
+    let mut bodies =
+        vec![RequestBody::ArmForce(case_a_job()), RequestBody::ArmForce(extreme_force_params())];
+    #[cfg(feature = "sim-inputs")]
+    bodies.extend([
+        RequestBody::Sim(SimRequest::Milling(case_a_sim(SimForceFault::SpindleStop))),
+        RequestBody::Sim(SimRequest::Milling(extreme_sim_params())),
+    ]);
+    for body in bodies {
         let req = Request { seq: 9, body };
         let mut buf = [0u8; MAX_MESSAGE];
         let bytes = postcard::to_slice(&req, &mut buf).unwrap();
         assert_eq!(decode_request(bytes), Ok(req.clone()));
     }
-    assert_eq!(RequestBody::ArmForce(case_a_job()).kind(), 24);
-    assert_eq!(RequestBody::SimMilling(extreme_sim_params()).kind(), 25);
+    assert_eq!(RequestBody::ArmForce(case_a_job()).kind(), 22);
     assert_eq!(
         command_kind(&RequestBody::ArmForce(case_a_job())),
         command_kind(&RequestBody::Start)
     );
-    assert_eq!(command_kind(&RequestBody::SimMilling(extreme_sim_params())), None);
     for p in ForcePhase::ALL {
         assert_eq!(ForcePhase::from_u8(p as u8), p);
     }
@@ -148,33 +152,43 @@ fn arm_force_refusals_name_the_field_and_change_nothing() {
     }
     let r = l.send(RequestBody::ArmForce(extreme_force_params()));
     assert!(matches!(nak(&r), Some((ErrorCode::OutOfRange, NakDetail::Config { .. }))));
-    let mut s = case_a_sim(SimForceFault::None);
-    s.spindle_mrev_s = 0;
-    assert_eq!(nak(&l.send(RequestBody::SimMilling(s))), named("spindle_mrev_s"));
-    assert_eq!(
-        nak(&l.send(RequestBody::SimMilling(extreme_sim_params()))).map(|n| n.0),
-        Some(ErrorCode::OutOfRange)
-    );
     assert_eq!(l.t, before, "refusals change nothing");
-    // Without the capabilities: Unsupported, nothing changes.
+    // Without the capability: Unsupported, nothing changes.
     let mut plain = Link::new(CAP_DDA | CAP_SIM_INPUTS);
     let before = plain.t.clone();
     let r = plain.send(RequestBody::ArmForce(case_a_job()));
     assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::Unsupported));
-    let r = plain.send(RequestBody::SimMilling(case_a_sim(SimForceFault::None)));
-    assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::Unsupported));
-    let mut no_sim = Link::new(CAP_DDA | CAP_FORCE_JOB);
-    let r = no_sim.send(RequestBody::SimMilling(case_a_sim(SimForceFault::None)));
-    assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::Unsupported));
     assert_eq!(plain.t, before);
+}
+
+#[cfg(feature = "sim-inputs")]
+#[test]
+fn sim_milling_needs_both_capabilities_and_names_bad_fields() {
+    let milling = |p| RequestBody::Sim(SimRequest::Milling(p));
+    let mut l = Link::new(CAPS);
+    let before = l.t.clone();
+    let mut s = case_a_sim(SimForceFault::None);
+    s.spindle_mrev_s = 0;
+    assert_eq!(nak(&l.send(milling(s))), named("spindle_mrev_s"));
+    let r = l.send(milling(extreme_sim_params()));
+    assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::OutOfRange));
+    assert_eq!(l.t, before, "refusals change nothing");
+    assert_eq!(command_kind(&milling(extreme_sim_params())), None);
+    for caps in [CAP_DDA | CAP_SIM_INPUTS, CAP_DDA | CAP_FORCE_JOB] {
+        let mut plain = Link::new(caps);
+        let before = plain.t.clone();
+        let r = plain.send(milling(case_a_sim(SimForceFault::None)));
+        assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::Unsupported));
+        assert_eq!(plain.t, before);
+    }
+    let sim = case_a_sim(SimForceFault::Stuck { channel: 2 });
+    assert!(matches!(l.send(milling(sim)), Response::Ack { .. }));
+    assert_eq!(l.t.sim_milling, Some(sim));
 }
 
 #[test]
 fn arm_force_arms_once_in_ready_and_the_table_refuses_it_in_fault() {
     let mut l = Link::new(CAPS);
-    let sim = case_a_sim(SimForceFault::Stuck { channel: 2 });
-    assert!(matches!(l.send(RequestBody::SimMilling(sim)), Response::Ack { .. }));
-    assert_eq!(l.t.sim_milling, Some(sim));
     assert!(matches!(l.send(RequestBody::ArmForce(case_a_job())), Response::Ack { .. }));
     assert_eq!(l.t.force_armed, Some(case_a_job()));
     // Armed twice: refused with the state, the first arming stays.

@@ -6,6 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use super::bounded::{BlockBytes, EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
+#[cfg(feature = "sim-inputs")]
+use super::sim::messages::SimRequest;
 use crate::config::{
     AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, TickTiming, MAX_AXES,
 };
@@ -14,7 +16,7 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 5;
+pub const PROTOCOL_VERSION: u16 = 6;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -44,7 +46,8 @@ pub const CAP_SENSORS: u32 = 1 << 5;
 pub const CAP_EVENTS: u32 = 1 << 6;
 /// `ArmWire` (wire-manipulator jobs with wire-stall retrace) is honoured.
 pub const CAP_WIRE_JOB: u32 = 1 << 7;
-/// `SimInject` drives simulated inputs (a simulator board only: QEMU has no GPIO).
+/// `Sim` requests drive simulated inputs (a simulator board only: QEMU has no GPIO; the
+/// firmware is built with the `sim-inputs` feature).
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
 // -- Z-slide job (issue 5) --
 /// Z-slide jobs (`ZTableBegin`/`ZTableChunk`/`ZTableEnd`, `StartZ`) are honoured.
@@ -52,7 +55,7 @@ pub const CAP_ZSLIDE_JOB: u32 = 1 << 9;
 /// Most table bytes in one `ZTableChunk`.
 pub const MAX_Z_CHUNK: usize = 192;
 // -- force job (issue 4) --
-/// `ArmForce` (constant-force milling jobs) is honoured; `SimMilling` too with `CAP_SIM_INPUTS`.
+/// `ArmForce` (constant-force milling jobs) is honoured; `Sim(Milling)` too with `CAP_SIM_INPUTS`.
 pub const CAP_FORCE_JOB: u32 = 1 << 10;
 // -- copy mode (issue 6) --
 /// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
@@ -117,11 +120,6 @@ pub enum RequestBody {
     /// job, and `Start` runs it through the wire-stall retrace controller instead of the plain
     /// feeder. Parameters out of range -> `OutOfRange`.
     ArmWire(WireJobParams),
-    /// Simulated inputs (only with `CAP_SIM_INPUTS`, else `Unsupported`): the wire-stall
-    /// switch level the board reads from its next tick on, until the next `SimInject`.
-    SimInject {
-        wire_stall: bool,
-    },
     // -- Z-slide job (issue 5) --
     /// Opens a Z coefficient-table upload (drops an unfinished one). Queue column; refused
     /// (`OutOfState`) while a Z job runs; a bad header -> `InvalidTable`.
@@ -142,12 +140,6 @@ pub enum RequestBody {
     /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
     /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::ZSlide { fault }`.
     StartZ(ZJobSpec),
-    /// Simulated spindle (only with `CAP_SIM_INPUTS`, else `Unsupported`): its speed from the
-    /// next tick on (thousandths of rpm, >= 0) and whether its encoder gives index pulses.
-    SimSpindle {
-        rpm_milli: u32,
-        index: bool,
-    },
     // -- force job (issue 4) --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
     /// job armed; needs `CAP_FORCE_JOB`): from its `Start` on, force samples run through the
@@ -155,10 +147,6 @@ pub enum RequestBody {
     /// the feed through the machine's fault model. Parameters out of range -> `OutOfRange` with
     /// `NakDetail::Config` naming the field.
     ArmForce(ForceJobParams),
-    /// The simulated milling plant a simulator board's force samples come from (only with
-    /// `CAP_SIM_INPUTS` and `CAP_FORCE_JOB`, else `Unsupported`); used by the next `ArmForce`
-    /// job's start. Out of range -> `OutOfRange` naming the field.
-    SimMilling(SimMillingParams),
     // -- copy mode (issue 6) --
     /// Start a copy job (`Ready`, nothing queued; needs `CAP_COPY_JOB`): from the next tick the
     /// arm and carriage encoders drive theta and r live, r scaled `m`:`k` (each 1..=4, else
@@ -176,14 +164,19 @@ pub enum RequestBody {
     ReadTeach {
         block: u16,
     },
-    /// Simulated encoders (only with `CAP_SIM_INPUTS`, else `Unsupported`): the counts the
-    /// simulated arm and carriage encoders slew to, one count per
-    /// `polar::copy_link::SIM_TICKS_PER_COUNT` ticks each.
-    SimEncoders {
-        arm_counts: i32,
-        carriage_counts: i32,
-    },
+    /// A simulator board's test hook ([`SimRequest`]; only with `CAP_SIM_INPUTS`, else
+    /// `Unsupported`). Compiled only with the `sim-inputs` feature: a board built without it
+    /// does not decode the variant and answers it `Unsupported` all the same.
+    ///
+    /// Stays the last variant: compiled out, it must not shift any other variant's index. A
+    /// new request goes before it, and [`KIND_SIM`] moves up by one.
+    #[cfg(feature = "sim-inputs")]
+    Sim(SimRequest),
 }
+
+/// The postcard index of `RequestBody::Sim`, known with and without the `sim-inputs` feature
+/// (a board without it recognises the request it cannot decode).
+pub const KIND_SIM: u8 = 25;
 
 // -- force job (issue 4) --
 /// Contact strategy of a force job (`motion::force::control::ContactStrategy`).
@@ -314,46 +307,6 @@ impl ForcePhase {
     }
 }
 
-/// A fault the simulated plant injects once the tool is `fault_at_um` into the work.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum SimForceFault {
-    None,
-    /// A channel reads full scale.
-    Saturated {
-        channel: u8,
-    },
-    /// A channel repeats its last reading.
-    Stuck {
-        channel: u8,
-    },
-    /// The spindle stops.
-    SpindleStop,
-}
-
-/// The simulated milling plant (`SimMilling`): eq 4.17 `F = Kc b [x(t) - x(t - tau)]`
-/// (`Kc = K a`) with a depth step, seen through a simulated 12-bit ADC.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SimMillingParams {
-    /// Cutting constant Kc: force per mm^2 of chip section (axial depth times the feed per
-    /// tooth), mN/mm^2 (eq 4.17's `K a`: 205 N/mm^3 x 20 mm = 4 100 000); axial depth b before
-    /// and after its step at `step_at_um` of penetration, um.
-    pub kc_mn_per_mm2: u32,
-    pub b_before_um: u32,
-    pub b_after_um: u32,
-    pub step_at_um: u32,
-    /// The wall: the feed axis's position (steps from where the job starts) where the cut begins.
-    pub wall_steps: i64,
-    /// Feed-axis resolution, nm per step.
-    pub nm_per_step: u32,
-    /// The plant's spindle speed, milli-revolutions per second (the tooth delay).
-    pub spindle_mrev_s: u32,
-    /// Two-tooth periodic force (eq 4.19).
-    pub periodic: bool,
-    pub fault: SimForceFault,
-    /// Penetration where `fault` starts, um.
-    pub fault_at_um: u32,
-}
-
 /// A wire job's stall handling (`motion::wire::controller::StallParams`) and length.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct WireJobParams {
@@ -407,20 +360,18 @@ impl RequestBody {
             RequestBody::StartPlayback { .. } => 15,
             RequestBody::JogOffLimit => 16,
             RequestBody::ArmWire(_) => 17,
-            RequestBody::SimInject { .. } => 18,
             // -- Z-slide job (issue 5) --
-            RequestBody::ZTableBegin(_) => 19,
-            RequestBody::ZTableChunk { .. } => 20,
-            RequestBody::ZTableEnd { .. } => 21,
-            RequestBody::StartZ(_) => 22,
-            RequestBody::SimSpindle { .. } => 23,
+            RequestBody::ZTableBegin(_) => 18,
+            RequestBody::ZTableChunk { .. } => 19,
+            RequestBody::ZTableEnd { .. } => 20,
+            RequestBody::StartZ(_) => 21,
             // -- force job (issue 4) --
-            RequestBody::ArmForce(_) => 24,
-            RequestBody::SimMilling(_) => 25,
+            RequestBody::ArmForce(_) => 22,
             // -- copy mode (issue 6) --
-            RequestBody::StartCopy { .. } => 26,
-            RequestBody::ReadTeach { .. } => 27,
-            RequestBody::SimEncoders { .. } => 28,
+            RequestBody::StartCopy { .. } => 23,
+            RequestBody::ReadTeach { .. } => 24,
+            #[cfg(feature = "sim-inputs")]
+            RequestBody::Sim(_) => KIND_SIM,
         }
     }
 

@@ -8,7 +8,9 @@
 //!   documentation tables ([`markdown_table`]).
 //! * [`session`]: [`BoardLink`], the board's sequence/ACK state machine over a [`LinkTarget`].
 //! * [`host`]: [`HostLink`], the host's window, retransmission and credit accounting.
-//! * [`sim`]: [`SimTarget`], a fake machine for tests, fuzzing and loopback.
+//! * [`sim`]: the simulator board's test hooks ([`SimRequest`] in `RequestBody::Sim`, with the
+//!   `sim-inputs` feature) and [`SimTarget`] / [`CopySim`], fake machines for tests, fuzzing and
+//!   loopback (with the feature, or in this crate's tests).
 //!
 //! Reliability: every request carries a seq; the board executes seqs strictly in order, exactly
 //! once, and answers each with an Ack or a Nak; the host retransmits (go-back-N) until answered.
@@ -23,8 +25,6 @@ pub mod host;
 pub mod messages;
 pub mod session;
 pub mod sim;
-// -- copy mode (issue 6) --
-pub mod sim_copy;
 
 pub use bounded::{
     BlockBytes, EventBlock, FixedStr, SegmentBatch, MAX_EVENT_BLOCK, MAX_SEGMENTS_PER_FRAME,
@@ -37,8 +37,11 @@ pub use frame::{
 pub use host::{HostConfig, HostEvent, HostLink, Rejection, SendError};
 pub use messages::*;
 pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_MEMORY};
-pub use sim::SimTarget;
-pub use sim_copy::CopySim;
+#[cfg(feature = "sim-inputs")]
+pub use sim::SimRequest;
+#[cfg(any(test, feature = "sim-inputs"))]
+pub use sim::{CopySim, SimTarget};
+pub use sim::{SimForceFault, SimMillingParams};
 
 #[cfg(test)]
 mod tests;

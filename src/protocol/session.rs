@@ -38,9 +38,12 @@
 //! | ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::ZSlide`) |
 //! | StartZ (Start column) | a table (`OutOfState`), nothing queued, a spec in range and the pre-start check (`OutOfRange`) |
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
-//! | ReadTeach, SimEncoders (not commands) | SimEncoders: `CAP_SIM_INPUTS` (`Unsupported`) |
+//! | ReadTeach (not a command) | nothing |
 //! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
-//! | SimMilling (no column) | `CAP_SIM_INPUTS` and `CAP_FORCE_JOB` (`Unsupported`), parameters in range (`OutOfRange` naming the field) |
+//! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_FORCE_JOB` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
+//!
+//! A board built without the `sim-inputs` feature cannot decode `Sim`; it answers it
+//! `Unsupported` (seq consumed) as a board with the feature but without `CAP_SIM_INPUTS` does.
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
@@ -53,6 +56,9 @@ use crate::polar::playback::SizeScale;
 use crate::segment::{Rate, Segment};
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 use crate::zslide::link_requests::ZNak;
+
+#[cfg(feature = "sim-inputs")]
+use super::sim::messages::SimRequest;
 
 /// Outcomes remembered for retransmissions; the host's window must not exceed it.
 pub const RESULT_MEMORY: usize = 32;
@@ -118,11 +124,6 @@ pub trait LinkTarget {
     fn arm_wire(&mut self, _params: &WireJobParams) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
-    /// Sets the simulated wire-stall switch (only called when the board announces
-    /// `CAP_SIM_INPUTS`).
-    fn sim_inject(&mut self, _wire_stall: bool) -> Result<(), ErrorCode> {
-        Err(ErrorCode::Unsupported)
-    }
     // -- Z-slide job (issue 5) --
     /// `ZTableBegin` (see `motion::zslide::link_requests::ZRequests`). A refusal changes
     /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
@@ -141,10 +142,6 @@ pub trait LinkTarget {
     fn start_z(&mut self, _spec: &ZJobSpec) -> Result<(), ZNak> {
         Err((ErrorCode::Unsupported, NakDetail::None))
     }
-    /// `SimSpindle` (only called when the board announces `CAP_SIM_INPUTS`).
-    fn sim_spindle(&mut self, _rpm_milli: u32, _index: bool) -> Result<(), ErrorCode> {
-        Err(ErrorCode::Unsupported)
-    }
     // -- copy mode (issue 6) --
     /// Starts a copy job with a checked size scale (`Ready`, nothing queued, no job; else
     /// `OutOfState`). Targets without copy jobs: `Unsupported`.
@@ -160,10 +157,6 @@ pub trait LinkTarget {
     fn teach_resend(&self) -> Option<TeachChunk> {
         None
     }
-    /// Sets the simulated encoders' target counts (only called with `CAP_SIM_INPUTS`).
-    fn sim_encoders(&mut self, _counts: [i32; 2]) -> Result<(), ErrorCode> {
-        Err(ErrorCode::Unsupported)
-    }
     // -- force job (issue 4) --
     /// Arms a force job with checked parameters (`Ready`, empty queue, no events, no other job
     /// armed; else `OutOfState`). `OutOfRange` from the target means the sample rate does not
@@ -171,9 +164,11 @@ pub trait LinkTarget {
     fn arm_force(&mut self, _params: &ForceJobParams) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
-    /// Sets the simulated milling plant (checked; only called when the board announces
-    /// `CAP_SIM_INPUTS` and `CAP_FORCE_JOB`); used by the next force job's start.
-    fn sim_milling(&mut self, _params: &SimMillingParams) -> Result<(), ErrorCode> {
+    /// A simulator board's test hook, only called when the board announces `CAP_SIM_INPUTS`
+    /// (and `CAP_FORCE_JOB` for `Milling`, whose parameters are checked). Only with the
+    /// `sim-inputs` feature: production targets have no hooks to implement.
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, _req: &SimRequest) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
 }
@@ -214,15 +209,23 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::GetStatus
         | RequestBody::SetOverride { .. }
         | RequestBody::SetStatusPeriod { .. }
-        | RequestBody::SimInject { .. }
-        | RequestBody::SimSpindle { .. }
-        | RequestBody::ReadTeach { .. }
-        | RequestBody::SimEncoders { .. }
-        | RequestBody::SimMilling(_) => return None,
+        | RequestBody::ReadTeach { .. } => return None,
+        #[cfg(feature = "sim-inputs")]
+        RequestBody::Sim(_) => return None,
     })
 }
 
 type Outcome = Result<(), (ErrorCode, NakDetail)>;
+
+/// The message is a `RequestBody::Sim` (its body's variant index, a one-byte varint, follows
+/// the seq).
+#[cfg(not(feature = "sim-inputs"))]
+fn is_sim_request(msg: &[u8]) -> bool {
+    match postcard::take_from_bytes::<u32>(msg) {
+        Ok((_, rest)) => rest.first() == Some(&KIND_SIM),
+        Err(_) => false,
+    }
+}
 
 /// `kind` recorded for a request that passed its CRC but did not decode.
 const MALFORMED_KIND: u8 = 0xFF;
@@ -321,6 +324,14 @@ impl BoardLink {
             Ok(req) => return self.handle(&req, t),
             Err(m) => m,
         };
+        #[cfg(not(feature = "sim-inputs"))]
+        if let Some(seq) = malformed.seq.filter(|_| is_sim_request(msg)) {
+            // A test hook this build has no code for: refused as a board without the
+            // simulator capability refuses it, not counted as a bad frame.
+            return self.sequenced(seq, KIND_SIM, t, |_, _| {
+                Err((ErrorCode::Unsupported, NakDetail::None))
+            });
+        }
         self.frames_bad = self.frames_bad.wrapping_add(1);
         match malformed {
             Malformed { seq: None } => self.link_nak(ErrorCode::Malformed, t),
@@ -648,13 +659,6 @@ impl BoardLink {
                 })?;
                 Ok(Reply::None)
             }
-            RequestBody::SimInject { wire_stall } => {
-                if self.capabilities & CAP_SIM_INPUTS == 0 {
-                    return Err(plain(ErrorCode::Unsupported));
-                }
-                t.sim_inject(*wire_stall).map_err(plain)?;
-                Ok(Reply::None)
-            }
             // -- Z-slide job (issue 5) --
             RequestBody::ZTableBegin(h) => {
                 t.z_table_begin(h).map_err(|e| state_detail(e, machine))?;
@@ -674,13 +678,6 @@ impl BoardLink {
             RequestBody::StartZ(spec) => {
                 t.config().validate().map_err(config_nak)?;
                 t.start_z(spec).map_err(|e| state_detail(e, machine))?;
-                Ok(Reply::None)
-            }
-            RequestBody::SimSpindle { rpm_milli, index } => {
-                if self.capabilities & CAP_SIM_INPUTS == 0 {
-                    return Err(plain(ErrorCode::Unsupported));
-                }
-                t.sim_spindle(*rpm_milli, *index).map_err(plain)?;
                 Ok(Reply::None)
             }
             // -- copy mode (issue 6) --
@@ -710,20 +707,9 @@ impl BoardLink {
             RequestBody::ReadTeach { block } => {
                 Ok(Reply::Teach(t.read_teach(*block).map_err(plain)?))
             }
-            RequestBody::SimEncoders { arm_counts, carriage_counts } => {
-                if self.capabilities & CAP_SIM_INPUTS == 0 {
-                    return Err(plain(ErrorCode::Unsupported));
-                }
-                t.sim_encoders([*arm_counts, *carriage_counts]).map_err(plain)?;
-                Ok(Reply::None)
-            }
-            RequestBody::SimMilling(p) => {
-                let caps = CAP_SIM_INPUTS | CAP_FORCE_JOB;
-                if self.capabilities & caps != caps {
-                    return Err(plain(ErrorCode::Unsupported));
-                }
-                crate::force::link_job::check_sim(p).map_err(range_nak)?;
-                t.sim_milling(p).map_err(plain)?;
+            #[cfg(feature = "sim-inputs")]
+            RequestBody::Sim(s) => {
+                sim(self.capabilities, s, t)?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {
@@ -735,6 +721,27 @@ impl BoardLink {
             }
         }
     }
+}
+
+/// A test hook on a board announcing `capabilities`: without the hooks' capabilities
+/// `Unsupported`, changing nothing; a milling plant out of range `OutOfRange` naming the field.
+#[cfg(feature = "sim-inputs")]
+fn sim(
+    capabilities: u32,
+    req: &SimRequest,
+    t: &mut impl LinkTarget,
+) -> Result<(), (ErrorCode, NakDetail)> {
+    let needs = match req {
+        SimRequest::Milling(_) => CAP_SIM_INPUTS | CAP_FORCE_JOB,
+        _ => CAP_SIM_INPUTS,
+    };
+    if capabilities & needs != needs {
+        return Err((ErrorCode::Unsupported, NakDetail::None));
+    }
+    if let SimRequest::Milling(p) = req {
+        crate::force::link_job::check_sim(p).map_err(range_nak)?;
+    }
+    t.sim(req).map_err(|code| (code, NakDetail::None))
 }
 
 /// A target's refusal with the machine state filled into a bare `OutOfState`.

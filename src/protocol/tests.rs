@@ -127,7 +127,8 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         id: u32::MAX,
     };
     let seq = u32::MAX;
-    [
+    #[allow(unused_mut)]
+    let mut bodies = vec![
         RequestBody::Hello { version: u16::MAX, nonce: u32::MAX },
         RequestBody::GetConfig,
         RequestBody::SetConfig(extreme_config()),
@@ -167,7 +168,6 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             resume_segments: u32::MAX,
             segments: u32::MAX,
         }),
-        RequestBody::SimInject { wire_stall: true },
         // -- Z-slide job (issue 5) --
         RequestBody::ZTableBegin(crate::zslide::link_job::ZTableHeader {
             form: u8::MAX,
@@ -200,18 +200,23 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             max_accel_uin_per_s2: u32::MAX,
             min_speed_turn_q32_per_tick: u32::MAX,
         }),
-        RequestBody::SimSpindle { rpm_milli: u32::MAX, index: true },
         // -- force job (issue 4) --
         RequestBody::ArmForce(crate::protocol::force_tests::extreme_force_params()),
-        RequestBody::SimMilling(crate::protocol::force_tests::extreme_sim_params()),
         // -- copy mode (issue 6) --
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
-        RequestBody::SimEncoders { arm_counts: i32::MIN, carriage_counts: i32::MIN },
-    ]
-    .into_iter()
-    .map(|body| Request { seq, body })
-    .collect()
+    ];
+    #[cfg(feature = "sim-inputs")]
+    bodies.extend(
+        [
+            SimRequest::Inject { wire_stall: true },
+            SimRequest::Spindle { rpm_milli: u32::MAX, index: true },
+            SimRequest::Milling(crate::protocol::force_tests::extreme_sim_params()),
+            SimRequest::Encoders { arm_counts: i32::MIN, carriage_counts: i32::MIN },
+        ]
+        .map(RequestBody::Sim),
+    );
+    bodies.into_iter().map(|body| Request { seq, body }).collect()
 }
 
 pub(crate) fn extreme_responses() -> Vec<Response> {
@@ -723,8 +728,11 @@ fn arm_wire_checks_its_parameters_and_the_state_and_refusals_change_nothing() {
         assert_eq!(code(&r), Some(ErrorCode::OutOfRange), "{p:?}");
     }
     // No simulated inputs on this board.
-    let r = send(&mut b, &mut t, RequestBody::SimInject { wire_stall: true });
-    assert_eq!(code(&r), Some(ErrorCode::Unsupported));
+    #[cfg(feature = "sim-inputs")]
+    {
+        let r = send(&mut b, &mut t, RequestBody::Sim(SimRequest::Inject { wire_stall: true }));
+        assert_eq!(code(&r), Some(ErrorCode::Unsupported));
+    }
     assert_eq!(t, before, "refusals change nothing");
     // With segments queued (a plain job in the making): out of state, nothing changes.
     let r = send(
@@ -771,9 +779,13 @@ fn arm_wire_in_ready_arms_and_sim_inject_needs_the_capability() {
     );
     assert_eq!(code(&r), Some(ErrorCode::OutOfState));
     assert_eq!(t.wire_armed, Some(wire_params()));
-    let r = b.handle(&req(3, RequestBody::SimInject { wire_stall: true }), &mut t);
-    assert!(matches!(r, Response::Ack { seq: 3, .. }), "{r:?}");
-    assert!(t.sim_wire_stall);
+    #[cfg(feature = "sim-inputs")]
+    {
+        let inject = RequestBody::Sim(SimRequest::Inject { wire_stall: true });
+        let r = b.handle(&req(3, inject), &mut t);
+        assert!(matches!(r, Response::Ack { seq: 3, .. }), "{r:?}");
+        assert!(t.sim_wire_stall);
+    }
     assert!(wire_params_ok(&wire_params()));
 }
 

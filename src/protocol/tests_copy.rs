@@ -3,6 +3,7 @@
 use super::tests::config;
 use super::*;
 use crate::machine::MachineState;
+#[cfg(feature = "sim-inputs")]
 use crate::polar::stream::net_steps;
 
 fn req(seq: u32, body: RequestBody) -> Request {
@@ -26,6 +27,7 @@ fn nak_code(r: &Response) -> Option<ErrorCode> {
     }
 }
 
+#[cfg(feature = "sim-inputs")]
 fn teach(r: &Response) -> TeachChunk {
     match r {
         Response::Ack { reply: Reply::Teach(c), .. } => c.clone(),
@@ -35,11 +37,15 @@ fn teach(r: &Response) -> TeachChunk {
 
 #[test]
 fn copy_requests_round_trip() {
-    for body in [
+    #[allow(unused_mut)]
+    let mut bodies = vec![
         RequestBody::StartCopy { m: 3, k: 2, teach: true },
         RequestBody::ReadTeach { block: 513 },
-        RequestBody::SimEncoders { arm_counts: -70_000, carriage_counts: 12 },
-    ] {
+    ];
+    #[cfg(feature = "sim-inputs")]
+    bodies
+        .push(RequestBody::Sim(SimRequest::Encoders { arm_counts: -70_000, carriage_counts: 12 }));
+    for body in bodies {
         let r = req(9, body);
         let mut buf = [0u8; MAX_MESSAGE];
         let bytes = postcard::to_slice(&r, &mut buf).unwrap();
@@ -74,10 +80,13 @@ fn start_copy_checks_scale_state_and_capability() {
     assert!(!t.copy_running);
     // Without the capability bit the sim encoders are refused (and StartCopy on a target
     // without copy jobs is Unsupported).
-    let (mut link, mut t) = open(CAP_COPY_JOB);
-    let r = link
-        .handle(&req(1, RequestBody::SimEncoders { arm_counts: 1, carriage_counts: 1 }), &mut t);
-    assert_eq!(nak_code(&r), Some(ErrorCode::Unsupported));
+    #[cfg(feature = "sim-inputs")]
+    {
+        let (mut link, mut t) = open(CAP_COPY_JOB);
+        let encoders = SimRequest::Encoders { arm_counts: 1, carriage_counts: 1 };
+        let r = link.handle(&req(1, RequestBody::Sim(encoders)), &mut t);
+        assert_eq!(nak_code(&r), Some(ErrorCode::Unsupported));
+    }
     let mut plain = SimTarget::new(config(), 8);
     let mut link = BoardLink::new("plain", 0);
     link.handle(&req(0, RequestBody::Hello { version: PROTOCOL_VERSION, nonce: 1 }), &mut plain);
@@ -87,6 +96,7 @@ fn start_copy_checks_scale_state_and_capability() {
 
 /// A taught copy read block by block over the session, with a lost answer retransmitted: the
 /// blocks decode to the encoder moves the host asked for, and the machine's r is scaled 3:2.
+#[cfg(feature = "sim-inputs")]
 #[test]
 fn teach_is_read_back_whole_through_retransmissions() {
     let (mut link, mut t) = open(CAP_COPY_JOB | CAP_SIM_INPUTS);
@@ -107,7 +117,7 @@ fn teach_is_read_back_whole_through_retransmissions() {
         let (r, _) = send(
             &mut link,
             &mut t,
-            RequestBody::SimEncoders { arm_counts: tgt[0], carriage_counts: tgt[1] },
+            RequestBody::Sim(SimRequest::Encoders { arm_counts: tgt[0], carriage_counts: tgt[1] }),
         );
         assert!(matches!(r, Response::Ack { .. }), "{r:?}");
         for _ in 0..20 {

@@ -1,5 +1,5 @@
 //! Session tests of the Z-slide requests (issue 5): chunked table upload (order, length, CRC),
-//! uploads refused while a Z job runs, `StartZ` without a table, `SimSpindle` gating, the Z
+//! uploads refused while a Z job runs, `StartZ` without a table, `Sim(Spindle)` gating, the Z
 //! fields of `Status`, and that every refusal changes nothing. The target wraps [`SimTarget`]
 //! with the link firmware's own Z code (`ZRequests`, `ZJob`).
 
@@ -21,6 +21,8 @@ struct ZTarget {
     req: ZRequests,
     job: ZJob,
     z_active: bool,
+    // The last `Sim(Spindle)` speed (the hook exists with the `sim-inputs` feature only).
+    #[cfg(feature = "sim-inputs")]
     sim_rpm_milli: Option<u32>,
 }
 
@@ -38,6 +40,7 @@ impl ZTarget {
             req: ZRequests::new(),
             job,
             z_active: false,
+            #[cfg(feature = "sim-inputs")]
             sim_rpm_milli: None,
         }
     }
@@ -129,8 +132,12 @@ impl LinkTarget for ZTarget {
         self.sim.machine = MachineState::Running;
         Ok(())
     }
-    fn sim_spindle(&mut self, rpm_milli: u32, _index: bool) -> Result<(), ErrorCode> {
-        self.sim_rpm_milli = Some(rpm_milli);
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
+        match *req {
+            SimRequest::Spindle { rpm_milli, .. } => self.sim_rpm_milli = Some(rpm_milli),
+            _ => return Err(ErrorCode::Unsupported),
+        }
         Ok(())
     }
 }
@@ -242,10 +249,9 @@ fn new_requests_round_trip_and_fit_a_frame() {
             output: ZOutputSpec::Dac { codes_per_in: u32::MAX, mid_code: u16::MAX },
             ..spec()
         }),
-        RequestBody::SimSpindle { rpm_milli: u32::MAX, index: true },
     ];
     let kinds: std::vec::Vec<u8> = bodies.iter().map(|b| b.kind()).collect();
-    assert_eq!(kinds, [19, 20, 21, 22, 23]);
+    assert_eq!(kinds, [18, 19, 20, 21]);
     for body in bodies {
         let req = Request { seq: u32::MAX, body };
         let mut buf = [0u8; MAX_FRAME_WIRE];
@@ -400,15 +406,14 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
     r.send(RequestBody::ZTableBegin(h)).unwrap();
 }
 
+#[cfg(feature = "sim-inputs")]
 #[test]
 fn sim_spindle_needs_cap_sim_inputs() {
+    let spindle = |rpm_milli| RequestBody::Sim(SimRequest::Spindle { rpm_milli, index: true });
     let mut r = Rig::new(0);
-    assert_eq!(
-        r.send(RequestBody::SimSpindle { rpm_milli: 360_000, index: true }),
-        Err((ErrorCode::Unsupported, NakDetail::None))
-    );
+    assert_eq!(r.send(spindle(360_000)), Err((ErrorCode::Unsupported, NakDetail::None)));
     assert_eq!(r.t.sim_rpm_milli, None);
     let mut r = Rig::new(CAP_SIM_INPUTS);
-    r.send(RequestBody::SimSpindle { rpm_milli: 432_000, index: true }).unwrap();
+    r.send(spindle(432_000)).unwrap();
     assert_eq!(r.t.sim_rpm_milli, Some(432_000));
 }

@@ -1,6 +1,6 @@
 //! End to end, wire jobs: `motionctl wire run --qemu` runs segments 1..5 of the planned
 //! circle -> complex die (4 segments, ~39 s of machine time) as a wire job on the link
-//! firmware in QEMU, closes the simulated wire-stall switch (`SimInject`) 8 s after the start
+//! firmware in QEMU, closes the simulated wire-stall switch (`Sim(Inject)`) 8 s after the start
 //! for 3 s, and the result is checked here too, independently of motionctl's own check: the
 //! board saw one stall, retraced and returned, and the final X, Y, beta, alpha steps == the sum
 //! of the segments' steps (a lost or extra step anywhere in the stop, retrace or return shows).

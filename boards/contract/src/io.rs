@@ -18,7 +18,7 @@ pub struct RawInputs {
 }
 
 pub trait MachineIo {
-    /// The host may drive the inputs (`SimInject`; the simulated board).
+    /// The host may drive the inputs (`Sim(Inject)`; the simulated board).
     const SIM_INPUTS: bool;
     /// Sets the simulated wire-stall switch; false where not honoured.
     fn inject_wire_stall(stalled: bool) -> bool;

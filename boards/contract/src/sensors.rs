@@ -6,7 +6,7 @@ use motion::spindle::SpindleSource;
 
 /// The spindle angle source of Z-slide and force jobs.
 pub trait SpindleEncoder: SpindleSource {
-    /// The host drives a simulated spindle (`SimSpindle`).
+    /// The host drives a simulated spindle (`Sim(Spindle)`).
     const SIM: bool;
     /// Sets the simulated speed and index pulses; false where not honoured.
     fn set_sim(speed_turn_q32_per_tick: u32, index: bool) -> bool;

@@ -59,10 +59,10 @@ impl MachineIo {
 }
 
 impl board_contract::MachineIo for MachineIo {
-    /// The real board reads real inputs: no `SimInject`.
+    /// The real board reads real inputs: no `Sim(Inject)`.
     const SIM_INPUTS: bool = false;
 
-    /// `SimInject` is not honoured here (false: refused).
+    /// `Sim(Inject)` is not honoured here (false: refused).
     fn inject_wire_stall(_stalled: bool) -> bool {
         false
     }

@@ -74,7 +74,7 @@ impl SpindleTimer {
     }
 }
 
-/// The real spindle is read, never simulated: `SimSpindle` is refused.
+/// The real spindle is read, never simulated: `Sim(Spindle)` is refused.
 impl board_contract::SpindleEncoder for SpindleTimer {
     const SIM: bool = false;
 

@@ -7,9 +7,9 @@
 //! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
-//! | (none) | copy-mode encoders: simulated A/B levels (`SimEncoders`) decoded by `board_drivers::quadrature::SoftDecoder` (`sim_io.rs`) |
+//! | (none) | copy-mode encoders: simulated A/B levels (`Sim(Encoders)`) decoded by `board_drivers::quadrature::SoftDecoder` (`sim_io.rs`) |
 //! | USART1 | host link (`link` firmware), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
-//! | (sim) | spindle for Z-slide jobs: `SimSpindle` sets its speed, the encoder logic reads it |
+//! | (sim) | spindle for Z-slide jobs: `Sim(Spindle)` sets its speed, the encoder logic reads it |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
 
 #![no_std]

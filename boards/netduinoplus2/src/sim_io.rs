@@ -2,9 +2,9 @@
 //! and the outputs go nowhere (the fault paths these inputs drive are exercised by the scenario
 //! firmware's `fault_*` scenarios instead). Two inputs are simulated for the host:
 //!
-//! * the wire-stall switch, set with `SimInject` (announced by `CAP_SIM_INPUTS`), to test the
+//! * the wire-stall switch, set with `Sim(Inject)` (announced by `CAP_SIM_INPUTS`), to test the
 //!   wire-stall retrace end to end;
-//! * the copy-mode encoders: two counters slew toward the host's `SimEncoders` target at one
+//! * the copy-mode encoders: two counters slew toward the host's `Sim(Encoders)` target at one
 //!   count per `SIM_TICKS_PER_COUNT` ticks (`motion::polar::copy_link::SimEncoderSlew`, like
 //!   a template moved at a bounded speed), drive simulated A/B lines, and the board reads them
 //!   back through the same software quadrature decoder a board without encoder timers would
@@ -18,13 +18,13 @@ use board_drivers::quadrature::{levels, Quadrature, SoftDecoder};
 use motion::machine::Outputs;
 use motion::polar::copy_link::SimEncoderSlew;
 
-/// The simulated wire-stall switch (`SimInject`): written by the USART task, read by the tick.
+/// The simulated wire-stall switch (`Sim(Inject)`): written by the USART task, read by the tick.
 static SIM_WIRE_STALL: AtomicBool = AtomicBool::new(false);
 
 pub struct MachineIo;
 
 impl board_contract::MachineIo for MachineIo {
-    /// The host drives the simulated inputs (`SimInject`).
+    /// The host drives the simulated inputs (`Sim(Inject)`).
     const SIM_INPUTS: bool = true;
 
     /// Sets the simulated wire-stall switch from the next tick on; true (honoured).
@@ -42,7 +42,7 @@ impl board_contract::MachineIo for MachineIo {
     fn write(&mut self, _o: &Outputs) {}
 }
 
-/// The simulated encoders' target counts (`SimEncoders`): written by the USART task, read by
+/// The simulated encoders' target counts (`Sim(Encoders)`): written by the USART task, read by
 /// the tick.
 static SIM_ENCODER_TARGET: [AtomicI32; 2] = [AtomicI32::new(0), AtomicI32::new(0)];
 

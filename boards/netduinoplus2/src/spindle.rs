@@ -1,5 +1,5 @@
 //! The simulated spindle of the QEMU board (QEMU models no timer encoder mode): a
-//! `motion::spindle::SimSpindle` turned every tick at the speed the host set with `SimSpindle`,
+//! `motion::spindle::SimSpindle` turned every tick at the speed the host set with `Sim(Spindle)`,
 //! read through the same encoder logic (`QuadratureEncoder`) the real board's TIM4 feeds, with
 //! or without index pulses (index loss -> `EncoderIndex`).
 
@@ -33,7 +33,7 @@ impl Default for Spindle {
 }
 
 impl board_contract::SpindleEncoder for Spindle {
-    /// The host drives this spindle (`SimSpindle`).
+    /// The host drives this spindle (`Sim(Spindle)`).
     const SIM: bool = true;
 
     /// (Re)starts the encoder logic.

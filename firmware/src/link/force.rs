@@ -5,7 +5,7 @@
 //! the sensor inputs, the controller's override into the DDA like `SetOverride`).
 //!
 //! Sample source: the simulator board (netduinoplus2 under QEMU, whose ADC values are fake)
-//! samples the milling plant of the last `SimMilling` from the feed axis's position every
+//! samples the milling plant of the last `Sim(Milling)` (`super::sim`) from the feed axis's position every
 //! `tick_hz / sample_hz` ticks inside the tick. The real board (f405-motion) samples its force
 //! sensors with the TIM3-triggered ADC1 scan into the DMA2 stream 0 double buffer at
 //! [`ADC_SAMPLE_HZ`]; the `DMA2_STREAM0` interrupt (priority 3, the tick's: they never preempt
@@ -83,15 +83,6 @@ pub fn arm(
     let job = ForceJob::new(p, tick_hz, TICK_SAMPLED, m.force.sim.as_ref())
         .map_err(|_| ErrorCode::OutOfRange)?;
     m.job = LastJob::Force(job);
-    Ok(())
-}
-
-/// `SimMilling`: the plant the next armed job samples (checked by the session).
-pub fn set_sim(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
-    if !TICK_SAMPLED {
-        return Err(ErrorCode::Unsupported);
-    }
-    m.force.sim = Some(*p);
     Ok(())
 }
 

@@ -50,10 +50,13 @@ pub mod force;
 mod host_port;
 mod last_job;
 mod session;
+/// The simulator board's test hooks (`Sim` requests).
+#[cfg(feature = "sim-inputs")]
+mod sim;
 mod target;
 /// Wire-manipulator jobs (`ArmWire`).
 pub mod wire;
-/// Z-slide jobs (`ZTableBegin`..`StartZ`, `SimSpindle`).
+/// Z-slide jobs (`ZTableBegin`..`StartZ`).
 pub mod zslide;
 
 pub use host_port::{encode, HostPort};
@@ -107,7 +110,8 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_WIRE_JOB
     | CAP_ZSLIDE_JOB
     | if force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
-    | if board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
+    // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
+    | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
     | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes

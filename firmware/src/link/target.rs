@@ -10,8 +10,8 @@ use motion::machine::{BoardConfig, MachineCommand, MachineState, Refusal};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, SimMillingParams, Status,
-    TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, Status, TeachChunk,
+    WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
 use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
@@ -20,7 +20,7 @@ use motion::Dda;
 use rtic::Mutex;
 
 use crate::board;
-use board_contract::{ConfigStorage as _, CopyEncoders as _, MachineIo as _, TickRate as _};
+use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
 
 use super::feed::Feed;
 use super::*;
@@ -363,29 +363,12 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         self.motion.get_mut().lock(|m| zslide::start(m, empty, prepared))
     }
 
-    fn sim_spindle(&mut self, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
-        let tick_hz = self.with(|m| m.machine.config().wire.machine.tick_hz);
-        zslide::sim_spindle(tick_hz, rpm_milli, index)
-    }
-
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         self.motion.get_mut().lock(|m| {
             let wire_live = wire::live(m);
             force::arm(m, empty, wire_live, params)
         })
-    }
-
-    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
-        self.motion.get_mut().lock(|m| force::set_sim(m, params))
-    }
-
-    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
-        if board::MachineIo::inject_wire_stall(wire_stall) {
-            Ok(())
-        } else {
-            Err(ErrorCode::Unsupported)
-        }
     }
 
     fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
@@ -410,11 +393,9 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         Some(self.with(|m| copy::resend(&self.link.teach, m)))
     }
 
-    fn sim_encoders(&mut self, counts: [i32; 2]) -> Result<(), ErrorCode> {
-        if board::CopyEncoders::set_sim_target(counts) {
-            Ok(())
-        } else {
-            Err(ErrorCode::Unsupported)
-        }
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &motion::protocol::SimRequest) -> Result<(), ErrorCode> {
+        let motion: &mut M = self.motion.get_mut();
+        super::sim::apply(motion, req)
     }
 }

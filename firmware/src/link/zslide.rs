@@ -80,21 +80,3 @@ pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<()
 pub fn status(m: &Motion, s: &mut Status) {
     zr::status(&m.z, m.machine.config().wire.machine.tick_hz, s);
 }
-
-/// `SimSpindle`: the rpm as a speed at the current tick rate (divides: USART task).
-pub fn sim_spindle(tick_hz: u32, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
-    if !board::Spindle::SIM {
-        return Err(ErrorCode::Unsupported);
-    }
-    // rpm / 60 turns per second / tick_hz, times 2^32 (as `spindle::speed_turn_q32_per_tick`,
-    // range-checked here).
-    let speed = ((rpm_milli as u64) << 32) / (60_000 * tick_hz.max(1) as u64);
-    let Ok(speed) = i32::try_from(speed) else {
-        return Err(ErrorCode::OutOfRange);
-    };
-    if board::Spindle::set_sim(speed as u32, index) {
-        Ok(())
-    } else {
-        Err(ErrorCode::Unsupported)
-    }
-}

@@ -2,10 +2,10 @@
 //! against the host model.
 //!
 //! Hello -> the board ready (`runner::ready_board`: config, ConfigMissing cleared, homing) ->
-//! `SimSpindle` at the job's speed (QEMU only: the real spindle must already turn) -> the table
+//! `Sim(Spindle)` at the job's speed (QEMU only: the real spindle must already turn) -> the table
 //! uploaded (`ZTableBegin`, `ZTableChunk`s, `ZTableEnd` with its CRC-32) -> wait until the board
 //! senses the speed -> `StartZ` -> watch the status stream (board time, `runner::JobWatch`),
-//! with an optional spindle speed step (`SimSpindle` at `speed_step_at` seconds of board time
+//! with an optional spindle speed step (`Sim(Spindle)` at `speed_step_at` seconds of board time
 //! after the start) -> the final status against the host model: the same `ZJob` run on the host
 //! with the same table, spec, config and spindle speeds (the step at the board tick it was sent
 //! at). Checks: X and Z steps at the end equal the model's, no fault, the job finished, and the
@@ -22,8 +22,8 @@ use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
-    AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, WireConfig,
-    CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
+    AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, SimRequest,
+    WireConfig, CAP_SIM_INPUTS, CAP_ZSLIDE_JOB, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::zslide::link_job::{
@@ -156,7 +156,7 @@ pub struct ZRunOptions {
     pub blend_in: f64,
     pub output: ZOutput,
     /// A spindle speed step: at this many seconds of board time after the start, by this
-    /// fraction (0.2 = +20 %). QEMU only (`SimSpindle`).
+    /// fraction (0.2 = +20 %). QEMU only (`Sim(Spindle)`).
     pub speed_step: Option<(f64, f64)>,
     pub host: HostConfig,
     pub home: bool,
@@ -370,8 +370,8 @@ pub fn run(
     if sim {
         query(
             &mut s,
-            RequestBody::SimSpindle { rpm_milli: o.rpm_milli, index: true },
-            "SimSpindle",
+            RequestBody::Sim(SimRequest::Spindle { rpm_milli: o.rpm_milli, index: true }),
+            "Sim(Spindle)",
         )?;
     }
     query(&mut s, RequestBody::ZTableBegin(table.header), "ZTableBegin")?;
@@ -467,7 +467,8 @@ pub fn run(
             let dt = latest.tick.saturating_sub(t_start);
             if dt >= at && s.host.window_free() > 0 {
                 let rpm = (o.rpm_milli as f64 * (1.0 + frac)).round() as u32;
-                s.send(RequestBody::SimSpindle { rpm_milli: rpm, index: true }).map_err(link)?;
+                s.send(RequestBody::Sim(SimRequest::Spindle { rpm_milli: rpm, index: true }))
+                    .map_err(link)?;
                 step_at = Some(dt);
                 say(&format!("spindle step to {:.1} rpm at board tick {dt}", rpm as f64 / 1e3));
             }

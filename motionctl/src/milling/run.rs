@@ -3,7 +3,7 @@
 //! as a force job through the board's force chain and control law, with the job's nominal
 //! force, thresholds, gains, teeth and spindle speed.
 //!
-//! Hello -> the board ready (config, ConfigMissing cleared, homed) -> `SimMilling` (a simulator
+//! Hello -> the board ready (config, ConfigMissing cleared, homed) -> `Sim(Milling)` (a simulator
 //! board: the job's cut, and an injected fault if asked) -> status stream -> `ArmForce` -> the
 //! move -> `Start` -> the status stream logged (force, override, feed vs board time) until the
 //! job ends (Ready) or a fault holds it -> checks against the host model (the same library
@@ -22,7 +22,7 @@ use motion::force::scenario as sc;
 use motion::machine::MachineState;
 use motion::protocol::{
     AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    SimForceFault, Status, WireConfig, CAP_FORCE_JOB, CAP_SIM_INPUTS,
+    SimForceFault, SimRequest, Status, WireConfig, CAP_FORCE_JOB, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -194,7 +194,7 @@ pub fn run(
     runner::ready_board(&mut s, cfg, opts.home, "milling machine (X)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     if simulated {
-        query(&mut s, RequestBody::SimMilling(sim), "SimMilling")?;
+        query(&mut s, RequestBody::Sim(SimRequest::Milling(sim)), "Sim(Milling)")?;
         say("sent the simulated plant (eq 4.17 cut)");
     }
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;

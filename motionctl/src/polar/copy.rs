@@ -3,7 +3,7 @@
 //!
 //! Hello -> the polar machine's config and homing (`runner::ready_board`) -> GetStatus (the
 //! encoders' counts now are the origin) -> `StartCopy { m, k, teach }` -> on a simulator board
-//! (`CAP_SIM_INPUTS`), the template trace as `SimEncoders` targets, waiting for the encoders to
+//! (`CAP_SIM_INPUTS`), the template trace as `Sim(Encoders)` targets, waiting for the encoders to
 //! reach each one (on a real board the operator moves the arm for `--seconds`) -> `Abort` ->
 //! `ReadTeach` until the recording ends -> verify:
 //! * no event lost, the stream decodes, its events = the board's taught count, and its net
@@ -17,7 +17,9 @@ use crate::transport::Transport;
 use motion::polar::copy::CopyMode;
 use motion::polar::playback::SizeScale;
 use motion::polar::stream::decode_all;
-use motion::protocol::{HostConfig, Reply, RequestBody, Status, CAP_COPY_JOB, CAP_SIM_INPUTS};
+use motion::protocol::{
+    HostConfig, Reply, RequestBody, SimRequest, Status, CAP_COPY_JOB, CAP_SIM_INPUTS,
+};
 use std::time::{Duration, Instant};
 
 /// A template trace: encoder count waypoints (arm, carriage) relative to the copy's origin.
@@ -209,8 +211,11 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
     let origin = base.encoder_counts;
     if opts.trace.is_some() {
         // The simulated encoders stay where they are until the first waypoint.
-        let body = RequestBody::SimEncoders { arm_counts: origin[0], carriage_counts: origin[1] };
-        query(&mut s, body, "SimEncoders")?;
+        let body = RequestBody::Sim(SimRequest::Encoders {
+            arm_counts: origin[0],
+            carriage_counts: origin[1],
+        });
+        query(&mut s, body, "Sim(Encoders)")?;
     }
     let body = RequestBody::StartCopy { m: opts.scale.m, k: opts.scale.k, teach: opts.teach };
     query(&mut s, body, "StartCopy")?;
@@ -254,9 +259,11 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
         report.waypoints = trace.len();
         for (i, w) in trace.iter().enumerate() {
             let target = [origin[0].wrapping_add(w[0]), origin[1].wrapping_add(w[1])];
-            let body =
-                RequestBody::SimEncoders { arm_counts: target[0], carriage_counts: target[1] };
-            query(&mut s, body, "SimEncoders")?;
+            let body = RequestBody::Sim(SimRequest::Encoders {
+                arm_counts: target[0],
+                carriage_counts: target[1],
+            });
+            query(&mut s, body, "Sim(Encoders)")?;
             let since = Instant::now();
             loop {
                 if opts.teach {

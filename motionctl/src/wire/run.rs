@@ -17,7 +17,7 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, WireConfig, WireJobParams,
+    HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, SimRequest, WireConfig, WireJobParams,
     CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
@@ -123,7 +123,7 @@ pub fn run(
     runner::ready_board(&mut s, cfg, opts.home, "wire machine (X, Y, beta, alpha)", &|m| say(m))
         .map_err(|e| anyhow!("{e}"))?;
     if opts.stall.is_some() {
-        query(&mut s, RequestBody::SimInject { wire_stall: false }, "SimInject")?;
+        query(&mut s, RequestBody::Sim(SimRequest::Inject { wire_stall: false }), "Sim(Inject)")?;
     }
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
@@ -163,7 +163,9 @@ pub fn run(
                 }
                 (Pending::Start, Ok(_)) => started = true,
                 (Pending::Start, Err(r)) => bail!("Start refused: {}", describe_rejection(&r)),
-                (Pending::Inject, Err(r)) => bail!("SimInject refused: {}", describe_rejection(&r)),
+                (Pending::Inject, Err(r)) => {
+                    bail!("Sim(Inject) refused: {}", describe_rejection(&r))
+                }
                 (Pending::Inject, Ok(_)) => {}
                 (Pending::Poll, Ok(Reply::Status(st))) => {
                     poll_in_flight = false;
@@ -222,7 +224,8 @@ pub fn run(
                 _ => None,
             };
             if let Some(w) = want.filter(|_| s.host.window_free() > 0) {
-                let seq = s.send(RequestBody::SimInject { wire_stall: w }).map_err(link)?;
+                let seq =
+                    s.send(RequestBody::Sim(SimRequest::Inject { wire_stall: w })).map_err(link)?;
                 pending.insert(seq, Pending::Inject);
                 stall_state += 1;
                 say(&format!(
@@ -271,7 +274,7 @@ pub fn run(
         }
     }
     if opts.stall.is_some() {
-        query(&mut s, RequestBody::SimInject { wire_stall: false }, "SimInject")?;
+        query(&mut s, RequestBody::Sim(SimRequest::Inject { wire_stall: false }), "Sim(Inject)")?;
     }
     let fin = status(&mut s)?;
     let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });

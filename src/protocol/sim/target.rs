@@ -11,16 +11,18 @@
 
 use heapless::Deque;
 
-use super::errors::{ErrorCode, FaultCode};
-use super::messages::{
-    BoardCounters, ForceJobParams, HomingConfig, SimMillingParams, Status, WireConfig,
-    WireJobParams, WireState,
-};
-use super::session::LinkTarget;
+use super::messages::SimMillingParams;
+#[cfg(feature = "sim-inputs")]
+use super::messages::SimRequest;
 use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
+use crate::protocol::errors::{ErrorCode, FaultCode};
+use crate::protocol::messages::{
+    BoardCounters, ForceJobParams, HomingConfig, Status, WireConfig, WireJobParams, WireState,
+};
+use crate::protocol::session::LinkTarget;
 use crate::segment::{Rate, Segment};
 
 /// Largest queue a `SimTarget` can have.
@@ -63,12 +65,12 @@ pub struct SimTarget {
     event_base: [i64; MAX_AXES],
     /// An armed wire job's parameters (`ArmWire`); the sim runs its segments as plain ones.
     pub wire_armed: Option<WireJobParams>,
-    /// The simulated wire-stall switch (`SimInject`).
+    /// The simulated wire-stall switch (`Sim(Inject)`).
     pub sim_wire_stall: bool,
     // -- force job (issue 4) --
     /// An armed force job's parameters (`ArmForce`); the sim runs its segments as plain ones.
     pub force_armed: Option<ForceJobParams>,
-    /// The simulated milling plant (`SimMilling`).
+    /// The simulated milling plant (`Sim(Milling)`).
     pub sim_milling: Option<SimMillingParams>,
     /// Pauses for a late host (`BoardCounters::starve_holds`), counted by whoever runs the
     /// queue.
@@ -413,12 +415,6 @@ impl LinkTarget for SimTarget {
         Ok(())
     }
 
-    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
-        self.sim_wire_stall = wire_stall;
-        self.mutations += 1;
-        Ok(())
-    }
-
     // -- force job (issue 4) --
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
         let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
@@ -431,8 +427,17 @@ impl LinkTarget for SimTarget {
         Ok(())
     }
 
-    fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
-        self.sim_milling = Some(*params);
+    /// The wire-stall switch and the milling plant; no spindle or encoders (`CopySim` has
+    /// those).
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
+        match *req {
+            SimRequest::Inject { wire_stall } => self.sim_wire_stall = wire_stall,
+            SimRequest::Milling(params) => self.sim_milling = Some(params),
+            SimRequest::Spindle { .. } | SimRequest::Encoders { .. } => {
+                return Err(ErrorCode::Unsupported)
+            }
+        }
         self.mutations += 1;
         Ok(())
     }

@@ -1,13 +1,11 @@
 //! [`CopySim`]: [`SimTarget`] with copy jobs (issue 6), for session tests and the host's
-//! simulated board: simulated encoders slewing to the host's `SimEncoders` target, the
+//! simulated board: simulated encoders slewing to the host's `Sim(Encoders)` target, the
 //! firmware's `CopyMode` and `TeachRecorder`, ticked by [`CopySim::run_copy`] the way the link
 //! firmware's tick and status task run them.
 
-use super::errors::ErrorCode;
-use super::messages::*;
-use super::session::LinkTarget;
-use super::sim::SimTarget;
-use super::BlockBytes;
+#[cfg(feature = "sim-inputs")]
+use super::messages::SimRequest;
+use super::target::SimTarget;
 use crate::config::MAX_AXES;
 use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::copy::CopyMode;
@@ -16,6 +14,10 @@ use crate::polar::copy_link::{
 };
 use crate::polar::playback::SizeScale;
 use crate::polar::StepEvent;
+use crate::protocol::errors::ErrorCode;
+use crate::protocol::messages::*;
+use crate::protocol::session::LinkTarget;
+use crate::protocol::BlockBytes;
 use crate::segment::{Rate, Segment};
 
 /// A [`SimTarget`] that also runs copy jobs.
@@ -205,9 +207,6 @@ impl LinkTarget for CopySim {
         }
         self.inner.arm_wire(params)
     }
-    fn sim_inject(&mut self, wire_stall: bool) -> Result<(), ErrorCode> {
-        self.inner.sim_inject(wire_stall)
-    }
     fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
         let busy = self.copy_running
             || self.inner.events_pending()
@@ -237,8 +236,17 @@ impl LinkTarget for CopySim {
         let r = self.teach.peek(block);
         Some(self.chunk(block, r.bytes, r.ended))
     }
-    fn sim_encoders(&mut self, counts: [i32; 2]) -> Result<(), ErrorCode> {
-        self.encoder_target = counts;
-        Ok(())
+    /// The encoders are this target's; the wire-stall switch the inner one's; no spindle or
+    /// milling plant.
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
+        match *req {
+            SimRequest::Encoders { arm_counts, carriage_counts } => {
+                self.encoder_target = [arm_counts, carriage_counts];
+                Ok(())
+            }
+            SimRequest::Inject { .. } => self.inner.sim(req),
+            SimRequest::Spindle { .. } | SimRequest::Milling(_) => Err(ErrorCode::Unsupported),
+        }
     }
 }

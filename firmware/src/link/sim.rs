@@ -1,0 +1,59 @@
+//! The simulator board's test hooks (`RequestBody::Sim`, announced by `CAP_SIM_INPUTS`): built
+//! only with the `sim-inputs` feature, which the QEMU board's build turns on and the real
+//! board's goes without (its session then refuses the hooks undecoded, `Unsupported`). Each
+//! hook still asks the board, so a build with the feature on a board without the simulated
+//! input answers `Unsupported` too.
+
+use motion::protocol::{ErrorCode, SimMillingParams, SimRequest};
+use rtic::Mutex;
+
+use super::{force, Motion};
+use crate::board;
+use board_contract::{CopyEncoders as _, MachineIo as _, SpindleEncoder as _};
+
+/// Runs one hook (the session checked the capabilities and the plant's ranges).
+pub fn apply(motion: &mut impl Mutex<T = Motion>, req: &SimRequest) -> Result<(), ErrorCode> {
+    let done = match *req {
+        SimRequest::Inject { wire_stall } => board::MachineIo::inject_wire_stall(wire_stall),
+        SimRequest::Spindle { rpm_milli, index } => {
+            let tick_hz = motion.lock(|m| m.machine.config().wire.machine.tick_hz);
+            return spindle(tick_hz, rpm_milli, index);
+        }
+        SimRequest::Milling(p) => return motion.lock(|m| milling(m, &p)),
+        SimRequest::Encoders { arm_counts, carriage_counts } => {
+            board::CopyEncoders::set_sim_target([arm_counts, carriage_counts])
+        }
+    };
+    if done {
+        Ok(())
+    } else {
+        Err(ErrorCode::Unsupported)
+    }
+}
+
+/// `Spindle`: the rpm as a speed at the current tick rate (divides: USART task).
+fn spindle(tick_hz: u32, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
+    if !board::Spindle::SIM {
+        return Err(ErrorCode::Unsupported);
+    }
+    // rpm / 60 turns per second / tick_hz, times 2^32 (as `spindle::speed_turn_q32_per_tick`,
+    // range-checked here).
+    let speed = ((rpm_milli as u64) << 32) / (60_000 * tick_hz.max(1) as u64);
+    let Ok(speed) = i32::try_from(speed) else {
+        return Err(ErrorCode::OutOfRange);
+    };
+    if board::Spindle::set_sim(speed as u32, index) {
+        Ok(())
+    } else {
+        Err(ErrorCode::Unsupported)
+    }
+}
+
+/// `Milling`: the plant the next armed force job samples (a tick-sampled board only).
+fn milling(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
+    if !force::TICK_SAMPLED {
+        return Err(ErrorCode::Unsupported);
+    }
+    m.force.sim = Some(*p);
+    Ok(())
+}
