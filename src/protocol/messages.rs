@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::bounded::{BlockBytes, EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
+use super::program_outputs::ProgramOutputs;
 use crate::config::{
     AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, TickTiming, MAX_AXES,
 };
@@ -14,7 +15,7 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 5;
+pub const PROTOCOL_VERSION: u16 = 6;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -183,6 +184,13 @@ pub enum RequestBody {
         arm_counts: i32,
         carriage_counts: i32,
     },
+    /// The spindle (off, clockwise, counterclockwise) and coolant (mist, flood) a program
+    /// switches, all at once, from the next tick on; the wire power and the Z DAC are left as
+    /// they are. Not a machine command: accepted in every state but refused (`OutOfState`,
+    /// nothing changes) while an e-stop is latched or pressed. Faults that kill the outputs
+    /// (e-stop and the other `Kill` reactions) switch these off too. The host sends it once the
+    /// motion before it is done (program order); `Status::outputs` shows the result.
+    SetProgramOutputs(ProgramOutputs),
 }
 
 // -- force job (issue 4) --
@@ -421,6 +429,7 @@ impl RequestBody {
             RequestBody::StartCopy { .. } => 26,
             RequestBody::ReadTeach { .. } => 27,
             RequestBody::SimEncoders { .. } => 28,
+            RequestBody::SetProgramOutputs(_) => 29,
         }
     }
 
@@ -688,6 +697,9 @@ pub struct Status {
     pub lost_events: u32,
     /// What the board recovered from without a fault, counted since boot.
     pub counters: BoardCounters,
+    /// The program outputs the board drives now (`SetProgramOutputs`), `OUT_*` bits: bit 0
+    /// spindle on, bit 1 spindle counterclockwise (with bit 0), bit 2 mist, bit 3 flood.
+    pub outputs: u8,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

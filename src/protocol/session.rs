@@ -40,12 +40,14 @@
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
 //! | ReadTeach, SimEncoders (not commands) | SimEncoders: `CAP_SIM_INPUTS` (`Unsupported`) |
 //! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
+//! | SetProgramOutputs (not a command) | no e-stop latched or pressed (`OutOfState`) |
 //! | SimMilling (no column) | `CAP_SIM_INPUTS` and `CAP_FORCE_JOB` (`Unsupported`), parameters in range (`OutOfRange` naming the field) |
 
 use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
 use super::frame::FrameError;
 use super::messages::*;
+use super::program_outputs::ProgramOutputs;
 use crate::config::{ConfigError, MAX_AXES};
 use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::feed::check_block;
@@ -176,6 +178,13 @@ pub trait LinkTarget {
     fn sim_milling(&mut self, _params: &SimMillingParams) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+
+    /// Switches the spindle and coolant (`SetProgramOutputs`), keeping the other outputs;
+    /// `OutOfState` while an e-stop is latched or pressed. Targets without these outputs:
+    /// `Unsupported`.
+    fn set_program_outputs(&mut self, _o: ProgramOutputs) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
 }
 
 /// `ArmWire`'s parameters are usable: counts and limits at least 1, overrides in (0, 2.0].
@@ -218,6 +227,7 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::SimSpindle { .. }
         | RequestBody::ReadTeach { .. }
         | RequestBody::SimEncoders { .. }
+        | RequestBody::SetProgramOutputs(_)
         | RequestBody::SimMilling(_) => return None,
     })
 }
@@ -724,6 +734,13 @@ impl BoardLink {
                 }
                 crate::force::link_job::check_sim(p).map_err(range_nak)?;
                 t.sim_milling(p).map_err(plain)?;
+                Ok(Reply::None)
+            }
+            RequestBody::SetProgramOutputs(o) => {
+                t.set_program_outputs(*o).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {

@@ -16,9 +16,10 @@ use super::messages::{
     BoardCounters, ForceJobParams, HomingConfig, SimMillingParams, Status, WireConfig,
     WireJobParams, WireState,
 };
+use super::program_outputs::ProgramOutputs;
 use super::session::LinkTarget;
 use crate::config::MAX_AXES;
-use crate::machine::{cell, Cell, CommandKind, MachineState};
+use crate::machine::{cell, reaction, Cell, CommandKind, MachineState, Outputs, Reaction};
 use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::segment::{Rate, Segment};
@@ -73,6 +74,9 @@ pub struct SimTarget {
     /// Pauses for a late host (`BoardCounters::starve_holds`), counted by whoever runs the
     /// queue.
     pub starve_holds: u32,
+    /// The machine's outputs (`SetProgramOutputs` switches the spindle and coolant in them; a
+    /// fault whose reaction kills them forces [`Outputs::SAFE`], as the machine does).
+    pub outputs: Outputs,
 }
 
 impl PartialEq for SimTarget {
@@ -91,6 +95,7 @@ impl PartialEq for SimTarget {
             && self.playback.fired() == o.playback.fired()
             && (self.wire_armed, self.sim_wire_stall) == (o.wire_armed, o.sim_wire_stall)
             && (self.force_armed, self.sim_milling) == (o.force_armed, o.sim_milling)
+            && self.outputs == o.outputs
     }
 }
 
@@ -127,6 +132,7 @@ impl SimTarget {
             force_armed: None,
             sim_milling: None,
             starve_holds: 0,
+            outputs: Outputs::SAFE,
         }
     }
 
@@ -193,6 +199,9 @@ impl SimTarget {
     /// Latches a fault: motion stops, the queue is dropped.
     pub fn raise_fault(&mut self, code: FaultCode) {
         self.faults |= code.bit();
+        if reaction(code) == Reaction::Kill {
+            self.outputs = Outputs::SAFE;
+        }
         self.queue.clear();
         self.drop_events();
         self.planned = self.positions;
@@ -280,6 +289,7 @@ impl LinkTarget for SimTarget {
             events_fired: self.playback.fired(),
             event_blocks: self.events.blocks() as u16,
             counters: BoardCounters { starve_holds: self.starve_holds, ..BoardCounters::default() },
+            outputs: ProgramOutputs::of(&self.outputs).bits(),
             ..Status::default()
         }
     }
@@ -433,6 +443,16 @@ impl LinkTarget for SimTarget {
 
     fn sim_milling(&mut self, params: &SimMillingParams) -> Result<(), ErrorCode> {
         self.sim_milling = Some(*params);
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn set_program_outputs(&mut self, o: ProgramOutputs) -> Result<(), ErrorCode> {
+        // As `Machine::set_outputs`: nothing switches on while the e-stop is latched.
+        if self.faults & FaultCode::EStop.bit() != 0 {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.outputs = o.applied_to(self.outputs);
         self.mutations += 1;
         Ok(())
     }

@@ -113,6 +113,7 @@ fn extreme_status() -> Status {
             steps_deferred: u32::MAX,
             starve_holds: u32::MAX,
         },
+        outputs: u8::MAX,
     }
 }
 
@@ -208,6 +209,11 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
         RequestBody::SimEncoders { arm_counts: i32::MIN, carriage_counts: i32::MIN },
+        RequestBody::SetProgramOutputs(crate::protocol::ProgramOutputs {
+            spindle: crate::protocol::SpindleDir::Ccw,
+            mist: true,
+            flood: true,
+        }),
     ]
     .into_iter()
     .map(|body| Request { seq, body })
