@@ -239,3 +239,18 @@ fn rendered_docs_are_stable_and_cover_the_table() {
         assert!(doc.contains(&format!("| {} | {} |", f.code(), f.name())));
     }
 }
+
+#[test]
+fn estop_switches_the_spindle_and_coolant_off_and_keeps_them_off() {
+    use motion::protocol::{ProgramOutputs, SpindleDir};
+    let mut r = rig_in(MachineState::Running);
+    let on = ProgramOutputs { spindle: SpindleDir::Ccw, mist: true, flood: true };
+    assert!(r.m.set_outputs(on.applied_to(r.m.outputs())));
+    assert_eq!(ProgramOutputs::of(&r.m.outputs()), on);
+    r.hold(&Inputs { estop: true, ..Inputs::QUIET });
+    assert!(r.m.faults().has(FaultCode::EStop));
+    assert_eq!(r.m.outputs(), motion::machine::Outputs::SAFE);
+    // Refused while the e-stop is latched: nothing switches back on.
+    assert!(!r.m.set_outputs(on.applied_to(r.m.outputs())));
+    assert_eq!(ProgramOutputs::of(&r.m.outputs()), ProgramOutputs::OFF);
+}

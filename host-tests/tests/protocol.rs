@@ -174,7 +174,7 @@ fn all_responses() -> Vec<Response> {
         wire_returns: 4,
         wire_max_retrace_steps: 8_738,
         wire_power: true,
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         ..Status::default()
     };
     let hello = HelloInfo {

@@ -11,6 +11,7 @@
 use crate::job::{Axis, Feed, FeedAction, Item, Job, Machine, Source, Target};
 use motion::dda::{Command, MAX_SCHEDULED};
 use motion::planner::Move;
+use motion::protocol::ProgramOutputs;
 use motion::{AxisLimits, MachineConfig, Rate, MAX_AXES};
 use std::fmt;
 
@@ -34,7 +35,8 @@ pub enum ProgramItem {
         mv: Move,
         source: Source,
     },
-    Spindle(bool),
+    /// The spindle and coolant from here on ([`Item::Outputs`]).
+    Outputs(ProgramOutputs),
     Pause,
     /// Seconds at rest.
     Dwell(f64),
@@ -179,7 +181,7 @@ impl Stepper {
     /// error the position is unchanged.
     pub fn item(&mut self, item: &Item) -> Result<Option<ProgramItem>, ConvertError> {
         let m = match item {
-            Item::Spindle(on) => return Ok(Some(ProgramItem::Spindle(*on))),
+            Item::Outputs(o) => return Ok(Some(ProgramItem::Outputs(*o))),
             Item::Pause => return Ok(Some(ProgramItem::Pause)),
             Item::Dwell(s) => return Ok(Some(ProgramItem::Dwell(*s))),
             Item::Move(m) => m,

@@ -4,6 +4,7 @@
 //! Lengths are millimetres (or the axis's own unit for rotary axes), feeds mm/min, rates mm/s.
 //! [`crate::convert`] turns a [`Job`] into planner moves in steps.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion::StepTiming;
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
@@ -93,8 +94,9 @@ impl Machine {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Item {
     Move(MoveCmd),
-    /// Spindle on (M3) or off (M5). Motion before it completes first.
-    Spindle(bool),
+    /// The spindle (M3, M4, M5) and coolant (M7, M8, M9) as they are from here on, all of them:
+    /// one switch of the board's outputs. Motion before it completes first.
+    Outputs(ProgramOutputs),
     /// Program pause (M0): motion before it completes, then the runner holds until resumed.
     Pause,
     /// Dwell (G4): motion before it completes, then the machine stands still this many seconds.
@@ -480,6 +482,7 @@ impl RawMachine {
 /// one given; `rapid = true` applies to its own entry only.
 fn moves_to_items(moves: &[RawMove], machine: &Machine) -> Result<Vec<Item>, JobError> {
     let mut feed_mm_min: Option<f64> = None;
+    let mut outputs = ProgramOutputs::OFF;
     let mut items = Vec::with_capacity(moves.len());
     for (index, m) in moves.iter().enumerate() {
         let field = |f: &str| format!("moves[{index}]{f}");
@@ -503,7 +506,13 @@ fn moves_to_items(moves: &[RawMove], machine: &Machine) -> Result<Vec<Item>, Job
         }
         if let Some(s) = m.spindle {
             no_motion_fields(m, &field)?;
-            items.push(Item::Spindle(matches!(s, SpindleState::On)));
+            // A job file switches the spindle only; the coolant stays as it is (off).
+            let spindle = match s {
+                SpindleState::On => SpindleDir::Cw,
+                SpindleState::Off => SpindleDir::Off,
+            };
+            outputs.spindle = spindle;
+            items.push(Item::Outputs(outputs));
             continue;
         }
         if let Some(p) = m.pause {

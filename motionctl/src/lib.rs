@@ -19,6 +19,7 @@ pub mod link;
 pub mod milling;
 pub mod noise;
 pub mod out;
+pub mod outputs;
 pub mod plan;
 pub mod plan_figure;
 pub mod plot;

@@ -52,7 +52,7 @@ pub fn describe_rejection(r: &Rejection) -> String {
         NakDetail::Block { reason, expected } => {
             format!(" [event block check {reason} failed; board expects block {expected:?}]")
         }
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         NakDetail::ZSlide { reason, expected, fault } => {
             let fault =
                 fault.map(|f| format!(", pre-start check: {}", f.name())).unwrap_or_default();

@@ -7,6 +7,7 @@
 use crate::convert::{Program, ProgramItem};
 use crate::job::Source;
 use motion::planner::{Move, PlanError, Planner, LOOKAHEAD};
+use motion::protocol::ProgramOutputs;
 use motion::report::Report;
 use motion::{MachineConfig, Segment, MAX_AXES};
 use std::collections::VecDeque;
@@ -17,8 +18,8 @@ use std::marker::PhantomData;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Output {
     Segment(Segment),
-    /// Switch the spindle once every earlier segment has completed.
-    Spindle(bool),
+    /// Switch the spindle and coolant to this once every earlier segment has completed.
+    Outputs(ProgramOutputs),
     /// Hold once every earlier segment has completed, until the operator resumes.
     Pause,
     /// Stand still this many seconds once every earlier segment has completed.
@@ -153,9 +154,9 @@ where
                 Some(r) => r,
                 None => match self.items.next() {
                     Some(Ok(ProgramItem::Move { mv, source })) => (mv, source),
-                    Some(Ok(ProgramItem::Spindle(on))) => {
+                    Some(Ok(ProgramItem::Outputs(o))) => {
                         self.planner.finish();
-                        self.event = Some(Output::Spindle(on));
+                        self.event = Some(Output::Outputs(o));
                         continue;
                     }
                     Some(Ok(ProgramItem::Pause)) => {
@@ -207,6 +208,7 @@ where
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Plan {
     pub segments: Vec<Segment>,
+    /// Spindle and coolant switches (M3, M4, M5, M7, M8, M9; one per switching call).
     pub spindle_events: usize,
     pub pauses: usize,
     /// Dwells, and their time at rest in milliseconds.
@@ -229,7 +231,7 @@ pub fn plan(program: &Program) -> Result<Plan, PlanFailure> {
                 p.nominal_ticks += s.duration_ticks as u64;
                 p.segments.push(s);
             }
-            Output::Spindle(_) => p.spindle_events += 1,
+            Output::Outputs(_) => p.spindle_events += 1,
             Output::Pause => p.pauses += 1,
             Output::Dwell(s) => {
                 p.dwells += 1;
@@ -330,6 +332,7 @@ pub struct Totals {
     pub moves: usize,
     pub skipped_moves: usize,
     pub segments: usize,
+    /// Spindle and coolant switches (M3, M4, M5, M7, M8, M9; one per switching call).
     pub spindle_events: usize,
     pub pauses: usize,
     pub dwells: usize,
@@ -531,7 +534,7 @@ where
                     t.nominal_ticks += s.duration_ticks as u64;
                     return Some(s);
                 }
-                Ok(Output::Spindle(_)) => t.spindle_events += 1,
+                Ok(Output::Outputs(_)) => t.spindle_events += 1,
                 Ok(Output::Pause) => t.pauses += 1,
                 Ok(Output::Dwell(s)) => {
                     t.dwells += 1;

@@ -3,7 +3,9 @@
 //! Hello (protocol version) -> the board must be idle with an empty queue -> `SetConfig` from the
 //! job's `[machine]` (skipped when the board already has it) -> `SetStatusPeriod` -> the
 //! segments of [`crate::plan::Stream`] in `QueueSegments` batches as credits allow, `Start` once
-//! the queue is full (or everything before the next event is queued), spindle events printed,
+//! the queue is full (or everything before the next event is queued), the spindle and coolant
+//! switched (`SetProgramOutputs`, read back from the board's status) once the motion before them
+//! is done,
 //! program pauses (M0) held until the operator presses Enter -> wait until every segment is done
 //! and the board is idle -> verify: segments done == sent, the board's order hash == the hash of
 //! the ids sent (every segment exactly once, in order), final positions == the host model's.
@@ -19,8 +21,8 @@ use crate::transport::Transport;
 use motion::dda::Command;
 use motion::machine::MachineState;
 use motion::protocol::{
-    AxisScale, BoardCounters, ErrorCode, FaultCode, HostConfig, HostEvent, Reply, RequestBody,
-    SegmentBatch, Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
+    AxisScale, BoardCounters, ErrorCode, FaultCode, HostConfig, HostEvent, ProgramOutputs, Reply,
+    RequestBody, SegmentBatch, Status, WireConfig, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::{order_hash, Segment};
 use motion::{Rate, MAX_AXES};
@@ -98,6 +100,10 @@ pub struct RunReport {
     pub noise: Option<(NoiseStats, NoiseStats)>,
     /// The board's counters over the run (its final Status's less its first).
     pub board: BoardCounters,
+    /// Every spindle/coolant switch in program order, as the board showed it right after.
+    pub output_switches: Vec<crate::outputs::Switched>,
+    /// The board's `Status::outputs` at the end.
+    pub final_outputs: u8,
     pub problems: Vec<String>,
 }
 
@@ -145,6 +151,8 @@ impl RunReport {
                 "steps_deferred": self.board.steps_deferred,
                 "starve_holds": self.board.starve_holds,
             },
+            "output_switches": self.output_switches.len(),
+            "final_outputs": self.final_outputs,
             "problems": self.problems,
         })
     }
@@ -242,6 +250,14 @@ impl RunReport {
             c.steps_deferred,
             c.starve_holds
         );
+        if !self.output_switches.is_empty() {
+            let _ = writeln!(
+                t,
+                "outputs    {} spindle/coolant switches; at the end: {}",
+                self.output_switches.len(),
+                crate::outputs::describe(ProgramOutputs::from_bits(self.final_outputs))
+            );
+        }
         if let Some((to, from)) = self.noise {
             let _ = writeln!(
                 t,
@@ -801,6 +817,8 @@ pub fn run_outputs(
     let mut last_tx = (s.host.sent_frames, Instant::now());
     let mut last_poll = Instant::now();
     let job_done = |st: &Status| st.segments_done.wrapping_sub(base.segments_done);
+    // The spindle and coolant as the board has them (switched in program order from here).
+    let mut switched = ProgramOutputs::from_bits(base.outputs);
 
     loop {
         s.pump(Duration::from_millis(5)).map_err(link_err)?;
@@ -809,6 +827,11 @@ pub fn run_outputs(
         }
         if opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst)) {
             let aborted = matches!(s.request(RequestBody::Abort), Ok(Ok(_)));
+            // An operator's stop stops the spindle and coolant too (the board's Abort stops
+            // motion only).
+            if switched != ProgramOutputs::OFF {
+                let _ = s.request(RequestBody::SetProgramOutputs(ProgramOutputs::OFF));
+            }
             return Err(err(format!(
                 "interrupted: {} sent to the board; {} of {total} segments were done",
                 if aborted { "Abort" } else { "Abort could not be" },
@@ -939,7 +962,7 @@ pub fn run_outputs(
             clean_acks = 0;
         }
 
-        // Events (spindle, pause) once the motion before them is done.
+        // Events (spindle and coolant, pause, dwell) once the motion before them is done.
         while let Some((out, _)) = peek(&mut outputs, &mut s, &latest, &base)? {
             if matches!(out, Output::Segment(_)) {
                 break;
@@ -949,15 +972,41 @@ pub fn run_outputs(
                 break;
             }
             match out {
-                Output::Spindle(on) => {
-                    say(
-                        &progress,
-                        &format!(
-                            "spindle {} (no spindle hardware yet: nothing switched)",
-                            if on { "on (M3)" } else { "off (M5)" }
-                        ),
-                    );
+                Output::Outputs(first) => {
+                    let mut to = first;
                     outputs.advance();
+                    // Switches with no motion between them (M9 is two calls, a program end
+                    // three) are one request.
+                    while let Some((Output::Outputs(next), _)) =
+                        peek(&mut outputs, &mut s, &latest, &base)?
+                    {
+                        to = next;
+                        outputs.advance();
+                    }
+                    if to != switched {
+                        let words = crate::outputs::describe_change(switched, to);
+                        say(&progress, &words);
+                        let st =
+                            crate::outputs::switch(&mut s, to).map_err(link_err)?.map_err(|e| {
+                                err(format!(
+                                    "{e}; {} of {total} segments were done",
+                                    job_done(&latest)
+                                ))
+                            })?;
+                        let shown = st.outputs;
+                        if shown != to.bits() {
+                            report.problems.push(format!(
+                                "{words}: the board's status shows {} instead",
+                                crate::outputs::describe(ProgramOutputs::from_bits(shown))
+                            ));
+                        }
+                        report.output_switches.push(crate::outputs::Switched {
+                            to,
+                            shown,
+                            segments_done: job_done(&st),
+                        });
+                        switched = to;
+                    }
                 }
                 Output::Pause if !opts.interactive => {
                     say(&progress, "program pause (M0): not interactive, continuing at once");
@@ -1159,6 +1208,7 @@ pub fn run_outputs(
     report.reconnects = s.stats.reconnects;
     report.noise = s.transport().noise_stats();
     report.board = fin.counters.since(&base.counters);
+    report.final_outputs = fin.outputs;
     report.statuses = rate_count;
     if let (Some((w0, k0)), Some((w1, k1))) = (rate_first, rate_last) {
         let n = rate_count.saturating_sub(1) as f64;

@@ -1,11 +1,15 @@
 //! mm -> steps: absolute rounding without drift, feeds in step space, rapids, limits.
 
 use motion::dda::Command;
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion::Rate;
 use motionctl::convert::{self, feed_hz, rapid_feed_hz, ProgramItem};
 use motionctl::job::{
     self, Feed, FeedAction, FeedCommand, Item, Job, Machine, MoveCmd, Source, Target,
 };
+
+/// M3 alone.
+const CW: ProgramOutputs = ProgramOutputs { spindle: SpindleDir::Cw, mist: false, flood: false };
 
 fn machine() -> Machine {
     job::parse_machine_toml(include_str!("../examples/machine.toml")).unwrap()
@@ -105,7 +109,7 @@ fn machine_config_rounds_limits_down() {
 fn zero_step_moves_are_skipped_and_events_kept_in_order() {
     let items = vec![
         relative(0, [0.001, 0.0, 0.0], Feed::MmPerMin(100.0)),
-        Item::Spindle(true),
+        Item::Outputs(CW),
         relative(2, [0.01, 0.0, 0.0], Feed::MmPerMin(100.0)),
         Item::Pause,
         relative(4, [0.0, 0.0, 0.0], Feed::Rapid),
@@ -115,7 +119,7 @@ fn zero_step_moves_are_skipped_and_events_kept_in_order() {
     assert!(matches!(
         p.items.as_slice(),
         [
-            ProgramItem::Spindle(true),
+            ProgramItem::Outputs(CW),
             ProgramItem::Move { source: Source::Toml { index: 2 }, .. },
             ProgramItem::Pause
         ]

@@ -1,9 +1,14 @@
 //! G-code through motion-gcode (the rs274ngc-grade front end): modes, units, events, comments,
 //! and every error with file:line:column in rs274's words.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motionctl::convert;
 use motionctl::gcode;
 use motionctl::job::{self, Feed, Item, Job, Machine, Source, Target};
+
+/// M3 alone, and everything off.
+const CW: ProgramOutputs = ProgramOutputs { spindle: SpindleDir::Cw, mist: false, flood: false };
+const OFF: ProgramOutputs = ProgramOutputs::OFF;
 
 fn machine() -> Machine {
     job::parse_machine_toml(include_str!("../examples/machine.toml")).unwrap()
@@ -42,8 +47,8 @@ fn part_example_parses_and_ends_where_written() {
     assert_eq!(moves, 12);
     let events: Vec<&Item> = items.iter().filter(|i| !matches!(i, Item::Move(_))).collect();
     // M5, then M30's own spindle stop (rs274 stops the spindle at the program end).
-    let stops = [&Item::Spindle(false), &Item::Spindle(false)];
-    assert_eq!(events, [[&Item::Spindle(true), &Item::Pause].as_slice(), &stops].concat());
+    let stops = [&Item::Outputs(OFF), &Item::Outputs(OFF)];
+    assert_eq!(events, [[&Item::Outputs(CW), &Item::Pause].as_slice(), &stops].concat());
     // N160 in inches: X1.5 Y1 at F40 in/min; Z stays where N130 put it.
     let Some(Item::Move(inch)) = items.iter().rev().nth(3) else { panic!("N160 is a move") };
     assert_eq!(inch.source, Source::Gcode { line: 18 });
@@ -115,14 +120,47 @@ fn spindle_pause_and_end_are_items_in_order() {
     );
     // Within one block: spindle before motion, pause after it.
     let it = items("G1 X1 F100 M0 M3 S1000");
-    assert!(matches!(it.as_slice(), [Item::Spindle(true), Item::Move(_), Item::Pause]));
+    assert!(matches!(it.as_slice(), [Item::Outputs(CW), Item::Move(_), Item::Pause]));
     // M30 ends the program (stopping the spindle): nothing after it is read.
     assert_eq!(items("G0 X1\nM30\nthis is not G-code").len(), 2);
-    assert_eq!(items("M2\nG0 X1"), [Item::Spindle(false)]);
+    assert_eq!(items("M2\nG0 X1"), [Item::Outputs(OFF)]);
     // A tool change stops the spindle and pauses the job for the operator.
-    assert_eq!(items("T1 M6"), [Item::Spindle(false), Item::Pause]);
+    assert_eq!(items("T1 M6"), [Item::Outputs(OFF), Item::Pause]);
     // A motion word without axes is rs274's zero-length move: it moves nothing.
     assert_eq!(final_steps("G0\nG1 F100\nG90 G21"), [0, 0, 0]);
+}
+
+#[test]
+fn spindle_and_coolant_words_become_the_whole_output_state_in_order() {
+    let events: Vec<ProgramOutputs> =
+        items("M3 S1000\nM8\nG0 X1\nM7\nM9\nM4\nG0 X2\nM5\nM7 M3\nM2")
+            .iter()
+            .filter_map(|i| match i {
+                Item::Outputs(o) => Some(*o),
+                _ => None,
+            })
+            .collect();
+    let o = |spindle, mist, flood| ProgramOutputs { spindle, mist, flood };
+    use SpindleDir::{Ccw, Cw, Off};
+    assert_eq!(
+        events,
+        [
+            o(Cw, false, false),
+            o(Cw, false, true),
+            o(Cw, true, true),
+            // M9 is two calls: mist off, then flood off.
+            o(Cw, false, true),
+            o(Cw, false, false),
+            o(Ccw, false, false),
+            o(Off, false, false),
+            // One block: the spindle before the coolant (rs274's order), each a switch.
+            o(Cw, false, false),
+            o(Cw, true, false),
+            // M2 stops the spindle, then the coolant that is on.
+            o(Off, true, false),
+            o(Off, false, false),
+        ]
+    );
 }
 
 #[test]
@@ -149,7 +187,6 @@ fn errors_carry_line_column_and_what_was_expected() {
         ("%\n(ok)\n  G0 X1 %", "gcode:3:9: error: Bad character '%' used"),
         // What this machine or board cannot do, named with its line.
         ("G0 A1", "gcode:1:1: error: moves A to 1.0000 but the machine has no A axis"),
-        ("M4 S100", "gcode:1:1: error: M4 (spindle counterclockwise): the board has no spindle"),
         ("G38.2 Z-5 F100", "gcode:1:1: error: G38.x probe move: the board has no probe input yet"),
     ];
     let mut failures = Vec::new();

@@ -4,6 +4,7 @@
 //! journal `FILE.journal` that `run` keeps and `run --resume` reads; a job interrupted on the
 //! simulated board and resumed ends where the whole job ends.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motionctl::convert::ProgramItem;
 use motionctl::gcode::resume::{ResumeAt, SPIN_UP_S};
 use motionctl::gcode::stream;
@@ -11,6 +12,9 @@ use motionctl::job;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+/// M3 alone.
+const CW: ProgramOutputs = ProgramOutputs { spindle: SpindleDir::Cw, mist: false, flood: false };
 
 /// A small fast router: Z's safe height (its upper soft limit) 5 mm.
 const MACHINE: &str = r#"format = "motion-job"
@@ -108,7 +112,7 @@ fn the_resumed_program_is_the_approach_then_the_program_from_the_line() {
     // Spindle on and its spin-up between the traverse and the plunge (the program had M3).
     let events: Vec<&ProgramItem> =
         resumed.iter().filter(|i| !matches!(i, ProgramItem::Move { .. })).collect();
-    assert_eq!(events[0], &ProgramItem::Spindle(true));
+    assert_eq!(events[0], &ProgramItem::Outputs(CW));
     assert_eq!(events[1], &ProgramItem::Dwell(SPIN_UP_S));
     // Then exactly the whole program's moves from that line on.
     let whole_moves = moves(&whole);

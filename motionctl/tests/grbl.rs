@@ -285,6 +285,19 @@ impl Raw {
         l
     }
 
+    /// Polls `?` until a report passes `want` (within 10 s); that report.
+    fn until_status(&mut self, want: impl Fn(&str) -> bool) -> String {
+        let start = Instant::now();
+        loop {
+            let st = self.status();
+            if want(&st) {
+                return st;
+            }
+            assert!(start.elapsed() < Duration::from_secs(10), "never: {st}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
     /// Polls `?` until the machine is idle; the last report.
     fn until_idle(&mut self) -> String {
         let start = Instant::now();
@@ -446,6 +459,48 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.send(b"~");
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:40.000,0.000,0.000|"), "{st}");
+
+    // Spindle and coolant: switched on the board in program order, reported in grbl 1.1's
+    // accessory field (`A:` after `Ov:`; S clockwise, C counterclockwise, F flood, M mist; none
+    // while all are off) and in `$G`.
+    r.send(b"M3 S1000\nM8\n");
+    r.expect("ok");
+    r.expect("ok");
+    let st = r.until_status(|st| st.contains("|A:"));
+    assert!(st.ends_with("|Ov:100,100,100|A:SF>"), "{st}");
+    r.send(b"G1 X41 F6000 M4 M7\n");
+    r.expect("ok");
+    let st = r.until_status(|st| st.contains("|A:C"));
+    assert!(st.ends_with("|A:CFM>"), "{st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M4 M7 M8 ") && gc.ends_with(" S1000]"), "{gc}");
+    r.expect("ok");
+    r.send(b"M9\n");
+    r.expect("ok");
+    let st = r.until_status(|st| st.ends_with("|A:C>"));
+    assert!(st.starts_with("<Idle|MPos:41.000,"), "the move before M9 is done: {st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M4 M9 "), "{gc}");
+    r.expect("ok");
+    r.send(b"M5\n");
+    r.expect("ok");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    assert!(st.ends_with("|Ov:100,100,100>"), "{st}");
+    // A soft reset stops them, as grbl's does.
+    r.send(b"M3\nM7\n");
+    r.expect("ok");
+    r.expect("ok");
+    r.until_status(|st| st.ends_with("|A:SM>"));
+    r.send(b"\x18");
+    r.expect("");
+    r.expect("Grbl 1.1h ['$' for help]");
+    let st = r.status();
+    assert!(!st.contains("|A:"), "{st}");
+    r.send(b"G0 X40\n");
+    r.expect("ok");
+    r.until_idle();
 
     // Work offsets: $# and WCO, kept across a soft reset as grbl keeps them; G92 is not.
     r.send(b"G10 L2 P1 X5 Y-2.5\nG92 Z1\n$#\n");

@@ -1,12 +1,17 @@
 //! Planning and the offline model run: the examples end where they should; events follow the
 //! motion before them; the binary's `plan` works and errors are one line.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motionctl::cli::{self, JobArgs};
 use motionctl::convert::{self, Program};
 use motionctl::job::{self, Feed, Item, Job, MoveCmd, Source, Target};
 use motionctl::plan::{self, Output, Stream};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// M3 alone, and everything off.
+const CW: ProgramOutputs = ProgramOutputs { spindle: SpindleDir::Cw, mist: false, flood: false };
+const OFF: ProgramOutputs = ProgramOutputs::OFF;
 
 fn example(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(name)
@@ -64,21 +69,21 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
     let p = program(vec![
         mv(0, 10.0, Feed::MmPerMin(3_000.0)),
         mv(1, 10.0, Feed::MmPerMin(3_000.0)),
-        Item::Spindle(true),
+        Item::Outputs(CW),
         mv(3, 5.0, Feed::Rapid),
         Item::Pause,
         mv(5, 5.0, Feed::Rapid),
         Item::Dwell(0.25),
         mv(7, 2.0, Feed::Rapid),
-        Item::Spindle(false),
+        Item::Outputs(OFF),
     ]);
     let out: Vec<Output> = Stream::new(&p).map(Result::unwrap).collect();
     let kinds: Vec<char> = out
         .iter()
         .map(|o| match o {
             Output::Segment(_) => 's',
-            Output::Spindle(true) => 'M',
-            Output::Spindle(false) => 'm',
+            Output::Outputs(o) if o.spindle != SpindleDir::Off => 'M',
+            Output::Outputs(_) => 'm',
             Output::Pause => 'P',
             Output::Dwell(s) => {
                 assert_eq!(*s, 0.25);
@@ -89,7 +94,7 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
     assert_eq!(kinds.iter().collect::<String>(), "ssMsPsDsm");
     // The segment before each event ends at rest; the first ones meet at speed.
     for w in out.windows(2) {
-        if let (Output::Segment(s), Output::Spindle(_) | Output::Pause | Output::Dwell(_)) =
+        if let (Output::Segment(s), Output::Outputs(_) | Output::Pause | Output::Dwell(_)) =
             (w[0], w[1])
         {
             assert_eq!(s.exit_rate, motion::Rate::ZERO);

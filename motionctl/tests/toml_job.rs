@@ -1,7 +1,12 @@
 //! TOML job files: the shipped example in full, and every error path naming its field.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motionctl::convert::{self, ProgramItem};
 use motionctl::job::{self, Feed, FeedAction, Item, Source, Target};
+
+/// M3 alone, and everything off.
+const CW: ProgramOutputs = ProgramOutputs { spindle: SpindleDir::Cw, mist: false, flood: false };
+const OFF: ProgramOutputs = ProgramOutputs::OFF;
 
 const SQUARE: &str = include_str!("../examples/square.toml");
 
@@ -27,13 +32,13 @@ fn square_example_parses_in_full() {
     assert_eq!(first.target, Target::Absolute(vec![Some(10.0), Some(10.0), None]));
     assert_eq!(first.feed, Feed::Rapid);
     assert_eq!(first.source, Source::Toml { index: 0 });
-    assert_eq!(job.items[1], Item::Spindle(true));
+    assert_eq!(job.items[1], Item::Outputs(CW));
     // feed_mm_min is modal: moves[4] has none and keeps 1200.
     let Item::Move(side) = &job.items[4] else { panic!("moves[4] is a move") };
     assert_eq!(side.target, Target::Relative(vec![0.0, 40.0, 0.0]));
     assert_eq!(side.feed, Feed::MmPerMin(1_200.0));
     assert_eq!(job.items[8], Item::Pause);
-    assert_eq!(job.items[10], Item::Spindle(false));
+    assert_eq!(job.items[10], Item::Outputs(OFF));
     assert_eq!(job.feed_commands.len(), 2);
     assert_eq!(job.feed_commands[0].at_s, 1.0);
     assert_eq!(job.feed_commands[0].action, FeedAction::Override(1.5));
@@ -55,7 +60,7 @@ fn square_example_parses_in_full() {
     assert_eq!(p.final_steps[..3], [400, 400, 0]);
     assert_eq!(p.commands.len(), 2);
     assert_eq!(p.commands[0].0, 100_000);
-    assert!(matches!(p.items[1], ProgramItem::Spindle(true)));
+    assert!(matches!(p.items[1], ProgramItem::Outputs(CW)));
 }
 
 /// Replaces `from` (which must occur) in the example and returns the error text.

@@ -1,4 +1,4 @@
-//! `motionctl fourier run`'s host model and table handling (issue 5): the model is the
+//! `motionctl fourier run`'s host model and table handling: the model is the
 //! firmware's own `Machine` + `ZJob` + encoder logic, so these runs are what the board must
 //! report at the end of a QEMU run (`cargo xtask zslide-e2e`).
 

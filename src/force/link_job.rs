@@ -1,4 +1,4 @@
-//! A force job on the link firmware (`ArmForce`, issue 4): the force chain and the control law
+//! A force job on the link firmware (`ArmForce`): the force chain and the control law
 //! around one segment job, fed per ADC sample, with the simulated milling plant of a simulator
 //! board (`Sim(Milling)`) as the sample source where the board has no real ADC.
 //!

@@ -113,7 +113,7 @@ coded_enum! {
             "seq is older than the board's retransmission memory, or the board executed a different request under it; its result is unknown."),
         Internal = 15 => ("Internal",
             "The board failed a request that passed every check (a firmware bug). The one NAK that may have changed something: part of a QueueSegments batch may be queued; read Status."),
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         InvalidTable = 16 => ("InvalidTable",
             "A Z table upload step was refused (detail: NakDetail::ZSlide with the reason and the chunk index expected); the active table is unchanged."),
     }

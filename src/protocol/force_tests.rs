@@ -1,4 +1,4 @@
-//! Session tests of the force-job requests (issue 4): `ArmForce`, `Sim(Milling)`, the Status
+//! Session tests of the force-job requests: `ArmForce`, `Sim(Milling)`, the Status
 //! force fields.
 
 use super::tests::config;

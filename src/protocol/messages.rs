@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::bounded::{BlockBytes, EventBlock, FixedStr, SegmentBatch};
 use super::errors::{ErrorCode, FaultCode, SegmentReason};
+use super::program_outputs::ProgramOutputs;
 #[cfg(feature = "sim-inputs")]
 use super::sim::messages::SimRequest;
 use crate::config::{
@@ -16,7 +17,7 @@ use crate::machine::{HomeAxis, MachineState};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -49,15 +50,15 @@ pub const CAP_WIRE_JOB: u32 = 1 << 7;
 /// `Sim` requests drive simulated inputs (a simulator board only: QEMU has no GPIO; the
 /// firmware is built with the `sim-inputs` feature).
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
-// -- Z-slide job (issue 5) --
+// -- Z-slide job --
 /// Z-slide jobs (`ZTableBegin`/`ZTableChunk`/`ZTableEnd`, `StartZ`) are honoured.
 pub const CAP_ZSLIDE_JOB: u32 = 1 << 9;
 /// Most table bytes in one `ZTableChunk`.
 pub const MAX_Z_CHUNK: usize = 192;
-// -- force job (issue 4) --
+// -- force job --
 /// `ArmForce` (constant-force milling jobs) is honoured; `Sim(Milling)` too with `CAP_SIM_INPUTS`.
 pub const CAP_FORCE_JOB: u32 = 1 << 10;
-// -- copy mode (issue 6) --
+// -- copy mode --
 /// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
 pub const CAP_COPY_JOB: u32 = 1 << 11;
 
@@ -120,7 +121,7 @@ pub enum RequestBody {
     /// job, and `Start` runs it through the wire-stall retrace controller instead of the plain
     /// feeder. Parameters out of range -> `OutOfRange`.
     ArmWire(WireJobParams),
-    // -- Z-slide job (issue 5) --
+    // -- Z-slide job --
     /// Opens a Z coefficient-table upload (drops an unfinished one). Queue column; refused
     /// (`OutOfState`) while a Z job runs; a bad header -> `InvalidTable`.
     ZTableBegin(ZTableHeader),
@@ -140,14 +141,14 @@ pub enum RequestBody {
     /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
     /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::ZSlide { fault }`.
     StartZ(ZJobSpec),
-    // -- force job (issue 4) --
+    // -- force job --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
     /// job armed; needs `CAP_FORCE_JOB`): from its `Start` on, force samples run through the
     /// force chain and the control law, whose feed override drives the DDA; force faults hold
     /// the feed through the machine's fault model. Parameters out of range -> `OutOfRange` with
     /// `NakDetail::Config` naming the field.
     ArmForce(ForceJobParams),
-    // -- copy mode (issue 6) --
+    // -- copy mode --
     /// Start a copy job (`Ready`, nothing queued; needs `CAP_COPY_JOB`): from the next tick the
     /// arm and carriage encoders drive theta and r live, r scaled `m`:`k` (each 1..=4, else
     /// `OutOfRange`); the encoders' counts now are the job's origin. With `teach`, every
@@ -164,6 +165,13 @@ pub enum RequestBody {
     ReadTeach {
         block: u16,
     },
+    /// The spindle (off, clockwise, counterclockwise) and coolant (mist, flood) a program
+    /// switches, all at once, from the next tick on; the wire power and the Z DAC are left as
+    /// they are. Not a machine command: accepted in every state but refused (`OutOfState`,
+    /// nothing changes) while an e-stop is latched or pressed. Faults that kill the outputs
+    /// (e-stop and the other `Kill` reactions) switch these off too. The host sends it once the
+    /// motion before it is done (program order); `Status::outputs` shows the result.
+    SetProgramOutputs(ProgramOutputs),
     /// A simulator board's test hook ([`SimRequest`]; only with `CAP_SIM_INPUTS`, else
     /// `Unsupported`). Compiled only with the `sim-inputs` feature: a board built without it
     /// does not decode the variant and answers it `Unsupported` all the same.
@@ -176,9 +184,9 @@ pub enum RequestBody {
 
 /// The postcard index of `RequestBody::Sim`, known with and without the `sim-inputs` feature
 /// (a board without it recognises the request it cannot decode).
-pub const KIND_SIM: u8 = 25;
+pub const KIND_SIM: u8 = 26;
 
-// -- force job (issue 4) --
+// -- force job --
 /// Contact strategy of a force job (`motion::force::control::ContactStrategy`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ForceStrategy {
@@ -360,16 +368,17 @@ impl RequestBody {
             RequestBody::StartPlayback { .. } => 15,
             RequestBody::JogOffLimit => 16,
             RequestBody::ArmWire(_) => 17,
-            // -- Z-slide job (issue 5) --
+            // -- Z-slide job --
             RequestBody::ZTableBegin(_) => 18,
             RequestBody::ZTableChunk { .. } => 19,
             RequestBody::ZTableEnd { .. } => 20,
             RequestBody::StartZ(_) => 21,
-            // -- force job (issue 4) --
+            // -- force job --
             RequestBody::ArmForce(_) => 22,
-            // -- copy mode (issue 6) --
+            // -- copy mode --
             RequestBody::StartCopy { .. } => 23,
             RequestBody::ReadTeach { .. } => 24,
+            RequestBody::SetProgramOutputs(_) => 25,
             #[cfg(feature = "sim-inputs")]
             RequestBody::Sim(_) => KIND_SIM,
         }
@@ -418,7 +427,7 @@ pub enum Reply {
     Status(Status),
     /// The answer to `QueueEvents`: free event-block slots right after it (`T = seq`).
     EventCredits(u16),
-    // -- copy mode (issue 6) --
+    // -- copy mode --
     /// The answer to `ReadTeach`.
     Teach(TeachChunk),
 }
@@ -502,7 +511,7 @@ pub enum NakDetail {
         reason: u8,
         expected: Option<u16>,
     },
-    // -- Z-slide job (issue 5) --
+    // -- Z-slide job --
     /// A refused Z request: `reason` = `ZTableError::code` for an upload step (1 header, 2 no
     /// upload, 3 sequence, 4 too long, 5 short, 6 CRC, 7 table), 0 for a start; `expected` =
     /// the chunk index the board wanted (sequence); `fault` = what the pre-start check found.
@@ -608,7 +617,7 @@ pub struct Status {
     pub wire_returns: u32,
     pub wire_max_retrace_steps: u64,
     pub wire_power: bool,
-    // -- Z-slide job (issue 5) --
+    // -- Z-slide job --
     /// The current (or last) Z job: `ZJob::state_code` (`ZState`) (0 none, 1 idle/engaging,
     /// 2 running, 3 finished, 4 faulted), commanded X (inches Q24), Z command (inches Q32),
     /// the largest following error (nanoinches), Z steps emitted, the DAC code, and the spindle
@@ -620,7 +629,7 @@ pub struct Status {
     pub z_steps: i64,
     pub z_dac_code: u16,
     pub z_spindle_rpm_milli: i64,
-    // -- force job (issue 4) --
+    // -- force job --
     /// The current (or last) force job: the chain's latest force (resultant) and its tooth
     /// peak, mN; the controller's override (`Rate` bits); its phase (`ForcePhase` as u8: 0 no
     /// job); control updates run.
@@ -629,7 +638,7 @@ pub struct Status {
     pub force_override_bits: u32,
     pub force_phase: u8,
     pub force_updates: u32,
-    // -- copy mode (issue 6) --
+    // -- copy mode --
     /// A copy job runs (or holds).
     pub copy_running: bool,
     /// The copy encoders' counts now (arm, carriage), read every tick.
@@ -639,6 +648,9 @@ pub struct Status {
     pub lost_events: u32,
     /// What the board recovered from without a fault, counted since boot.
     pub counters: BoardCounters,
+    /// The program outputs the board drives now (`SetProgramOutputs`), `OUT_*` bits: bit 0
+    /// spindle on, bit 1 spindle counterclockwise (with bit 0), bit 2 mist, bit 3 flood.
+    pub outputs: u8,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

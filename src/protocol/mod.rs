@@ -4,6 +4,7 @@
 //! * [`frame`]: `COBS(postcard(message) ++ crc32_le) ++ 0x00` framing ([`encode_frame`],
 //!   [`FrameDecoder`]).
 //! * [`messages`]: [`Request`] (host -> board, with a seq) and [`Response`] (board -> host).
+//! * [`program_outputs`]: the spindle and coolant state a program switches ([`ProgramOutputs`]).
 //! * [`errors`]: the numbered NAK codes, segment-check reasons and fault codes, with their
 //!   documentation tables ([`markdown_table`]).
 //! * [`session`]: [`BoardLink`], the board's sequence/ACK state machine over a [`LinkTarget`].
@@ -23,6 +24,7 @@ pub mod errors;
 pub mod frame;
 pub mod host;
 pub mod messages;
+pub mod program_outputs;
 pub mod session;
 pub mod sim;
 
@@ -36,6 +38,9 @@ pub use frame::{
 };
 pub use host::{HostConfig, HostEvent, HostLink, Rejection, SendError};
 pub use messages::*;
+pub use program_outputs::{
+    ProgramOutputs, SpindleDir, OUT_FLOOD, OUT_MIST, OUT_SPINDLE, OUT_SPINDLE_CCW,
+};
 pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_MEMORY};
 #[cfg(feature = "sim-inputs")]
 pub use sim::SimRequest;
@@ -47,8 +52,10 @@ pub use sim::{SimForceFault, SimMillingParams};
 mod tests;
 #[cfg(test)]
 mod tests_zslide;
-// -- force job (issue 4) --
+// -- force job --
 #[cfg(test)]
 mod force_tests;
 #[cfg(test)]
 mod tests_copy;
+#[cfg(test)]
+mod tests_outputs;

@@ -40,6 +40,7 @@
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
 //! | ReadTeach (not a command) | nothing |
 //! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
+//! | SetProgramOutputs (not a command) | no e-stop latched or pressed (`OutOfState`) |
 //! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_FORCE_JOB` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
 //!
 //! A board built without the `sim-inputs` feature cannot decode `Sim`; it answers it
@@ -49,6 +50,7 @@ use super::bounded::FixedStr;
 use super::errors::{ErrorCode, SegmentReason};
 use super::frame::FrameError;
 use super::messages::*;
+use super::program_outputs::ProgramOutputs;
 use crate::config::{ConfigError, MAX_AXES};
 use crate::machine::{cell, Cell, CommandKind, MachineState};
 use crate::polar::feed::check_block;
@@ -124,7 +126,7 @@ pub trait LinkTarget {
     fn arm_wire(&mut self, _params: &WireJobParams) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
-    // -- Z-slide job (issue 5) --
+    // -- Z-slide job --
     /// `ZTableBegin` (see `motion::zslide::link_requests::ZRequests`). A refusal changes
     /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
     fn z_table_begin(&mut self, _h: &ZTableHeader) -> Result<(), ZNak> {
@@ -142,7 +144,7 @@ pub trait LinkTarget {
     fn start_z(&mut self, _spec: &ZJobSpec) -> Result<(), ZNak> {
         Err((ErrorCode::Unsupported, NakDetail::None))
     }
-    // -- copy mode (issue 6) --
+    // -- copy mode --
     /// Starts a copy job with a checked size scale (`Ready`, nothing queued, no job; else
     /// `OutOfState`). Targets without copy jobs: `Unsupported`.
     fn start_copy(&mut self, _scale: SizeScale, _teach: bool) -> Result<(), ErrorCode> {
@@ -157,7 +159,7 @@ pub trait LinkTarget {
     fn teach_resend(&self) -> Option<TeachChunk> {
         None
     }
-    // -- force job (issue 4) --
+    // -- force job --
     /// Arms a force job with checked parameters (`Ready`, empty queue, no events, no other job
     /// armed; else `OutOfState`). `OutOfRange` from the target means the sample rate does not
     /// fit the board (the NAK names `sample_hz`). Targets without force jobs: `Unsupported`.
@@ -169,6 +171,13 @@ pub trait LinkTarget {
     /// `sim-inputs` feature: production targets have no hooks to implement.
     #[cfg(feature = "sim-inputs")]
     fn sim(&mut self, _req: &SimRequest) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+
+    /// Switches the spindle and coolant (`SetProgramOutputs`), keeping the other outputs;
+    /// `OutOfState` while an e-stop is latched or pressed. Targets without these outputs:
+    /// `Unsupported`.
+    fn set_program_outputs(&mut self, _o: ProgramOutputs) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
 }
@@ -199,7 +208,7 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         RequestBody::Abort => CommandKind::Abort,
         RequestBody::ClearFault => CommandKind::ClearFault,
         RequestBody::JogOffLimit => CommandKind::JogOff,
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         RequestBody::ZTableBegin(_)
         | RequestBody::ZTableChunk { .. }
         | RequestBody::ZTableEnd { .. } => CommandKind::Queue,
@@ -209,7 +218,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::GetStatus
         | RequestBody::SetOverride { .. }
         | RequestBody::SetStatusPeriod { .. }
-        | RequestBody::ReadTeach { .. } => return None,
+        | RequestBody::ReadTeach { .. }
+        | RequestBody::SetProgramOutputs(_) => return None,
         #[cfg(feature = "sim-inputs")]
         RequestBody::Sim(_) => return None,
     })
@@ -659,7 +669,7 @@ impl BoardLink {
                 })?;
                 Ok(Reply::None)
             }
-            // -- Z-slide job (issue 5) --
+            // -- Z-slide job --
             RequestBody::ZTableBegin(h) => {
                 t.z_table_begin(h).map_err(|e| state_detail(e, machine))?;
                 Ok(Reply::None)
@@ -680,7 +690,7 @@ impl BoardLink {
                 t.start_z(spec).map_err(|e| state_detail(e, machine))?;
                 Ok(Reply::None)
             }
-            // -- copy mode (issue 6) --
+            // -- copy mode --
             RequestBody::StartCopy { m, k, teach } => {
                 let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
                 t.config().validate().map_err(config_nak)?;
@@ -690,7 +700,7 @@ impl BoardLink {
                 })?;
                 Ok(Reply::None)
             }
-            // -- force job (issue 4) --
+            // -- force job --
             RequestBody::ArmForce(p) => {
                 if self.capabilities & CAP_FORCE_JOB == 0 {
                     return Err(plain(ErrorCode::Unsupported));
@@ -710,6 +720,13 @@ impl BoardLink {
             #[cfg(feature = "sim-inputs")]
             RequestBody::Sim(s) => {
                 sim(self.capabilities, s, t)?;
+                Ok(Reply::None)
+            }
+            RequestBody::SetProgramOutputs(o) => {
+                t.set_program_outputs(*o).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
                 Ok(Reply::None)
             }
             RequestBody::ClearFault => {

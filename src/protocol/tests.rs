@@ -86,7 +86,7 @@ fn extreme_status() -> Status {
         wire_returns: u32::MAX,
         wire_max_retrace_steps: u64::MAX,
         wire_power: true,
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         z_state: u8::MAX,
         z_x_in_q24: i32::MIN,
         z_cmd_in_q32: i32::MIN,
@@ -94,13 +94,13 @@ fn extreme_status() -> Status {
         z_steps: i64::MIN,
         z_dac_code: u16::MAX,
         z_spindle_rpm_milli: i64::MIN,
-        // -- force job (issue 4) --
+        // -- force job --
         force_mn: u32::MAX,
         force_peak_mn: u32::MAX,
         force_override_bits: u32::MAX,
         force_phase: u8::MAX,
         force_updates: u32::MAX,
-        // -- copy mode (issue 6) --
+        // -- copy mode --
         copy_running: true,
         encoder_counts: [i32::MIN; 2],
         taught_events: u32::MAX,
@@ -113,6 +113,7 @@ fn extreme_status() -> Status {
             steps_deferred: u32::MAX,
             starve_holds: u32::MAX,
         },
+        outputs: u8::MAX,
     }
 }
 
@@ -168,7 +169,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             resume_segments: u32::MAX,
             segments: u32::MAX,
         }),
-        // -- Z-slide job (issue 5) --
+        // -- Z-slide job --
         RequestBody::ZTableBegin(crate::zslide::link_job::ZTableHeader {
             form: u8::MAX,
             rows: u16::MAX,
@@ -200,11 +201,16 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             max_accel_uin_per_s2: u32::MAX,
             min_speed_turn_q32_per_tick: u32::MAX,
         }),
-        // -- force job (issue 4) --
+        // -- force job --
         RequestBody::ArmForce(crate::protocol::force_tests::extreme_force_params()),
-        // -- copy mode (issue 6) --
+        // -- copy mode --
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
+        RequestBody::SetProgramOutputs(crate::protocol::ProgramOutputs {
+            spindle: crate::protocol::SpindleDir::Ccw,
+            mist: true,
+            flood: true,
+        }),
     ];
     #[cfg(feature = "sim-inputs")]
     bodies.extend(
@@ -243,7 +249,7 @@ pub(crate) fn extreme_responses() -> Vec<Response> {
         Response::Ack { seq, credits, reply: Reply::Config(extreme_config()) },
         Response::Ack { seq, credits, reply: Reply::Status(extreme_status()) },
         Response::Ack { seq, credits, reply: Reply::EventCredits(u16::MAX) },
-        // -- copy mode (issue 6) --
+        // -- copy mode --
         Response::Ack {
             seq,
             credits,

@@ -1,4 +1,4 @@
-//! Session tests of the copy-mode requests (issue 6) over [`CopySim`].
+//! Session tests of the copy-mode requests over [`CopySim`].
 
 use super::tests::config;
 use super::*;

@@ -1,4 +1,4 @@
-//! Session tests of the Z-slide requests (issue 5): chunked table upload (order, length, CRC),
+//! Session tests of the Z-slide requests: chunked table upload (order, length, CRC),
 //! uploads refused while a Z job runs, `StartZ` without a table, `Sim(Spindle)` gating, the Z
 //! fields of `Status`, and that every refusal changes nothing. The target wraps [`SimTarget`]
 //! with the link firmware's own Z code (`ZRequests`, `ZJob`).

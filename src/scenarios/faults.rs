@@ -375,7 +375,14 @@ impl FaultScenario {
             s.home_refused = home.is_err();
         }
         // Outputs a running cut would have on, so the e-stop's switch-off shows.
-        s.machine.set_outputs(Outputs { spindle_enable: true, wire_power: true, z_dac: 3_000 });
+        s.machine.set_outputs(Outputs {
+            spindle_enable: true,
+            spindle_ccw: true,
+            mist: true,
+            flood: true,
+            wire_power: true,
+            z_dac: 3_000,
+        });
         Some(s)
     }
 

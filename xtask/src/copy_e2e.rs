@@ -1,4 +1,4 @@
-//! End to end, copy mode (issue 6): `motionctl polar copy --qemu` drives the link firmware's
+//! End to end, copy mode: `motionctl polar copy --qemu` drives the link firmware's
 //! simulated encoders along a piece of the limacon template (r = 3 + 2 cos theta in, theta
 //! 0..0.6 rad: 1528 arm and 349 carriage counts) with the copy at size 3:2 and teach on, and
 //! saves the taught stream; then `motionctl polar run` replays that stream at speed 2, size 1:1.

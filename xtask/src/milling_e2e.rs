@@ -1,4 +1,4 @@
-//! End to end, force jobs (issue 4): `motionctl milling run --qemu` runs Case A
+//! End to end, force jobs: `motionctl milling run --qemu` runs Case A
 //! (`motionctl/examples/case_a_milling.toml`: Fnom 4100 N, b 2.5 -> 10 mm) as a force job on the
 //! link firmware in QEMU, whose simulated milling plant cuts; then a job of other numbers
 //! (`pocket_wall_1500n.toml`: 1500 N, 800 rpm, 3 teeth); then Case A with a stuck force channel

@@ -1,4 +1,4 @@
-//! End to end, Z-slide jobs (issue 5): `motionctl fourier run --qemu` runs the built-in
+//! End to end, Z-slide jobs: `motionctl fourier run --qemu` runs the built-in
 //! Douglass table on the link firmware in QEMU twice: 360 rpm with the Z axis's step/dir output,
 //! then with the DAC output and a +20 % spindle speed step 0.25 s (board time) after the start.
 //! X feeds 0 -> 0.5 in at 1 in/s (a short feed: the whole step stays well under a minute of

@@ -20,11 +20,16 @@ pub struct RawInputs {
 pub trait MachineIo {
     /// The host may drive the inputs (`Sim(Inject)`; the simulated board).
     const SIM_INPUTS: bool;
+    /// `write` drives the spindle direction and the mist and flood coolant outputs (a board
+    /// whose pins for them are taken by another option does not: `SetProgramOutputs` is then
+    /// refused as unsupported instead of reporting outputs nothing switches).
+    const PROGRAM_OUTPUTS: bool;
     /// Sets the simulated wire-stall switch; false where not honoured.
     fn inject_wire_stall(stalled: bool) -> bool;
     /// Every input, once per tick. Bounded, no division.
     fn read(&mut self) -> RawInputs;
-    /// The machine's outputs (spindle enable, wire power, Z DAC), once per tick.
+    /// The machine's outputs (spindle enable and direction, mist, flood, wire power, Z DAC),
+    /// once per tick.
     fn write(&mut self, outputs: &Outputs);
 }
 

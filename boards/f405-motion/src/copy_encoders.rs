@@ -1,4 +1,4 @@
-//! Copy-mode encoders (template digitizer, issue 6): the arm angle on TIM5 (32-bit) and the
+//! Copy-mode encoders (template digitizer): the arm angle on TIM5 (32-bit) and the
 //! carriage radius on TIM3 (16-bit, extended to i32 by `board_drivers::quadrature::TimerEncoder`),
 //! both in encoder mode 3 (every edge of both quadrature channels counts). Pins: `pins.rs`
 //! (`COPY_ENCODER_PINS`).

@@ -14,7 +14,7 @@
 //! | DAC channel 1 | Z-slide command (PA4), mid-scale when safe |
 //! | USART1 | host link (`link` firmware), 460800 8N1 from the 84 MHz APB2 clock, interrupt driven |
 //! | EXTI12 | e-stop (EXTI15_10 interrupt); the tick also reads its level |
-//! | GPIO | limit switches (raw; the machine debounces them), probe (PD2), wire stall (read every tick), spindle enable, wire power |
+//! | GPIO | limit switches (raw; the machine debounces them), wire stall (read every tick), spindle enable and direction, mist, flood, wire power |
 //! | IWDG | watchdog (link firmware), ~100 ms, fed only while tick and control run |
 //! | FLASH sectors 2-3 | the persisted board config (two 16 KiB slots; code starts at sector 4) |
 //! | DWT.CYCCNT | cycle counter for benchmarks |
@@ -108,6 +108,7 @@ impl board_contract::Board for Board {
         let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
         clocks::enable_peripherals(&dp.RCC);
         pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC, &dp.GPIOD);
+        pins::init_program_outputs(&dp.GPIOC, &dp.GPIOD);
         let copy_encoders = CopyEncoders::new(dp.TIM5, dp.TIM3, &dp.RCC, &dp.GPIOA, &dp.GPIOB);
         force_adc::init_common(&dp.ADC_COMMON);
         // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.
@@ -132,7 +133,7 @@ impl board_contract::Board for Board {
             tick_timer: TickTimer::new(dp.TIM2, clocks.apb1_timer_hz, tick_hz),
             step_port: StepPort::new(dp.GPIOC, GpioOut::new(pins::Port::B, pins::DRV_EN_N as u8)),
             estop: EStop::new(dp.EXTI, &dp.SYSCFG),
-            io: MachineIo::new(z_dac, tick_hz),
+            io: MachineIo::new(z_dac),
             host: HostSerial::new(dp.USART1, clocks.pclk2_hz, Self::HOST_BAUD),
             watchdog: Watchdog::new(dp.IWDG),
             config: FlashConfig::new(ConfigFlash::new(dp.FLASH), flash::SECTOR_BYTES),

@@ -1,22 +1,22 @@
 //! The safety inputs and process outputs the machine reads and drives every tick: e-stop, the
-//! 12 limit switches, the probe and the wire-stall switch in; spindle enable, wire power and
-//! the Z-slide DAC out.
+//! 12 limit switches and the wire-stall switch in; spindle enable and direction, mist and flood
+//! coolant, wire power and the Z-slide DAC out.
 //!
 //! The limit switches are read as three port words (12 `InputPin` reads a tick would cost four
 //! times as much) and the e-stop as an `InputPin` (an unreadable pin reads tripped), both raw:
 //! the machine debounces them with the configured `switch_debounce_us`
-//! (`motion::machine::debounce`), the same on every board. The probe, which the machine does not
-//! read yet, goes through a trip-at-once `Debounced` here (the trip taken the tick it is seen,
-//! the release only after 2 ms stable). The wire-stall switch is passed raw: the wire controller
-//! debounces it with the job's own `debounce_ticks`. Outputs go through GPIOB's BSRR (atomic
-//! set/reset).
+//! (`motion::machine::debounce`), the same on every board. The touch probe has no pin on this
+//! board (its pin, PD2, drives the mist coolant; nothing reads a probe yet): it reads
+//! untriggered. The wire-stall switch is passed raw: the wire controller debounces it with the
+//! job's own `debounce_ticks`. Outputs go through their ports' BSRR (atomic set/reset, no
+//! read-modify-write against the step port's writes to GPIOC).
 
 use super::pins::{
-    self, GpioIn, Port, ESTOP, LIMIT_MAX, LIMIT_MIN, PROBE, SPINDLE_EN, WIRE_POWER, WIRE_STALL,
+    self, GpioIn, Port, ESTOP, FLOOD, LIMIT_MAX, LIMIT_MIN, MIST, PROGRAM_OUTPUTS_ROUTED,
+    SPINDLE_DIR, SPINDLE_EN, WIRE_POWER, WIRE_STALL,
 };
 use super::z_dac::ZDac;
 use crate::pac;
-use board_contract::debounce::{ticks_for_ms, SWITCH_MS};
 use board_contract::{Debounced, Debouncer, RawInputs};
 use motion::machine::Outputs;
 
@@ -24,7 +24,6 @@ pub struct MachineIo {
     z_dac: ZDac,
     /// Raw (a 0-tick debouncer: the active level resolved, a read error tripped).
     estop: Debounced<GpioIn>,
-    probe: Debounced<GpioIn>,
 }
 
 #[inline(always)]
@@ -42,32 +41,28 @@ fn gather(pins: &[(Port, u8); 6], a: u32, b: u32, c: u32) -> u8 {
 }
 
 impl MachineIo {
-    /// Pins are configured by `pins::init`; the debounce times are set in ticks of `tick_hz`.
-    pub fn new(z_dac: ZDac, tick_hz: u32) -> Self {
-        let ticks = ticks_for_ms(SWITCH_MS, tick_hz);
+    /// Pins are configured by `pins::init` and `pins::init_program_outputs`.
+    pub fn new(z_dac: ZDac) -> Self {
         // Normally closed to ground: open (high) = stop / tripped.
         let estop =
             Debounced::new(GpioIn::new(Port::B, ESTOP as u8), true, Debouncer::new(0, false));
-        // Normally open to ground: closed (low) = triggered.
-        let probe = Debounced::new(
-            GpioIn::new(Port::D, PROBE as u8),
-            false,
-            Debouncer::trips_at_once(ticks, false),
-        );
-        MachineIo { z_dac, estop, probe }
+        MachineIo { z_dac, estop }
     }
 }
 
 impl board_contract::MachineIo for MachineIo {
     /// The real board reads real inputs: no `Sim(Inject)`.
     const SIM_INPUTS: bool = false;
+    /// Spindle direction, flood and mist on PC14, PC15 and PD2, unless an SPI option took
+    /// PC14/PC15.
+    const PROGRAM_OUTPUTS: bool = PROGRAM_OUTPUTS_ROUTED;
 
     /// `Sim(Inject)` is not honoured here (false: refused).
     fn inject_wire_stall(_stalled: bool) -> bool {
         false
     }
 
-    /// Every input, active levels resolved; the probe debounced.
+    /// Every input, active levels resolved; no probe (see the module docs).
     #[inline]
     fn read(&mut self) -> RawInputs {
         let (a, b, c) = (pins::idr(Port::A), pins::idr(Port::B), pins::idr(Port::C));
@@ -77,18 +72,30 @@ impl board_contract::MachineIo for MachineIo {
             limit_max: gather(&LIMIT_MAX, a, b, c),
             // Closed to ground (pulled up): low = stalled.
             wire_stall: (a >> WIRE_STALL) & 1 == 0,
-            probe: self.probe.update(),
+            probe: false,
         }
     }
 
-    /// Spindle enable, wire power and the Z DAC to `o`'s levels. A DAC code out of range
-    /// writes mid-scale (the slide at rest); the machine only ever produces 12-bit codes.
+    /// Spindle enable and direction, coolant, wire power and the Z DAC to `o`'s levels. A DAC
+    /// code out of range writes mid-scale (the slide at rest); the machine only ever produces
+    /// 12-bit codes.
     #[inline]
     fn write(&mut self, o: &Outputs) {
         let on = |level: bool, pin: u32| if level { 1 << pin } else { 1 << (pin + 16) };
         let bits = on(o.spindle_enable, SPINDLE_EN) | on(o.wire_power, WIRE_POWER);
         // SAFETY: BSRR accepts any bit pattern; only these two output bits are written.
         unsafe { (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(bits)) };
+        if PROGRAM_OUTPUTS_ROUTED {
+            let c = on(o.spindle_ccw, SPINDLE_DIR.1 as u32) | on(o.flood, FLOOD.1 as u32);
+            let d = on(o.mist, MIST.1 as u32);
+            // SAFETY: as above; only the direction and flood bits of GPIOC (the step port's
+            // bits are untouched: BSRR sets and resets only the bits written as 1) and the mist
+            // bit of GPIOD.
+            unsafe {
+                (*pac::GPIOC::ptr()).bsrr().write(|w| w.bits(c));
+                (*pac::GPIOD::ptr()).bsrr().write(|w| w.bits(d));
+            }
+        }
         let _ = self.z_dac.write(o.z_dac);
     }
 }

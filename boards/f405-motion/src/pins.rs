@@ -54,8 +54,14 @@ pub const SPINDLE_EN: u32 = 0;
 pub const WIRE_POWER: u32 = 1;
 /// Wire-lag micro-switch on GPIOA, closed to ground = stalled.
 pub const WIRE_STALL: u32 = 8;
-/// Touch probe on PD2 (the LQFP64's only port-D pin), closed to ground = triggered.
-pub const PROBE: u32 = 2;
+/// Program outputs (G-code M3/M4, M7, M8), active high, off (and clockwise) from reset:
+/// spindle direction on PC14 (high = counterclockwise, M4), flood coolant on PC15, mist coolant
+/// on PD2. PC14/PC15 were the LQFP64's last free pins and PD2 its only port-D pin, which the
+/// touch probe held; nothing reads the probe yet (G38.x is refused), so the coolant took it.
+/// PC13..PC15 are slow, low-current pins: they drive relay or SSR driver inputs, not loads.
+pub const SPINDLE_DIR: (Port, u8) = (Port::C, 14);
+pub const FLOOD: (Port, u8) = (Port::C, 15);
+pub const MIST: (Port, u8) = (Port::D, 2);
 
 const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
     Pin { name, port, pin, mode }
@@ -65,7 +71,7 @@ const LOW: Mode = Mode::Output { high: false };
 
 const IN: Mode = Mode::InputPullUp;
 
-pub const PINS: [Pin; 41] = [
+pub const PINS: [Pin; 40] = [
     pin("STEP0", Port::C, 0, LOW),
     pin("STEP1", Port::C, 1, LOW),
     pin("STEP2", Port::C, 2, LOW),
@@ -96,7 +102,6 @@ pub const PINS: [Pin; 41] = [
     pin("SPINDLE_EN", Port::B, SPINDLE_EN as u8, LOW),
     pin("WIRE_POWER", Port::B, WIRE_POWER as u8, LOW),
     pin("WIRE_STALL", Port::A, WIRE_STALL as u8, IN),
-    pin("PROBE", Port::D, PROBE as u8, IN),
     // Limit switches, normally closed to ground: open (high) = tripped or a broken wire.
     pin("LIMIT_MIN0", LIMIT_MIN[0].0, LIMIT_MIN[0].1, IN),
     pin("LIMIT_MIN1", LIMIT_MIN[1].0, LIMIT_MIN[1].1, IN),
@@ -126,7 +131,7 @@ const _: () = {
     }
 };
 
-/// Copy-mode encoder inputs (template digitizer, issue 6): arm angle on TIM5 CH1/CH2 (PA0/PA1,
+/// Copy-mode encoder inputs (template digitizer): arm angle on TIM5 CH1/CH2 (PA0/PA1,
 /// AF2; TIM5 is 32-bit), carriage radius on TIM3 CH1/CH2 (PB4/PB5, AF2; 16-bit, extended in
 /// software). The 64-pin F405RG has no spare pair of encoder pins, so the pin plan makes room:
 /// the force sensors sit on PA2/PA3/PA7 (ADC1 IN2/IN3/IN7; the chain takes three channels),
@@ -161,6 +166,36 @@ pub const COPY_ENCODERS_ROUTED: bool = {
 // This board routes them: a pin change that takes one fails the build instead of quietly
 // turning copy mode off.
 const _: () = assert!(COPY_ENCODERS_ROUTED, "a copy encoder pin is assigned to something else");
+
+/// The program outputs' pins ([`SPINDLE_DIR`], [`FLOOD`], [`MIST`]), configured by
+/// [`init_program_outputs`] when [`PROGRAM_OUTPUTS_ROUTED`].
+pub const PROGRAM_OUTPUT_PINS: [Pin; 3] = [
+    pin("SPINDLE_DIR", SPINDLE_DIR.0, SPINDLE_DIR.1, LOW),
+    pin("FLOOD", FLOOD.0, FLOOD.1, LOW),
+    pin("MIST", MIST.0, MIST.1, LOW),
+];
+
+/// The program outputs are wired: no SPI option takes PC14/PC15 (its chip select and
+/// sample/reset lines sit there).
+pub const PROGRAM_OUTPUTS_ROUTED: bool =
+    !cfg!(any(feature = "resolver-spi", feature = "force-spi"));
+
+/// No program output pin is in [`PINS`] (checked at compile time).
+const _: () = {
+    let mut i = 0;
+    while i < PROGRAM_OUTPUT_PINS.len() {
+        let mut j = 0;
+        while j < PINS.len() {
+            let same_port = PROGRAM_OUTPUT_PINS[i].port as u8 == PINS[j].port as u8;
+            assert!(
+                !(same_port && PROGRAM_OUTPUT_PINS[i].pin == PINS[j].pin),
+                "a program output pin is assigned to something else"
+            );
+            j += 1;
+        }
+        i += 1;
+    }
+};
 
 /// Force-sensor ADC channels, in FORCE0.. order.
 pub const FORCE_CHANNELS: [u8; 3] = [2, 3, 7];
@@ -228,6 +263,22 @@ pub fn init_copy_encoders(a: &pac::GPIOA, b: &pac::GPIOB) {
             Port::A => configure!(a, p),
             Port::B => configure!(b, p),
             Port::C | Port::D => {}
+        }
+    }
+}
+
+/// Configures the program output pins (low: spindle clockwise, coolant off) if they are routed
+/// (see [`PROGRAM_OUTPUTS_ROUTED`]).
+pub fn init_program_outputs(c: &pac::GPIOC, d: &pac::GPIOD) {
+    if !PROGRAM_OUTPUTS_ROUTED {
+        defmt::warn!("spindle direction and coolant not routed: an SPI option uses PC14/PC15");
+        return;
+    }
+    for p in &PROGRAM_OUTPUT_PINS {
+        match p.port {
+            Port::C => configure!(c, p),
+            Port::D => configure!(d, p),
+            Port::A | Port::B => {}
         }
     }
 }

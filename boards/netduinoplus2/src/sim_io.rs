@@ -1,6 +1,9 @@
 //! The simulated machine I/O of the QEMU board. QEMU models no GPIO: no switch is ever open
-//! and the outputs go nowhere (the fault paths these inputs drive are exercised by the scenario
-//! firmware's `fault_*` scenarios instead). Two inputs are simulated for the host:
+//! (the fault paths these inputs drive are exercised by the scenario firmware's `fault_*`
+//! scenarios instead) and the outputs go nowhere: the spindle, its direction, the coolant and the
+//! wire power live in the machine's outputs, which `Status` reports (`Status::outputs`,
+//! `Status::wire_power`), so the host still sees every switch in order. Two inputs are
+//! simulated for the host:
 //!
 //! * the wire-stall switch, set with `Sim(Inject)` (announced by `CAP_SIM_INPUTS`), to test the
 //!   wire-stall retrace end to end;
@@ -26,6 +29,9 @@ pub struct MachineIo;
 impl board_contract::MachineIo for MachineIo {
     /// The host drives the simulated inputs (`Sim(Inject)`).
     const SIM_INPUTS: bool = true;
+    /// Simulated: the spindle direction and coolant are kept in the machine's outputs and
+    /// reported in `Status::outputs`.
+    const PROGRAM_OUTPUTS: bool = true;
 
     /// Sets the simulated wire-stall switch from the next tick on; true (honoured).
     fn inject_wire_stall(stalled: bool) -> bool {

@@ -1,4 +1,4 @@
-//! Constant-force milling jobs on the link firmware (`motion::force::link_job`, issue 4):
+//! Constant-force milling jobs on the link firmware (`motion::force::link_job`):
 //! `ArmForce` makes a [`ForceJob`] in [`Motion`] for the next plain segment job; `Start` starts
 //! the machine's job and the force loop in the same critical section; the tick runs the
 //! machine through `motion::force::link_job::link_tick` (the job's latched force faults among

@@ -10,8 +10,8 @@ use motion::machine::{BoardConfig, MachineCommand, MachineState, Refusal};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, Status, TeachChunk,
-    WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs, Status,
+    TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
 use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
@@ -151,6 +151,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                     starve_holds: mc.starve_holds(),
                     ..BoardCounters::default()
                 },
+                outputs: ProgramOutputs::of(&mc.outputs()).bits(),
                 ..Status::default()
             };
             wire::status(m, &mut s);
@@ -327,7 +328,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
 
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
-        // An armed force job owns the next segment job (issue 4).
+        // An armed force job owns the next segment job.
         let empty = empty && !self.with(|m| force::live(m));
         self.motion.get_mut().lock(|m| wire::arm(m, empty, params))
     }
@@ -397,5 +398,23 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn sim(&mut self, req: &motion::protocol::SimRequest) -> Result<(), ErrorCode> {
         let motion: &mut M = self.motion.get_mut();
         super::sim::apply(motion, req)
+    }
+
+    /// The spindle and coolant levels into the machine's outputs, which the tick writes to the
+    /// board's pins; the wire power and the Z DAC stay the wire and Z jobs'. The machine refuses
+    /// while an e-stop is latched or pressed; a board without the pins refuses as unsupported.
+    fn set_program_outputs(&mut self, o: ProgramOutputs) -> Result<(), ErrorCode> {
+        if !board::MachineIo::PROGRAM_OUTPUTS {
+            return Err(ErrorCode::Unsupported);
+        }
+        let set = self.motion.get_mut().lock(|m| {
+            let now = m.machine.outputs();
+            m.machine.set_outputs(o.applied_to(now))
+        });
+        if set {
+            Ok(())
+        } else {
+            Err(ErrorCode::OutOfState)
+        }
     }
 }

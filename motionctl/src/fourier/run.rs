@@ -1,4 +1,4 @@
-//! `motionctl fourier run`: a Z-slide job on a board with `CAP_ZSLIDE_JOB` (issue 5), checked
+//! `motionctl fourier run`: a Z-slide job on a board with `CAP_ZSLIDE_JOB`, checked
 //! against the host model.
 //!
 //! Hello -> the board ready (`runner::ready_board`: config, ConfigMissing cleared, homing) ->

@@ -4,15 +4,18 @@
 //! [`CHORD_TOLERANCE_MM`], grbl's `$12`).
 //!
 //! A program with any error is refused as a whole, before anything moves; every error is listed.
-//! What the board cannot do yet (probe moves, spindle direction, spindle-synchronised motion) is
-//! refused with a message saying so; what it cannot switch yet (coolant, outputs) is reported
-//! as a warning and not executed; a dwell (G4) is a stop at rest the runner times.
+//! What the board cannot do yet (probe moves, spindle-synchronised motion) is refused with a
+//! message saying so; what it cannot switch (M62..M68 outputs) is reported as a warning and not
+//! executed. The spindle (M3, M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`]
+//! each time one of them switches, carrying all of them; a dwell (G4) is a stop at rest the
+//! runner times.
 
 pub mod cli;
 pub mod resume;
 pub mod stream;
 
 use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion_gcode::canon::{Canon, Pos};
 use motion_gcode::frame::{Frame, Motion};
 use motion_gcode::source::{LineSource, SeekSource};
@@ -157,6 +160,8 @@ pub(crate) struct Converter<'a> {
     /// The last `F` and its line: rs274 sets the feed before the block's G20/G21, but a feed is
     /// in the units of its own block (as grbl reads it: `G20 G1 X1 F10` is 10 in/min).
     last_feed: Option<(u32, f64)>,
+    /// The spindle and coolant as the program has switched them so far.
+    outputs: ProgramOutputs,
 }
 
 impl<'a> Converter<'a> {
@@ -170,6 +175,7 @@ impl<'a> Converter<'a> {
             notes_omitted: 0,
             ended: false,
             last_feed: None,
+            outputs: ProgramOutputs::OFF,
         }
     }
 
@@ -191,12 +197,11 @@ impl<'a> Converter<'a> {
         if self.ended {
             return Ok(());
         }
+        if let Some(o) = switched(self.outputs, c) {
+            self.outputs = o;
+            out.push(Item::Outputs(o));
+        }
         match c {
-            Canon::StartSpindleClockwise(_) => out.push(Item::Spindle(true)),
-            Canon::StopSpindleTurning(_) => out.push(Item::Spindle(false)),
-            Canon::StartSpindleCounterclockwise(_) => {
-                return Err("M4 (spindle counterclockwise): the board has no spindle direction output yet".into())
-            }
             Canon::ProgramStop | Canon::OptionalProgramStop => out.push(Item::Pause),
             Canon::ChangeTool(t) => {
                 self.note(line, format!("tool change (pocket {t}): the job pauses for the operator"));
@@ -204,7 +209,6 @@ impl<'a> Converter<'a> {
             }
             Canon::ProgramEnd => self.ended = true,
             Canon::Dwell(s) => out.push(Item::Dwell(*s)),
-            Canon::FloodOn | Canon::MistOn => self.note(line, "coolant on: the board has no coolant output yet; not switched"),
             Canon::SetFeedMode { mode: 1, .. } => {
                 return Err("G95 (feed per revolution) needs spindle feedback the board does not have".into())
             }
@@ -283,4 +287,21 @@ impl<'a> Converter<'a> {
         }
         Ok(self.map.iter().map(|g| g.map(|i| p[i])).collect())
     }
+}
+
+/// The outputs after `c`, if it is a spindle or coolant call (M9 is two calls, mist then flood
+/// off; each gives the whole state).
+fn switched(now: ProgramOutputs, c: &Canon) -> Option<ProgramOutputs> {
+    Some(match c {
+        Canon::StartSpindleClockwise(_) => ProgramOutputs { spindle: SpindleDir::Cw, ..now },
+        Canon::StartSpindleCounterclockwise(_) => {
+            ProgramOutputs { spindle: SpindleDir::Ccw, ..now }
+        }
+        Canon::StopSpindleTurning(_) => ProgramOutputs { spindle: SpindleDir::Off, ..now },
+        Canon::MistOn => ProgramOutputs { mist: true, ..now },
+        Canon::MistOff => ProgramOutputs { mist: false, ..now },
+        Canon::FloodOn => ProgramOutputs { flood: true, ..now },
+        Canon::FloodOff => ProgramOutputs { flood: false, ..now },
+        _ => return None,
+    })
 }

@@ -5,8 +5,9 @@
 //! what it was at that line), but nothing before the first move of the resume line is sent. In
 //! its place the machine, standing at the job's origin (homed, as `run` expects), makes the
 //! approach: Z up to the safe height (the Z axis's upper soft limit), a rapid across to where the
-//! resume line's move starts, the spindle on with a spin-up dwell if the program had it on
-//! there, Z down in a rapid to 5 mm above that point and the rest at the plunge feed. From there
+//! resume line's move starts, the spindle (in its direction) and the coolant as the program had
+//! them there, with a spin-up dwell if the spindle turns, Z down in a rapid to 5 mm above that
+//! point and the rest at the plunge feed. From there
 //! the program runs as written.
 //! Program pauses and dwells before the resume line are skipped; so is the part of that line's
 //! move that was already cut (it is cut again: the same path).
@@ -15,6 +16,7 @@ use crate::convert::{rapid_feed_hz, ProgramItem};
 use crate::job::{Machine, Source};
 use anyhow::{bail, Result};
 use motion::planner::Move;
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion::{MachineConfig, MAX_AXES};
 use std::collections::VecDeque;
 
@@ -66,13 +68,13 @@ impl ResumeAt {
 #[derive(Clone, Debug)]
 pub struct Resume {
     at: ResumeAt,
-    /// Still before the resume point: the spindle state so far.
-    skipping: Option<bool>,
+    /// Still before the resume point: the spindle and coolant so far.
+    skipping: Option<ProgramOutputs>,
 }
 
 impl Resume {
     pub fn new(at: ResumeAt) -> Self {
-        Resume { at, skipping: Some(false) }
+        Resume { at, skipping: Some(ProgramOutputs::OFF) }
     }
 
     /// True once the resume point has been passed (the rest goes through as it is).
@@ -95,13 +97,13 @@ impl Resume {
         cfg: &MachineConfig,
         out: &mut VecDeque<ProgramItem>,
     ) {
-        let Some(spindle_on) = self.skipping.as_mut() else {
+        let Some(outputs) = self.skipping.as_mut() else {
             out.push_back(item);
             return;
         };
         let (mv, source) = match item {
-            ProgramItem::Spindle(on) => {
-                *spindle_on = on;
+            ProgramItem::Outputs(o) => {
+                *outputs = o;
                 return;
             }
             ProgramItem::Pause | ProgramItem::Dwell(_) => return,
@@ -114,7 +116,7 @@ impl Resume {
         if line < self.at.line {
             return;
         }
-        let on = *spindle_on;
+        let outputs = *outputs;
         self.skipping = None;
         // Where this move starts.
         let mut start = pos_after;
@@ -136,15 +138,17 @@ impl Resume {
             let feed_hz = feed.unwrap_or_else(|| rapid_feed_hz(&steps, cfg));
             out.push_back(ProgramItem::Move { mv: Move { steps, feed_hz }, source });
         };
-        // Z up, across at the safe height, spindle, Z down, the move.
+        // Z up, across at the safe height, spindle and coolant, Z down, the move.
         let mut up = [0i64; MAX_AXES];
         up[z] = safe;
         go(up, None, out);
         let mut above = start;
         above[z] = safe;
         go(above, None, out);
-        if on {
-            out.push_back(ProgramItem::Spindle(true));
+        if outputs != ProgramOutputs::OFF {
+            out.push_back(ProgramItem::Outputs(outputs));
+        }
+        if outputs.spindle != SpindleDir::Off {
             out.push_back(ProgramItem::Dwell(SPIN_UP_S));
         }
         let mut clear = start;

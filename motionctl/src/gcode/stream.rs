@@ -369,7 +369,7 @@ fn check<S: LineSource>(
                             t.segments += 1;
                             t.nominal_ticks += s.duration_ticks as u64;
                         }
-                        Ok(crate::plan::Output::Spindle(_)) => t.spindle_events += 1,
+                        Ok(crate::plan::Output::Outputs(_)) => t.spindle_events += 1,
                         Ok(crate::plan::Output::Pause) => t.pauses += 1,
                         Ok(crate::plan::Output::Dwell(s)) => {
                             t.dwells += 1;

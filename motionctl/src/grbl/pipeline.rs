@@ -1,5 +1,5 @@
 //! Moves as they come, one block at a time, into an incremental [`Planner`], and its segments
-//! (with the spindle, pause and dwell events between them) into a queue the link drains.
+//! (with the spindle and coolant, pause and dwell events between them) into a queue the link drains.
 //!
 //! Targets are rounded to steps from the commanded position in mm, as [`crate::convert`] does
 //! for a whole job, so rounding never accumulates. The planner keeps its lookahead window until
@@ -9,6 +9,7 @@
 use crate::convert::{feed_hz, rapid_feed_hz};
 use crate::job::{Feed, Machine};
 use motion::planner::{Move, PlanError, Planner};
+use motion::protocol::ProgramOutputs;
 use motion::{MachineConfig, Segment, MAX_AXES};
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -17,7 +18,8 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Out {
     Segment(Segment),
-    Spindle(bool),
+    /// The spindle and coolant from here on (M3, M4, M5, M7, M8, M9).
+    Outputs(ProgramOutputs),
     /// M0/M1: hold until cycle start.
     Pause,
     /// G4: wait this long once the motion before it is done.

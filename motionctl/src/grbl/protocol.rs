@@ -54,7 +54,8 @@ pub enum Realtime {
     Feed(OverrideChange),
     Rapid(u8),
     Spindle(OverrideChange),
-    /// Spindle stop, coolant toggles: accepted, nothing to switch.
+    /// Spindle stop, coolant toggles: accepted and not acted on (the bridge switches the spindle
+    /// and coolant in program order, from M3/M4/M5 and M7/M8/M9).
     Accessory(u8),
     /// Any other byte of 0x80..=0xFF: ignored, as grbl does.
     Ignored,

@@ -1,6 +1,9 @@
 //! Status reports (`?`) in grbl 1.1's format:
-//! `<State|MPos:x,y,z|Bf:blocks,bytes|FS:feed,speed|WCO:x,y,z|Ov:feed,rapid,spindle>`.
+//! `<State|MPos:x,y,z|Bf:blocks,bytes|FS:feed,speed|WCO:x,y,z|Ov:feed,rapid,spindle|A:SFM>`,
+//! the accessory field `A:` (after `Ov:`, as grbl prints it) only while an accessory is on: `S`
+//! spindle clockwise, `C` counterclockwise, `F` flood, `M` mist, in that order.
 
+use motion::protocol::{ProgramOutputs, SpindleDir};
 use std::fmt::Write as _;
 
 /// grbl's machine states as a report names them.
@@ -49,6 +52,8 @@ pub struct Report {
     pub feed: f64,
     pub speed: f64,
     pub overrides: [u8; 3],
+    /// The spindle and coolant the board drives (the `A:` field).
+    pub accessories: ProgramOutputs,
     /// `$10`: bit 0 MPos (else WPos), bit 1 buffer state.
     pub mask: u16,
     pub inches: bool,
@@ -87,7 +92,23 @@ impl Report {
         s.push_str("|WCO:");
         axes(&mut s, &self.wco, self.inches);
         let [f, r, sp] = self.overrides;
-        let _ = write!(s, "|Ov:{f},{r},{sp}>");
+        let _ = write!(s, "|Ov:{f},{r},{sp}");
+        let a = self.accessories;
+        if a != ProgramOutputs::OFF {
+            s.push_str("|A:");
+            match a.spindle {
+                SpindleDir::Off => {}
+                SpindleDir::Cw => s.push('S'),
+                SpindleDir::Ccw => s.push('C'),
+            }
+            if a.flood {
+                s.push('F');
+            }
+            if a.mist {
+                s.push('M');
+            }
+        }
+        s.push('>');
         s
     }
 }
@@ -107,6 +128,7 @@ mod tests {
             feed: 500.4,
             speed: 0.0,
             overrides: [100, 100, 100],
+            accessories: ProgramOutputs::OFF,
             mask: 3,
             inches: false,
         };
@@ -114,7 +136,14 @@ mod tests {
             r.line(),
             "<Hold:0|MPos:1.000,0.000,12.346|Bf:15,128|FS:500,0|WCO:0.000,0.000,2.000|Ov:100,100,100>"
         );
-        let w = Report { mask: 0, state: State::Idle, ..r };
+        let w = Report { mask: 0, state: State::Idle, ..r.clone() };
         assert!(w.line().starts_with("<Idle|WPos:1.000,0.000,10.346|FS:500,0|"), "{}", w.line());
+        let a = |spindle, mist, flood| {
+            Report { accessories: ProgramOutputs { spindle, mist, flood }, ..r.clone() }.line()
+        };
+        assert!(a(SpindleDir::Cw, true, true).ends_with("|Ov:100,100,100|A:SFM>"));
+        assert!(a(SpindleDir::Ccw, false, false).ends_with("|Ov:100,100,100|A:C>"));
+        assert!(a(SpindleDir::Off, true, false).ends_with("|Ov:100,100,100|A:M>"));
+        assert!(a(SpindleDir::Off, false, true).ends_with("|A:F>"));
     }
 }

@@ -19,8 +19,8 @@ use crate::runner::{self, fault_names, seq_at_or_after};
 use anyhow::{anyhow, bail, Result};
 use motion::machine::MachineState;
 use motion::protocol::{
-    FaultCode, Reply, RequestBody, SegmentBatch, Status, WireState, MAX_OVERRIDE_BITS,
-    MAX_SEGMENTS_PER_FRAME,
+    FaultCode, ProgramOutputs, Reply, RequestBody, SegmentBatch, Status, WireState,
+    MAX_OVERRIDE_BITS, MAX_SEGMENTS_PER_FRAME,
 };
 use motion_gcode::canon::Units;
 use std::collections::{HashMap, VecDeque};
@@ -307,6 +307,7 @@ impl<'a> Bridge<'a> {
             feed: if moving { self.feed_now * self.ovr[0] as f64 / 100.0 } else { 0.0 },
             speed: if spindle_on { m.speed } else { 0.0 },
             overrides: self.ovr,
+            accessories: ProgramOutputs::from_bits(self.latest.outputs),
             mask: self.settings.get(settings::STATUS_MASK) as u16,
             inches: self.settings.flag(settings::REPORT_INCHES),
         }
@@ -460,6 +461,8 @@ impl<'a> Bridge<'a> {
     /// welcome.
     fn soft_reset(&mut self) -> Result<()> {
         self.stop_motion()?;
+        // As grbl's reset: the spindle and coolant stop with the motion.
+        self.switch_outputs(ProgramOutputs::OFF)?;
         self.rx.clear();
         self.check = false;
         if self.ovr[0] != 100 {
@@ -603,7 +606,7 @@ impl<'a> Bridge<'a> {
             }
         }
 
-        self.front_events();
+        self.front_events()?;
         self.send_segments()?;
         self.reconcile()?;
 
@@ -633,18 +636,15 @@ impl<'a> Bridge<'a> {
             && !matches!(self.latest.machine, MachineState::Running | MachineState::Holding)
     }
 
-    /// Spindle, pause and dwell events once the motion before them is done.
-    fn front_events(&mut self) {
+    /// Spindle and coolant, pause and dwell events once the motion before them is done.
+    fn front_events(&mut self) -> Result<()> {
         while let Some(&front) = self.motion.out.front() {
             match front {
                 Out::Segment(_) => break,
                 _ if !self.drained() => break,
-                Out::Spindle(on) => {
-                    eprintln!(
-                        "motionctl: spindle {} (no spindle output on the board: nothing switched)",
-                        if on { "on" } else { "off" }
-                    );
+                Out::Outputs(to) => {
                     self.motion.out.pop_front();
+                    self.switch_outputs(to)?;
                 }
                 Out::Pause => {
                     // Cycle start takes it off the queue.
@@ -664,6 +664,23 @@ impl<'a> Bridge<'a> {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Switches the board's spindle and coolant (`SetProgramOutputs`) and reads its status back
+    /// (the report's `A:` field shows what the board drives). A refusal (an e-stop latched) is
+    /// said on stderr; the fault itself becomes the alarm.
+    fn switch_outputs(&mut self, to: ProgramOutputs) -> Result<()> {
+        let now = ProgramOutputs::from_bits(self.latest.outputs);
+        if to == now {
+            return Ok(());
+        }
+        let words = crate::outputs::describe_change(now, to);
+        match crate::outputs::switch(&mut self.s, to).map_err(link_err)? {
+            Ok(_) => eprintln!("motionctl: {words}"),
+            Err(e) => eprintln!("motionctl: {words}: {e}"),
+        }
+        self.refresh()
     }
 
     fn send_segments(&mut self) -> Result<()> {
@@ -787,8 +804,8 @@ impl<'a> Bridge<'a> {
                     }
                 }
                 Step::Item(Item::Move(_)) => {}
-                Step::Item(Item::Spindle(on)) if !self.check => {
-                    self.motion.push_event(Out::Spindle(on))
+                Step::Item(Item::Outputs(o)) if !self.check => {
+                    self.motion.push_event(Out::Outputs(o))
                 }
                 Step::Item(Item::Pause) if !self.check => self.motion.push_event(Out::Pause),
                 Step::Item(Item::Dwell(d)) if !self.check => self.motion.push_event(Out::Dwell(d)),

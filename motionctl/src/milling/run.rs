@@ -33,7 +33,7 @@ pub const STATUS_PERIOD_MS: u16 = 10;
 pub const POLL_EVERY: Duration = Duration::from_millis(5);
 /// A job whose board clock and position do not move for this long (wall clock) is stuck.
 pub const NO_PROGRESS: Duration = Duration::from_secs(15);
-/// The settling limit and band the run is judged by (issue 4's acceptance): at most 150 ms, or
+/// The settling limit and band the run is judged by (the acceptance figure): at most 150 ms, or
 /// the host model's settling plus [`SETTLE_SLACK_S`] for a job that settles slower.
 pub const SETTLE_LIMIT_S: f64 = 0.150;
 pub const SETTLE_SLACK_S: f64 = 0.050;

@@ -1,4 +1,4 @@
-//! [`CopySim`]: [`SimTarget`] with copy jobs (issue 6), for session tests and the host's
+//! [`CopySim`]: [`SimTarget`] with copy jobs, for session tests and the host's
 //! simulated board: simulated encoders slewing to the host's `Sim(Encoders)` target, the
 //! firmware's `CopyMode` and `TeachRecorder`, ticked by [`CopySim::run_copy`] the way the link
 //! firmware's tick and status task run them.

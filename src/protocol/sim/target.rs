@@ -15,13 +15,14 @@ use super::messages::SimMillingParams;
 #[cfg(feature = "sim-inputs")]
 use super::messages::SimRequest;
 use crate::config::MAX_AXES;
-use crate::machine::{cell, Cell, CommandKind, MachineState};
+use crate::machine::{cell, reaction, Cell, CommandKind, MachineState, Outputs, Reaction};
 use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::protocol::errors::{ErrorCode, FaultCode};
 use crate::protocol::messages::{
     BoardCounters, ForceJobParams, HomingConfig, Status, WireConfig, WireJobParams, WireState,
 };
+use crate::protocol::program_outputs::ProgramOutputs;
 use crate::protocol::session::LinkTarget;
 use crate::segment::{Rate, Segment};
 
@@ -67,7 +68,7 @@ pub struct SimTarget {
     pub wire_armed: Option<WireJobParams>,
     /// The simulated wire-stall switch (`Sim(Inject)`).
     pub sim_wire_stall: bool,
-    // -- force job (issue 4) --
+    // -- force job --
     /// An armed force job's parameters (`ArmForce`); the sim runs its segments as plain ones.
     pub force_armed: Option<ForceJobParams>,
     /// The simulated milling plant (`Sim(Milling)`).
@@ -75,6 +76,9 @@ pub struct SimTarget {
     /// Pauses for a late host (`BoardCounters::starve_holds`), counted by whoever runs the
     /// queue.
     pub starve_holds: u32,
+    /// The machine's outputs (`SetProgramOutputs` switches the spindle and coolant in them; a
+    /// fault whose reaction kills them forces [`Outputs::SAFE`], as the machine does).
+    pub outputs: Outputs,
 }
 
 impl PartialEq for SimTarget {
@@ -93,6 +97,7 @@ impl PartialEq for SimTarget {
             && self.playback.fired() == o.playback.fired()
             && (self.wire_armed, self.sim_wire_stall) == (o.wire_armed, o.sim_wire_stall)
             && (self.force_armed, self.sim_milling) == (o.force_armed, o.sim_milling)
+            && self.outputs == o.outputs
     }
 }
 
@@ -129,6 +134,7 @@ impl SimTarget {
             force_armed: None,
             sim_milling: None,
             starve_holds: 0,
+            outputs: Outputs::SAFE,
         }
     }
 
@@ -195,6 +201,9 @@ impl SimTarget {
     /// Latches a fault: motion stops, the queue is dropped.
     pub fn raise_fault(&mut self, code: FaultCode) {
         self.faults |= code.bit();
+        if reaction(code) == Reaction::Kill {
+            self.outputs = Outputs::SAFE;
+        }
         self.queue.clear();
         self.drop_events();
         self.planned = self.positions;
@@ -282,6 +291,7 @@ impl LinkTarget for SimTarget {
             events_fired: self.playback.fired(),
             event_blocks: self.events.blocks() as u16,
             counters: BoardCounters { starve_holds: self.starve_holds, ..BoardCounters::default() },
+            outputs: ProgramOutputs::of(&self.outputs).bits(),
             ..Status::default()
         }
     }
@@ -415,7 +425,7 @@ impl LinkTarget for SimTarget {
         Ok(())
     }
 
-    // -- force job (issue 4) --
+    // -- force job --
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
         let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
         let armed = self.wire_armed.is_some() || self.force_armed.is_some();
@@ -438,6 +448,16 @@ impl LinkTarget for SimTarget {
                 return Err(ErrorCode::Unsupported)
             }
         }
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn set_program_outputs(&mut self, o: ProgramOutputs) -> Result<(), ErrorCode> {
+        // As `Machine::set_outputs`: nothing switches on while the e-stop is latched.
+        if self.faults & FaultCode::EStop.bit() != 0 {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.outputs = o.applied_to(self.outputs);
         self.mutations += 1;
         Ok(())
     }
