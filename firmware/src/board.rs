@@ -28,10 +28,15 @@ pub type CycleCounter = <Selected as Contract>::CycleCounter;
 
 pub const NAME: &str = <Selected as Contract>::NAME;
 pub const HOST_BAUD: u32 = <Selected as Contract>::HOST_BAUD;
-/// QEMU's board, whose sensors are simulated (force jobs sample a plant in the tick; its timer
+/// QEMU's board, whose sensors are simulated (force jobs sample a plant; its timer
 /// does not pace the scenario firmware: see `bin/scenarios.rs`).
 pub const SIMULATED: bool =
     cfg!(all(feature = "board-netduinoplus2", not(feature = "board-f405-motion")));
+
+/// The force job's interrupt (priority 3, the tick's): the real board's ADC DMA stream; the
+/// simulator board's tick pends it for each plant sample, so both run the force chain outside
+/// the tick handler.
+pub const FORCE_IRQ: stm32f4::stm32f405::Interrupt = stm32f4::stm32f405::Interrupt::DMA2_STREAM0;
 
 /// Brings the board up (see `board_contract::Board::init`).
 pub fn init(

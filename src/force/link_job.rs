@@ -2,9 +2,10 @@
 //! around one segment job, fed per ADC sample, with the simulated milling plant of a simulator
 //! board (`Sim(Milling)`) as the sample source where the board has no real ADC.
 //!
-//! The firmware calls [`ForceJob::tick_sim`] from the DDA tick (simulator board: one plant
-//! sample every `ticks_per_sample` ticks, stepped from the feed axis's position) or
-//! [`ForceJob::sample`] from the force ADC's DMA interrupt (real board). Either returns a
+//! On a simulator board the DDA tick counts down to each plant sample ([`ForceJob::sample_due`],
+//! every `ticks_per_sample` ticks) and the sample itself ([`ForceJob::sample_sim`], from the feed
+//! axis's position) runs in the interrupt the tick pends, right after it, as the real board's
+//! force ADC DMA interrupt calls [`ForceJob::sample`]. Either returns a
 //! [`ForceTick`]: the override for the DDA (the path `SetOverride` takes) and the force fault
 //! bits for `Inputs::sensor_faults`, so the machine's one fault model holds the feed.
 //!
@@ -495,19 +496,28 @@ impl ForceJob {
         self.t
     }
 
-    /// One DDA tick on a tick-sampled (simulator) board, after the machine's tick moved the
-    /// axes: every `ticks_per_sample`th tick, one plant sample at the feed axis's position
-    /// through the simulated ADC into [`Self::sample`]. Division-free, bounded.
+    /// A tick-sampled (simulator) board's sample countdown, every DDA tick: true on the ticks
+    /// whose plant sample ([`Self::sample_sim`]) is due. A few instructions.
     #[inline]
-    pub fn tick_sim(&mut self, position_steps: i64) -> ForceTick {
+    pub fn sample_due(&mut self) -> bool {
         if self.stage != Stage::Running || self.ticks_per_sample == 0 {
-            return ForceTick { set_override: None, fault_bits: self.fault_bits };
+            return false;
         }
         self.countdown -= 1;
         if self.countdown != 0 {
-            return ForceTick { set_override: None, fault_bits: self.fault_bits };
+            return false;
         }
         self.countdown = self.ticks_per_sample;
+        true
+    }
+
+    /// A tick-sampled board's sample: the plant at the feed axis's position (after the
+    /// machine's tick moved the axes) through the simulated ADC into [`Self::sample`].
+    /// Division-free, bounded.
+    pub fn sample_sim(&mut self, position_steps: i64) -> ForceTick {
+        if self.stage != Stage::Running {
+            return ForceTick { set_override: None, fault_bits: self.fault_bits };
+        }
         let x = position_steps - self.origin_steps;
         let counts = match self.sim.as_mut() {
             Some(s) => {
@@ -533,13 +543,13 @@ impl ForceJob {
 
     /// The spindle speed the board measures (the real board's spindle encoder), for the chain's
     /// tooth period and the controller's spindle-stopped hold; a simulated plant sets its own in
-    /// [`Self::tick_sim`].
+    /// [`Self::sample_sim`].
     #[inline]
     pub fn set_spindle_mrev_s(&mut self, mrev_s: u32) {
         self.spindle_mrev_s = mrev_s;
     }
 
-    /// One ADC sample of every channel (the real board's DMA interrupt, or [`Self::tick_sim`]):
+    /// One ADC sample of every channel (the real board's DMA interrupt, or [`Self::sample_sim`]):
     /// the chain, and at the decimated rate the control law. Division-free, bounded.
     #[inline]
     pub fn sample(&mut self, counts: &[u16; MAX_CHANNELS], position_steps: i64) -> ForceTick {
@@ -585,7 +595,7 @@ impl ForceJob {
 /// (the machine's holds and fault freeze stay in charge: a held or frozen DDA does not move
 /// whatever the override). A force fault reaches the machine on the next tick (one tick of
 /// latency). The job runs while the machine runs or holds the job, and ends with it.
-/// Division-free, bounded: the machine's tick plus [`ForceJob::tick_sim`].
+/// Division-free, bounded: the machine's tick plus [`ForceJob::sample_sim`].
 #[inline]
 pub fn link_tick(
     machine: &mut Machine,
@@ -593,23 +603,48 @@ pub fn link_tick(
     inputs: &Inputs,
     job: &mut ForceJob,
 ) -> TickOut {
+    let (out, due) = link_tick_deferred(machine, dda, inputs, job);
+    if due {
+        link_sample(machine, dda, job);
+    }
+    out
+}
+
+/// [`link_tick`] without the plant sample: the machine's tick and the sample countdown; true
+/// when a sample is due, for [`link_sample`] to take right after this tick and before the next
+/// (the simulator board's stand-in for the real board's ADC interrupt, so the tick interrupt
+/// stays short and the sample sees the same positions as in [`link_tick`]).
+#[inline]
+pub fn link_tick_deferred(
+    machine: &mut Machine,
+    dda: &mut Dda,
+    inputs: &Inputs,
+    job: &mut ForceJob,
+) -> (TickOut, bool) {
     let mut inp = *inputs;
     if job.is_running() {
         inp.sensor_faults |= job.fault_bits;
     }
     let out = machine.tick(dda, &inp);
+    let mut due = false;
     if job.is_running() {
         if matches!(machine.state(), MachineState::Running | MachineState::Holding) {
-            let pos = machine.positions().get(job.axis).copied().unwrap_or(0);
-            let t = job.tick_sim(pos);
-            if let Some(rate) = t.set_override {
-                dda.apply(Command::CapabilityOverride(rate));
-            }
+            due = job.sample_due();
         } else {
             job.end();
         }
     }
-    out
+    (out, due)
+}
+
+/// The plant sample [`link_tick_deferred`] said is due: the chain, the control law at its rate,
+/// the override into the DDA.
+pub fn link_sample(machine: &Machine, dda: &mut Dda, job: &mut ForceJob) {
+    let pos = machine.positions().get(job.axis).copied().unwrap_or(0);
+    let t = job.sample_sim(pos);
+    if let Some(rate) = t.set_override {
+        dda.apply(Command::CapabilityOverride(rate));
+    }
 }
 
 /// The status phase of a controller mode.

@@ -396,10 +396,14 @@ How these are measured:
   behind the ART accelerator, assumed to hit (the `ART misses` columns below charge the F405's 5
   wait states at 168 MHz on every taken branch into flash). `isr_cycles_cruise_4axes`: median over ticks where four axes
   cruise; `isr_cycles_p99`/`_max`: over every tick of every job; `isr_instr_idle`: median
-  instructions of a tick with nothing to do; `isr_cpu_percent_default_tick`: the largest job's
-  mean handler cycles x 100 kHz / 168 MHz. `step_rate_max_hz_per_axis`: the DDA steps an axis at
-  most every other tick, at the fastest tick the handler's worst case fits in (168 MHz /
-  `isr_cycles_max`, at most the default 100 kHz); `_aggregate`: four axes at that rate (the
+  instructions of a tick with nothing to do. The force chain runs in its own interrupt on both
+  boards (DMA2 stream 0, the tick's priority: the real board's ADC DMA; on the QEMU board the
+  tick pends it on each plant sample and it runs right after the tick), traced the same way:
+  `isr_force_cycles_max` is its longest run. `isr_cpu_percent_default_tick`: the largest job's
+  mean cycles per tick, the tick handler's plus the force interrupt's spread over the ticks,
+  x 100 kHz / 168 MHz. `step_rate_max_hz_per_axis`: the DDA steps an axis at most every other
+  tick, at the fastest tick the worst case fits in (168 MHz / (`isr_cycles_max` +
+  `isr_force_cycles_max`), as if both fell on one tick; at most the default 100 kHz); `_aggregate`: four axes at that rate (the
   profiled case). The board can time its own handler: the link firmware built with the
   `isr-cycles` feature reads its cycle counter on entry and before return and logs a histogram
   every 100 ms over defmt (`firmware/src/isr_cycles.rs`). On an F405 that is DWT CYCCNT, the

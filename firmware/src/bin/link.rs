@@ -269,12 +269,16 @@ mod app {
             .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
     }
 
-    /// Force ADC half buffer (real board; never raised under QEMU): the force job's chain per
-    /// frame, its control law once per half, the override into the DDA (`link_force`). The
-    /// tick's priority: they never preempt each other.
+    /// Force ADC half buffer (real board): the force job's chain per frame, its control law
+    /// once per half, the override into the DDA (`link_force`). On the simulator board, which
+    /// has no force ADC, the tick pends it for each plant sample. The tick's priority: they
+    /// never preempt each other, and a pended sample runs before the next tick.
     #[task(binds = DMA2_STREAM0, priority = 3, shared = [motion], local = [force_adc])]
     fn force_dma(mut cx: force_dma::Context) {
-        let Some(adc) = cx.local.force_adc.as_mut() else { return };
+        let Some(adc) = cx.local.force_adc.as_mut() else {
+            cx.shared.motion.lock(link::force::on_sim_sample);
+            return;
+        };
         match adc.on_dma_irq() {
             Some(frames) => {
                 cx.shared.motion.lock(|m| link::force::on_adc_frames(m, Some(frames), false))

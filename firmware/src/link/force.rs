@@ -5,14 +5,15 @@
 //! the sensor inputs, the controller's override into the DDA like `SetOverride`).
 //!
 //! Sample source: the simulator board (netduinoplus2 under QEMU, whose ADC values are fake)
-//! samples the milling plant of the last `Sim(Milling)` (`super::sim`) from the feed axis's position every
-//! `tick_hz / sample_hz` ticks inside the tick. The real board (f405-motion) samples its force
+//! samples the milling plant of the last `Sim(Milling)` (`super::sim`) from the feed axis's
+//! position every `tick_hz / sample_hz` ticks: the tick counts down and pends the force
+//! interrupt ([`on_sim_sample`]), which runs right after it. The real board (f405-motion) samples its force
 //! sensors with the TIM3-triggered ADC1 scan into the DMA2 stream 0 double buffer at
 //! [`ADC_SAMPLE_HZ`]; the `DMA2_STREAM0` interrupt (priority 3, the tick's: they never preempt
 //! each other) hands each half buffer (`DECIMATION` frames = one control update) to
 //! [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
 
-use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::Command;
 use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
@@ -49,7 +50,29 @@ pub fn live(m: &Motion) -> bool {
 pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
     let Motion { dda, machine, job, .. } = m;
     let job = job.force_mut().filter(|j| j.is_running())?;
-    Some(link_job::link_tick(machine, dda, inputs, job))
+    let (out, due) = link_job::link_tick_deferred(machine, dda, inputs, job);
+    if due {
+        // The sample runs in the force interrupt, after this tick and before the next (the
+        // real board's ADC DMA interrupt, at the tick's priority): the tick stays short.
+        SAMPLE_DUE.store(true, Relaxed);
+        rtic::pend(crate::board::FORCE_IRQ);
+    }
+    Some(out)
+}
+
+/// A simulator board's plant sample is due ([`tick`] pended the force interrupt).
+static SAMPLE_DUE: AtomicBool = AtomicBool::new(false);
+
+/// The force interrupt on a simulator board: the plant sample the tick pended, the chain, the
+/// control law at its rate, the override into the DDA. Division-free, bounded.
+pub fn on_sim_sample(m: &mut Motion) {
+    if !SAMPLE_DUE.swap(false, Relaxed) {
+        return;
+    }
+    let Motion { dda, machine, job, .. } = m;
+    if let Some(job) = job.force_mut().filter(|j| j.is_running()) {
+        link_job::link_sample(machine, dda, job);
+    }
 }
 
 /// `ArmForce`: in `Ready` with nothing queued, no event or wire job and no live force job.

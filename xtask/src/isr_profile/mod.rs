@@ -24,6 +24,10 @@ use std::time::{Duration, Instant};
 
 /// TIM2's interrupt number (vector 16 + 28): the DDA tick.
 const TICK_IRQ: usize = 28;
+/// DMA2 stream 0's interrupt number (vector 16 + 56): the force interrupt, the real board's
+/// ADC DMA and the simulator board's plant sample, pended by the tick on the ticks a sample is
+/// due and run right after it.
+const FORCE_IRQ: usize = 56;
 /// The default configuration's tick and the F405's core clock.
 const DEFAULT_TICK_HZ: f64 = 100_000.0;
 const CORE_HZ: f64 = 168_000_000.0;
@@ -46,7 +50,7 @@ const SITUATIONS: [(&str, &[&str]); 5] = [
         &[
             "force::control::",
             "force::chain::",
-            "ForceJob::tick_sim",
+            "ForceJob::sample_due",
             "zslide::command::",
             "zslide::table::",
             "polar::playback::Playback::tick",
@@ -73,6 +77,8 @@ struct Job {
 pub struct JobProfile {
     pub name: &'static str,
     pub instances: Vec<trace::Instance>,
+    /// Runs of the force interrupt (the force chain, after the tick on the ticks it pends it).
+    pub force: Vec<trace::Instance>,
     pub wall: Duration,
     /// Function name -> instructions inside the handler, largest first.
     pub top: Vec<(String, u64)>,
@@ -134,6 +140,7 @@ pub fn run(root: &Path, only: &[String]) -> Result<Figures> {
     let bin = build_motionctl(root)?;
     let prog = disasm::Program::load(root, &elf)?;
     let entry = prog.irq_handler(TICK_IRQ)?;
+    let force_entry = prog.irq_handler(FORCE_IRQ)?;
     let work = root.join("target/isr-profile");
     std::fs::create_dir_all(&work)?;
     let wrapper_dir = write_wrapper(&work)?;
@@ -143,7 +150,7 @@ pub fn run(root: &Path, only: &[String]) -> Result<Figures> {
             continue;
         }
         println!("\n== {}: motionctl {}", job.name, job.args.join(" "));
-        let p = profile_job(root, &prog, entry, &bin, &job, &work, &wrapper_dir)?;
+        let p = profile_job(root, &prog, [entry, force_entry], &bin, &job, &work, &wrapper_dir)?;
         println!("{}", job_table(&p));
         profiles.push(p);
     }
@@ -189,7 +196,7 @@ fn write_wrapper(work: &Path) -> Result<PathBuf> {
 fn profile_job(
     root: &Path,
     prog: &disasm::Program,
-    entry: u32,
+    [entry, force_entry]: [u32; 2],
     bin: &Path,
     job: &Job,
     work: &Path,
@@ -202,13 +209,15 @@ fn profile_job(
     let path = format!("{}:{}", wrapper_dir.display(), std::env::var("PATH").unwrap_or_default());
     let start = Instant::now();
     let capped = AtomicBool::new(false);
-    let (analyzer, ok) = std::thread::scope(|scope| -> Result<(trace::Analyzer<'_>, bool)> {
-        let reader = scope.spawn(|| -> Result<trace::Analyzer<'_>> {
+    type Pair<'a> = (trace::Analyzer<'a>, trace::Analyzer<'a>);
+    let ((analyzer, force), ok) = std::thread::scope(|scope| -> Result<(Pair<'_>, bool)> {
+        let reader = scope.spawn(|| -> Result<Pair<'_>> {
             let keep = std::env::var_os(PCS_ENV).is_some();
             let mut a = trace::Analyzer::new(prog, entry, &markers).keep_pcs(keep);
+            let mut force = trace::Analyzer::new(prog, force_entry, &[]);
             let f = std::fs::File::open(&fifo).context("opening the trace FIFO")?;
-            a.read(BufReader::with_capacity(1 << 20, f), job.max_ticks, &capped)?;
-            Ok(a)
+            a.read(BufReader::with_capacity(1 << 20, f), job.max_ticks, &capped, &mut force)?;
+            Ok((a, force))
         });
         let mut child = Command::new(bin)
             .args(&job.args)
@@ -281,6 +290,7 @@ fn profile_job(
     Ok(JobProfile {
         name: job.name,
         instances: analyzer.instances,
+        force: force.instances,
         wall: start.elapsed(),
         top,
         unknown_pcs: analyzer.unknown,
@@ -345,6 +355,15 @@ fn job_table(p: &JobProfile) -> String {
             w.max
         );
     }
+    if !p.force.is_empty() {
+        let i = Stats::of(p.force.iter().map(|x| x.instructions).collect());
+        let c = Stats::of(p.force.iter().map(|x| x.cycles).collect());
+        let _ = writeln!(
+            s,
+            "| force interrupt (after the tick) | {} | {} / {} / {} / {} | {} / {} / {} / {} | |",
+            i.n, i.min, i.median, i.p99, i.max, c.min, c.median, c.p99, c.max
+        );
+    }
     let total: u64 = p.instances.iter().map(|i| i.instructions as u64).sum();
     s.push_str("\nwhere the instructions go:\n");
     for (name, n) in &p.top {
@@ -366,16 +385,23 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
     let cruise4 = four
         .map(|p| Stats::of(p.select(Some("cruise")).iter().map(|i| i.cycles).collect()))
         .unwrap_or_default();
+    // The force interrupt runs after the tick on the ticks it pends it: its cycles count in
+    // the CPU load (spread over the job's ticks) and in the longest tick-to-tick work.
+    let force = Stats::of(profiles.iter().flat_map(|p| p.force.iter()).map(|i| i.cycles).collect());
     let cpu = profiles
         .iter()
         .map(|p| {
-            let mean = Stats::of(p.instances.iter().map(|i| i.cycles).collect()).mean;
+            let tick: f64 = p.instances.iter().map(|i| i.cycles as f64).sum();
+            let force: f64 = p.force.iter().map(|i| i.cycles as f64).sum();
+            let mean = (tick + force) / p.instances.len().max(1) as f64;
             100.0 * mean * DEFAULT_TICK_HZ / CORE_HZ
         })
         .fold(0.0, f64::max);
-    // The fastest tick the handler's worst case allows on a 168 MHz core, capped by the
-    // default tick; the step rates follow from the DDA's one step per two ticks per axis.
-    let tick_hz = DEFAULT_TICK_HZ.min(CORE_HZ / (cycles.max.max(1) as f64));
+    // The fastest tick the worst case allows on a 168 MHz core (the longest tick handler plus
+    // the longest force interrupt, as if they fell on the same tick), capped by the default
+    // tick; the step rates follow from the DDA's one step per two ticks per axis.
+    let worst = cycles.max as f64 + force.max as f64;
+    let tick_hz = DEFAULT_TICK_HZ.min(CORE_HZ / worst.max(1.0));
     let per_axis = (tick_hz * STEPS_PER_TICK_PER_AXIS).floor();
     let keys = vec![
         ("isr_cycles_cruise_4axes", cruise4.median as f64),
@@ -385,21 +411,26 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
         ("isr_cycles_max", cycles.max as f64),
         ("isr_instr_idle", idle.median as f64),
         ("isr_cpu_percent_default_tick", (cpu * 100.0).round() / 100.0),
+        ("isr_force_cycles_max", force.max as f64),
     ];
     let mut md = String::from(
-        "| job | ticks | cycles median | cycles p99 | cycles max | mean CPU at 100 kHz |\n|---|---|---|---|---|---|\n",
+        "| job | ticks | cycles median | cycles p99 | cycles max | force interrupt max | mean CPU at 100 kHz |\n|---|---|---|---|---|---|---|\n",
     );
     for p in profiles {
         let c = Stats::of(p.instances.iter().map(|i| i.cycles).collect());
+        let f = Stats::of(p.force.iter().map(|i| i.cycles).collect());
+        let force: f64 = p.force.iter().map(|i| i.cycles as f64).sum();
+        let mean = c.mean + force / c.n.max(1) as f64;
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {:.1} % |",
+            "| {} | {} | {} | {} | {} | {} | {:.1} % |",
             p.name,
             c.n,
             c.median,
             c.p99,
             c.max,
-            100.0 * c.mean * DEFAULT_TICK_HZ / CORE_HZ
+            if f.n == 0 { "-".to_string() } else { f.max.to_string() },
+            100.0 * mean * DEFAULT_TICK_HZ / CORE_HZ
         );
     }
     md.push('\n');

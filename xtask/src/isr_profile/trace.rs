@@ -104,13 +104,15 @@ impl<'p> Analyzer<'p> {
         self.marks.values().any(|m| m & (1 << bit) != 0)
     }
 
-    /// Reads a whole trace (a FIFO while QEMU writes it). After `cap` handler instances it
-    /// sets `capped` and only drains the rest, so QEMU never blocks on a full FIFO.
+    /// Reads a whole trace (a FIFO while QEMU writes it), feeding `also` (another handler's
+    /// analyzer) the same instructions. After `cap` handler instances it sets `capped` and only
+    /// drains the rest, so QEMU never blocks on a full FIFO.
     pub fn read(
         &mut self,
         trace: impl BufRead,
         cap: Option<usize>,
         capped: &AtomicBool,
+        also: &mut Analyzer<'_>,
     ) -> std::io::Result<()> {
         let mut last = u32::MAX;
         for line in trace.split(b'\n') {
@@ -128,6 +130,7 @@ impl<'p> Analyzer<'p> {
             }
             last = pc;
             self.step(pc);
+            also.step(pc);
         }
         Ok(())
     }
