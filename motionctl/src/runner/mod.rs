@@ -1,0 +1,38 @@
+//! `motionctl run`: streams a planned job to the board and checks what it did.
+//!
+//! Hello (protocol version) -> the board must be idle with an empty queue -> `SetConfig` from the
+//! job's `[machine]` (skipped when the board already has it) -> `SetStatusPeriod` -> the
+//! segments of [`crate::plan::Stream`] in `QueueSegments` batches as credits allow, `Start` once
+//! the queue is full (or everything before the next event is queued), the spindle and coolant
+//! switched (`SetProgramOutputs`, read back from the board's status) once the motion before them
+//! is done,
+//! program pauses (M0) held until the operator presses Enter -> wait until every segment is done
+//! and the board is idle -> verify: segments done == sent, the board's order hash == the hash of
+//! the ids sent (every segment exactly once, in order), final positions == the host model's.
+//!
+//! One concern a file, each importing only those named before it here: `options` and `report`
+//! (what a run is given and what it gives back), `watch` (limits on a running job), `board`
+//! (asking the board, bringing it to `Ready`), `outputs` (what is sent, and where the run is in
+//! it), then the run itself: `stream` (connecting, the loop and most of its steps), `replies`
+//! (what the board said), `events` (spindle, coolant, pauses and dwells between segments) and
+//! `verify` (the checks at the end).
+
+mod board;
+mod events;
+mod options;
+mod outputs;
+mod replies;
+mod report;
+mod stream;
+mod verify;
+mod watch;
+
+pub use board::{
+    ask, ask_status, axes_of, fault_names, home, ready_board, seq_at_or_after, wire_config,
+    HOMING_BOARD_SECONDS, HOMING_STUCK,
+};
+pub use options::{RunOptions, DEFAULT_STATUS_PERIOD_MS};
+pub use outputs::Outputs;
+pub use report::{RunError, RunReport};
+pub use stream::{run, run_outputs, HEARTBEAT_EVERY};
+pub use watch::{JobWatch, Overdue};
