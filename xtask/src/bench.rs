@@ -402,8 +402,8 @@ How these are measured:
   `isr_force_cycles_max` is its longest run. `isr_cpu_percent_default_tick`: the largest job's
   mean cycles per tick, the tick handler's plus the force interrupt's spread over the ticks,
   x 100 kHz / 168 MHz. `step_rate_max_hz_per_axis`: the DDA steps an axis at most every other
-  tick, at the fastest tick the worst case fits in (168 MHz / (`isr_cycles_max` +
-  `isr_force_cycles_max`), as if both fell on one tick; at most the default 100 kHz); `_aggregate`: four axes at that rate (the
+  tick, at the fastest tick the worst case fits in (168 MHz / the largest job's longest tick
+  plus its longest force interrupt, as if both fell on one tick; at most the default 100 kHz); `_aggregate`: four axes at that rate (the
   profiled case). The board can time its own handler: the link firmware built with the
   `isr-cycles` feature reads its cycle counter on entry and before return and logs a histogram
   every 100 ms over defmt (`firmware/src/isr_cycles.rs`). On an F405 that is DWT CYCCNT, the

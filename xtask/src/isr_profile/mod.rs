@@ -397,10 +397,17 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
             100.0 * mean * DEFAULT_TICK_HZ / CORE_HZ
         })
         .fold(0.0, f64::max);
-    // The fastest tick the worst case allows on a 168 MHz core (the longest tick handler plus
-    // the longest force interrupt, as if they fell on the same tick), capped by the default
-    // tick; the step rates follow from the DDA's one step per two ticks per axis.
-    let worst = cycles.max as f64 + force.max as f64;
+    // The fastest tick the worst case allows on a 168 MHz core (per job, the longest tick
+    // handler plus the longest force interrupt, as if they fell on the same tick), capped by the
+    // default tick; the step rates follow from the DDA's one step per two ticks per axis.
+    let worst = profiles
+        .iter()
+        .map(|p| {
+            let tick = p.instances.iter().map(|i| i.cycles).max().unwrap_or(0);
+            let force = p.force.iter().map(|i| i.cycles).max().unwrap_or(0);
+            tick as f64 + force as f64
+        })
+        .fold(0.0, f64::max);
     let tick_hz = DEFAULT_TICK_HZ.min(CORE_HZ / worst.max(1.0));
     let per_axis = (tick_hz * STEPS_PER_TICK_PER_AXIS).floor();
     let keys = vec![
