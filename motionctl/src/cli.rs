@@ -582,17 +582,7 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
             crate::outln!("override   {ovr:.3}");
             crate::outln!("queue      {} queued, {} free", st.queue_depth, st.credits);
             crate::outln!("segments   {} done, last id {:?}", st.segments_done, st.last_done_id);
-            let c = &st.counters;
-            crate::outln!(
-                "counters   {} USART overruns, {} bad frames, {} answers dropped, {} tick \
-                 overruns, {} steps deferred, {} holds for a late host (since boot)",
-                c.usart_overruns,
-                c.frames_bad,
-                c.responses_dropped,
-                c.tick_overruns,
-                c.steps_deferred,
-                c.starve_holds
-            );
+            crate::outln!("counters   {} (since boot)", runner::counters_text(&st.counters));
             if st.faults != 0 {
                 let names: Vec<&str> = motion::protocol::FaultCode::ALL
                     .iter()

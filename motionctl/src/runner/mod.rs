@@ -33,6 +33,6 @@ pub use board::{
 };
 pub use options::{RunOptions, DEFAULT_STATUS_PERIOD_MS};
 pub use outputs::Outputs;
-pub use report::{RunError, RunReport};
+pub use report::{counters_text, RunError, RunReport};
 pub use stream::{run, run_outputs, HEARTBEAT_EVERY};
 pub use watch::{JobWatch, Overdue};

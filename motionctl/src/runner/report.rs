@@ -204,18 +204,7 @@ impl RunReport {
             self.max_queue_depth,
             self.queue_full_naks
         );
-        let c = &self.board;
-        let _ = writeln!(
-            t,
-            "board      {} USART overruns, {} bad frames, {} answers dropped, {} tick overruns, \
-             {} steps deferred, {} holds for a late host",
-            c.usart_overruns,
-            c.frames_bad,
-            c.responses_dropped,
-            c.tick_overruns,
-            c.steps_deferred,
-            c.starve_holds
-        );
+        let _ = writeln!(t, "board      {}", counters_text(&self.board));
         if !self.output_switches.is_empty() {
             let _ = writeln!(
                 t,
@@ -251,6 +240,20 @@ impl std::fmt::Display for RunError {
 }
 
 impl std::error::Error for RunError {}
+
+/// The board's error and stall counters in words (the run's report and `motionctl status`).
+pub fn counters_text(c: &BoardCounters) -> String {
+    format!(
+        "{} USART overruns, {} bad frames, {} answers dropped, {} tick overruns, {} steps \
+         deferred, {} holds for a late host",
+        c.usart_overruns,
+        c.frames_bad,
+        c.responses_dropped,
+        c.tick_overruns,
+        c.steps_deferred,
+        c.starve_holds
+    )
+}
 
 pub(super) fn err(message: impl Into<String>) -> RunError {
     RunError { message: message.into(), report: None }
