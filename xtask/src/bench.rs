@@ -412,7 +412,7 @@ How these are measured:
   `isr-cycles since boot: N runs, mean, p50, p99, max, cpu per mille`). Under QEMU the same build
   counts instructions (TIM5 under `-icount shift=0`): `cargo xtask isr-cycles` runs these jobs
   with it, a cross-check of the trace by other means (separate runs; the maxima agree within 2 %, the
-  counter reading the handler from inside: 4-axis job 1333 vs 1339 traced, turning 1930 vs 1970).
+  counter reading the handler from inside: 4-axis job 1236 vs 1244 traced, turning 1729 vs 1738).
 - `kernel_dda_tick_instr_*`: instructions for one `Dda::tick()` in the QEMU netduinoplus2 firmware,
   counted with TIM5 at QEMU's 1 GHz timer clock under `-icount shift=0` (one instruction = 1 ns),
   minus the cost of an empty measurement. Classes: `idle` (no segment), `moving` (in a segment,
