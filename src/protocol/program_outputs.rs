@@ -27,6 +27,17 @@ pub enum SpindleDir {
     Ccw,
 }
 
+impl SpindleDir {
+    /// From an enable and a direction level: a direction without the enable is a stopped spindle.
+    pub const fn of(on: bool, ccw: bool) -> SpindleDir {
+        match (on, ccw) {
+            (false, _) => SpindleDir::Off,
+            (true, false) => SpindleDir::Cw,
+            (true, true) => SpindleDir::Ccw,
+        }
+    }
+}
+
 /// Every output a program switches, as one state (`SetProgramOutputs`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct ProgramOutputs {
@@ -52,22 +63,20 @@ impl ProgramOutputs {
 
     /// Reads `Status::outputs` bits; a direction bit without the enable bit is a stopped spindle.
     pub const fn from_bits(bits: u8) -> ProgramOutputs {
-        let spindle = match (bits & OUT_SPINDLE != 0, bits & OUT_SPINDLE_CCW != 0) {
-            (false, _) => SpindleDir::Off,
-            (true, false) => SpindleDir::Cw,
-            (true, true) => SpindleDir::Ccw,
-        };
-        ProgramOutputs { spindle, mist: bits & OUT_MIST != 0, flood: bits & OUT_FLOOD != 0 }
+        ProgramOutputs {
+            spindle: SpindleDir::of(bits & OUT_SPINDLE != 0, bits & OUT_SPINDLE_CCW != 0),
+            mist: bits & OUT_MIST != 0,
+            flood: bits & OUT_FLOOD != 0,
+        }
     }
 
     /// What the machine's outputs say.
     pub const fn of(o: &Outputs) -> ProgramOutputs {
-        let spindle = match (o.spindle_enable, o.spindle_ccw) {
-            (false, _) => SpindleDir::Off,
-            (true, false) => SpindleDir::Cw,
-            (true, true) => SpindleDir::Ccw,
-        };
-        ProgramOutputs { spindle, mist: o.mist, flood: o.flood }
+        ProgramOutputs {
+            spindle: SpindleDir::of(o.spindle_enable, o.spindle_ccw),
+            mist: o.mist,
+            flood: o.flood,
+        }
     }
 
     /// `o` with these spindle and coolant levels; the wire power and the Z DAC stay as they are

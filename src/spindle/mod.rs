@@ -41,6 +41,18 @@ pub const fn speed_turn_q32_per_tick(rpm_milli: u64, tick_hz: u32) -> i32 {
     ((rpm_milli << 32) / (60_000 * tick_hz as u64)) as i32
 }
 
+/// [`speed_turn_q32_per_tick`] for a speed from outside (a host's request): `None` when it
+/// does not fit (half a turn per tick or more), and a tick rate of 0 read as 1.
+pub const fn checked_speed_turn_q32_per_tick(rpm_milli: u32, tick_hz: u32) -> Option<i32> {
+    let tick_hz = if tick_hz == 0 { 1 } else { tick_hz };
+    let speed = ((rpm_milli as u64) << 32) / (60_000 * tick_hz as u64);
+    if speed > i32::MAX as u64 {
+        None
+    } else {
+        Some(speed as i32)
+    }
+}
+
 /// Rpm in thousandths from a speed in 2^-32 turn per tick (reports; divides).
 pub const fn rpm_milli(speed_turn_q32_per_tick: i32, tick_hz: u32) -> i64 {
     (speed_turn_q32_per_tick as i64 * 60_000 * tick_hz as i64) >> 32

@@ -231,3 +231,18 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn a_requested_speed_is_converted_as_setup_does_and_refused_past_half_a_turn_per_tick() {
+    for rpm_milli in [0u32, 360_000, 6_000_000, 1_000_000_000] {
+        assert_eq!(
+            checked_speed_turn_q32_per_tick(rpm_milli, HZ),
+            Some(speed_turn_q32_per_tick(rpm_milli as u64, HZ))
+        );
+    }
+    // Half a turn per tick at 50 kHz is 1.5 M rpm: the first speed that no longer fits.
+    let half_turn_rpm_milli = 60_000 * HZ / 2;
+    assert!(checked_speed_turn_q32_per_tick(half_turn_rpm_milli - 1, HZ).is_some());
+    assert_eq!(checked_speed_turn_q32_per_tick(half_turn_rpm_milli, HZ), None);
+    assert_eq!(checked_speed_turn_q32_per_tick(u32::MAX, 0), None);
+}

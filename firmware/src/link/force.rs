@@ -1,17 +1,18 @@
 //! Constant-force milling jobs on the link firmware (`motion::force::link_job`):
 //! `ArmForce` makes a [`ForceJob`] in [`Motion`] for the next plain segment job; `Start` starts
 //! the machine's job and the force loop in the same critical section; the tick runs the
-//! machine through `motion::force::link_job::link_tick` (the job's latched force faults among
-//! the sensor inputs, the controller's override into the DDA like `SetOverride`).
+//! machine through `motion::force::link_job::link_tick_deferred` (the job's latched force
+//! faults among the sensor inputs); the force interrupt puts the controller's override into the
+//! DDA like `SetOverride`.
 //!
 //! Sample source: the simulator board (netduinoplus2 under QEMU, whose ADC values are fake)
 //! samples the milling plant of the last `Sim(Milling)` (`super::sim`) from the feed axis's
 //! position every `tick_hz / sample_hz` ticks: the tick counts down and pends the force
-//! interrupt ([`on_sim_sample`]), which runs right after it. The real board (f405-motion) samples its force
-//! sensors with the TIM3-triggered ADC1 scan into the DMA2 stream 0 double buffer at
-//! [`ADC_SAMPLE_HZ`]; the `DMA2_STREAM0` interrupt (priority 3, the tick's: they never preempt
-//! each other) hands each half buffer (`DECIMATION` frames = one control update) to
-//! [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
+//! interrupt ([`on_sim_sample`]), which runs right after it. The real board (f405-motion)
+//! samples its force sensors with the TIM3-triggered ADC1 scan into the DMA2 stream 0 double
+//! buffer at [`ADC_SAMPLE_HZ`]; the `DMA2_STREAM0` interrupt (priority 3, the tick's: they
+//! never preempt each other) hands each half buffer (`DECIMATION` frames = one control update)
+//! to [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::Command;
@@ -44,8 +45,8 @@ pub fn live(m: &Motion) -> bool {
 }
 
 /// One tick with a running force job (`None`: none, the caller ticks as usual). Interrupt
-/// rate: the machine's tick plus one plant sample, ADC conversion and chain sample every
-/// `tick_hz / sample_hz` ticks and one control update every fifth of those; division-free.
+/// rate: the machine's tick plus the sample countdown; on the ticks a sample is due it pends
+/// the force interrupt. Division-free.
 #[inline]
 pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
     let Motion { dda, machine, job, .. } = m;

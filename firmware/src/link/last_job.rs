@@ -6,7 +6,7 @@
 use motion::force::link_job::ForceJob;
 use motion::wire::link_job::WireJob;
 
-// `None` is small on purpose: the slot lives in a static resource, never moved around.
+// The variants' sizes differ on purpose: one slot for the larger job is the point of the type.
 #[allow(clippy::large_enum_variant)]
 #[derive(Default)]
 pub enum LastJob {

@@ -36,10 +36,7 @@ fn spindle(tick_hz: u32, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
     if !board::Spindle::SIM {
         return Err(ErrorCode::Unsupported);
     }
-    // rpm / 60 turns per second / tick_hz, times 2^32 (as `spindle::speed_turn_q32_per_tick`,
-    // range-checked here).
-    let speed = ((rpm_milli as u64) << 32) / (60_000 * tick_hz.max(1) as u64);
-    let Ok(speed) = i32::try_from(speed) else {
+    let Some(speed) = motion::spindle::checked_speed_turn_q32_per_tick(rpm_milli, tick_hz) else {
         return Err(ErrorCode::OutOfRange);
     };
     if board::Spindle::set_sim(speed as u32, index) {

@@ -224,7 +224,7 @@ pub fn job_spec(o: &ZRunOptions) -> anyhow::Result<ZJobSpec> {
 
 /// The board's sim-spindle speed for `rpm_milli` (as the link firmware converts it).
 pub fn sim_speed(rpm_milli: u32, tick_hz: u32) -> u32 {
-    (((rpm_milli as u64) << 32) / (60_000 * tick_hz.max(1) as u64)) as u32
+    motion::spindle::speed_turn_q32_per_tick(rpm_milli as u64, tick_hz.max(1)) as u32
 }
 
 /// The host model's figures.

@@ -187,3 +187,14 @@ fn serve(
     let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     bridge.run()
 }
+
+/// The corpus machine file, which the bridge's unit tests read settings and jogs against.
+#[cfg(test)]
+fn test_machine() -> crate::job::Machine {
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/corpus-machine.toml"
+    ))
+    .unwrap();
+    crate::job::parse_machine_toml(&src).unwrap()
+}

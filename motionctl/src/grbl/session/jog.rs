@@ -149,12 +149,7 @@ mod tests {
     use super::*;
 
     fn machine() -> Machine {
-        let src = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/examples/corpus-machine.toml"
-        ))
-        .unwrap();
-        crate::job::parse_machine_toml(&src).unwrap()
+        crate::grbl::test_machine()
     }
 
     #[test]
