@@ -133,6 +133,13 @@ impl SwitchFilter {
         self.estop.ticks = debounce_ticks;
     }
 
+    /// Every switch released and the e-stop closed, believed and not being timed: a tick that
+    /// reads the same would change nothing.
+    #[inline]
+    pub fn quiet(&self) -> bool {
+        self.limits.stable | self.limits.pending == 0 && !self.estop.stable && self.estop.count == 0
+    }
+
     /// `raw` with the switches and e-stop replaced by their filtered levels. Nearly every tick
     /// every input reads what the filter believes and nothing is being timed: then `raw` is the
     /// answer, after two compares.

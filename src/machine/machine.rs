@@ -25,6 +25,9 @@ use crate::planner::Planner;
 use crate::protocol::{ErrorCode, FaultCode, WireState};
 use crate::segment::{Segment, SegmentError};
 
+mod fast;
+pub use fast::SUPERVISE_TICKS;
+
 /// Slack, in virtual ticks, between the point where a starved job is held and the last point
 /// from which the hold still stops within the running segment (the hold acts from the next tick).
 pub const STARVE_MARGIN_VTICKS: u32 = 64;
@@ -293,6 +296,9 @@ pub struct Machine {
     tick_overruns: u32,
     /// Debounces the limit switches and the e-stop for the fault checks and jog-off.
     switch_filter: SwitchFilter,
+    /// Step-only ticks left before the next full tick ([`Machine::fast_tick`]); 0 after any
+    /// command, fault or state change.
+    fast_left: u8,
 }
 
 impl Default for Machine {
@@ -343,6 +349,7 @@ impl Machine {
             switch_filter: SwitchFilter::new(
                 cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz),
             ),
+            fast_left: 0,
         }
     }
 
@@ -464,6 +471,8 @@ impl Machine {
             return false;
         }
         self.outputs = o;
+        // The board writes outputs on full ticks only.
+        self.fast_left = 0;
         true
     }
 
@@ -619,6 +628,8 @@ impl Machine {
             }
         }
         self.state = to;
+        // Whatever the command changed, the next tick is a full one.
+        self.fast_left = 0;
         Ok(to)
     }
 
@@ -678,6 +689,7 @@ impl Machine {
             _ => {}
         }
         self.apply_hold(dda);
+        self.arm_fast(raw);
         TickOut { step, outputs: self.outputs }
     }
 
@@ -938,6 +950,7 @@ impl Machine {
 
     /// Latches `code`; a new fault gets its class's reaction and the machine goes to `Fault`.
     fn raise(&mut self, code: FaultCode) {
+        self.fast_left = 0;
         if !self.latch.raise(code) {
             return;
         }
@@ -995,6 +1008,7 @@ impl Machine {
     /// `HomingFailed` (the config was validated, so it does not happen with a valid one).
     pub fn background(&mut self, dda: &mut Dda, prep: &mut Preparer) {
         if self.abort_pending {
+            self.fast_left = 0;
             dda.abort();
             prep.reset_junction();
             self.abort_pending = false;
@@ -1019,6 +1033,7 @@ impl Machine {
             _ => None,
         };
         let Some(mv) = mv else { return };
+        self.fast_left = 0;
         let mut planner = Planner::new(&self.cfg.wire.machine);
         let mut ok = planner.push(&mv).is_ok();
         planner.finish();

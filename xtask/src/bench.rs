@@ -394,8 +394,11 @@ How these are measured:
   pipelined behind another), 1 for a store, 1 + N for LDM/STM/PUSH/POP, + 2 for a taken branch's
   pipeline refill) plus 12 cycles of exception entry and 10 of return; code runs from flash
   behind the ART accelerator, assumed to hit (the `ART misses` columns below charge the F405's 5
-  wait states at 168 MHz on every taken branch into flash). `isr_cycles_cruise_4axes`: median over ticks where four axes
-  cruise; `isr_cycles_p99`/`_max`: over every tick of every job; `isr_instr_idle`: median
+  wait states at 168 MHz on every taken branch into flash). While a job is quiet, 7 ticks in 8
+  are step-only (`Machine::fast_tick`: the DDA, the step counters and soft limits) and the 8th is
+  a full tick (inputs, debounce, faults, holds, job bookkeeping, outputs, wakes): medians are
+  step-only ticks, p99 and max full ones, and the CPU figure is the mean over both.
+  `isr_cycles_cruise_4axes`: median over ticks where four axes cruise; `isr_cycles_p99`/`_max`: over every tick of every job; `isr_instr_idle`: median
   instructions of a tick with nothing to do. The force chain runs in its own interrupt on both
   boards (DMA2 stream 0, the tick's priority: the real board's ADC DMA; on the QEMU board the
   tick pends it on each plant sample and it runs right after the tick), traced the same way:

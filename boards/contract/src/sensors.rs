@@ -14,6 +14,12 @@ pub trait SpindleEncoder: SpindleSource {
     fn configure(&mut self, cfg: EncoderConfig) -> Result<(), EncoderConfigError>;
     /// Once per tick, before the angle and speed are read. Bounded, no division.
     fn update(&mut self);
+    /// [`SpindleEncoder::update`] would change nothing until something outside the tick moves
+    /// the spindle (a simulated spindle standing still): a step-only tick may skip it. A
+    /// hardware counter can move any time, hence the default.
+    fn at_rest(&self) -> bool {
+        false
+    }
 }
 
 /// The copy-mode template encoders (arm, carriage).

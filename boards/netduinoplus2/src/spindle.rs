@@ -54,18 +54,24 @@ impl board_contract::SpindleEncoder for Spindle {
     /// while the spindle stands still.
     #[inline]
     fn update(&mut self) {
-        let speed = SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed);
-        // A still sim spindle whose encoder has seen a whole window of still counts: nothing
-        // would change (as a real timer encoder's count would not).
-        if speed == 0 && !self.sim.crossed_zero() && self.enc.as_ref().is_none_or(|e| e.is_still())
-        {
+        if self.at_rest() {
             return;
         }
+        let speed = SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed);
         self.sim.advance(speed);
         if let Some(e) = self.enc.as_mut() {
             let (count, index) = self.sim.encoder(e.config().counts_per_rev);
             e.update(count, if SIM_INDEX.load(Relaxed) { index } else { None });
         }
+    }
+
+    /// A still sim spindle whose encoder has seen a whole window of still counts: nothing
+    /// would change (as a real timer encoder's count would not).
+    #[inline]
+    fn at_rest(&self) -> bool {
+        SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed) == 0
+            && !self.sim.crossed_zero()
+            && self.enc.as_ref().is_none_or(|e| e.is_still())
     }
 }
 

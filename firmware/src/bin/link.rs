@@ -4,8 +4,9 @@
 //!
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
 //! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
-//! job (after reading the spindle) during a Z job -- and
-//! drives the step port and outputs; `estop` (EXTI, 3) cuts the drivers on
+//! job (after reading the spindle) during a Z job -- and drives the step port and outputs; while
+//! the machine grants it (a quiet plain job or none), 7 ticks in 8 are `Machine::fast_tick`
+//! (DDA, counters, soft limits) and read no inputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
@@ -24,7 +25,9 @@ static FEEDER_BLOCKED: AtomicBool = AtomicBool::new(false);
 #[rtic::app(device = stm32f4::stm32f405, dispatchers = [SPI2, SPI3])]
 mod app {
     use super::FEEDER_BLOCKED;
-    use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
+    use board_contract::{
+        ConfigStorage as _, CopyEncoders as _, SpindleEncoder as _, TickRate as _,
+    };
     use board_contract::{
         EStopLine as _, ForceAdc as _, HostSerial as _, MachineIo as _, StepPort as _,
         TickTimer as _, Watchdog as _,
@@ -197,12 +200,30 @@ mod app {
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
-            overran: bool = false, drivers_on: bool = true])]
+            overran: bool = false, drivers_on: bool = true,
+            plain: bool = false, spindle_at_rest: bool = false, copy_counts: [i32; 2] = [0; 2]])]
     fn tick(mut cx: tick::Context) {
         let l = cx.local;
         #[cfg(feature = "isr-cycles")]
         let entry = board_contract::CycleCounter::now(&*l.cycles);
         l.tick_timer.clear_update();
+        let port = cx.shared.step_port;
+        // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
+        // the DDA with work: a plain segment job (or none), the copy encoders still, no status
+        // run due and no e-stop edge. A turning spindle's decoder still sees every tick.
+        if *l.plain && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+            if !*l.spindle_at_rest {
+                l.spindle.update();
+            }
+            if let Some(step) = cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda)) {
+                port.write(&step);
+                *l.wake -= 1;
+                #[cfg(feature = "isr-cycles")]
+                motion_firmware::isr_cycles::BINS
+                    .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
+                return;
+            }
+        }
         let raw = l.io.read();
         let copy_counts = l.copy_encoders.read();
         let inputs = Inputs {
@@ -213,9 +234,12 @@ mod app {
             link_ok: LINK_OK.load(Relaxed),
             tick_overrun: *l.overran,
         };
-        let port = cx.shared.step_port;
+        let still = copy_counts == *l.copy_counts;
+        *l.copy_counts = copy_counts;
         cx.shared.motion.lock(|m| {
             link::zslide::sense(l.spindle, &mut m.z);
+            *l.spindle_at_rest = l.spindle.at_rest();
+            *l.plain = false;
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
                 out
@@ -228,6 +252,7 @@ mod app {
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
+                *l.plain = still;
                 m.machine.tick(&mut m.dda, &inputs)
             };
             port.write(&out.step);

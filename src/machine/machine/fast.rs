@@ -1,0 +1,79 @@
+//! The step-only tick: while nothing but the DDA has work, most ticks only step.
+//!
+//! A full tick ([`Machine::tick`]) reads and debounces the inputs, watches the faults, applies
+//! holds, keeps the job's books and leaves the outputs. While all of that is quiet -- inputs
+//! released and steady, no fault cause, no pending hold or resume, no homing, jog, event or Z job
+//! -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be [`Machine::fast_tick`]s: the DDA tick, the
+//! step counters and the soft-limit check on the axes that stepped, nothing else. The board
+//! skips reading its inputs on those ticks too. A full tick then comes round at least every
+//! [`SUPERVISE_TICKS`] ticks, and at once after any command, fault, output change or background
+//! work (each sets the count to 0).
+//!
+//! What that costs in reaction time, at the 100 kHz default tick: a limit switch or sensor fault
+//! is seen at most `SUPERVISE_TICKS - 1` ticks (70 us) later, against a 2 ms switch debounce; the
+//! e-stop's own interrupt has already cut the step drivers, and the board takes a full tick as
+//! soon as it has fired. Soft limits are still checked on every step. The job bookkeeping runs on
+//! every full tick in this mode, so it keeps its [`JOB_WATCH_TICKS`] period and the starve margin.
+
+use super::{Inputs, Machine, JOB_WATCH_TICKS};
+use crate::dda::{Dda, StepOutput};
+use crate::machine::MachineState;
+
+/// Ticks from one full tick to the next while the machine is quiet (the job bookkeeping's
+/// period, so that a quiet job is watched as often as a busy one).
+pub const SUPERVISE_TICKS: u8 = JOB_WATCH_TICKS;
+
+impl Machine {
+    /// A step-only tick, if the last full tick found everything quiet and fewer than
+    /// [`SUPERVISE_TICKS`] ticks have passed since: the DDA, the step counters and the soft
+    /// limits. `None`: run [`Machine::tick`] (or `tick_with`) instead. Interrupt rate: a few
+    /// compares and adds beside the DDA tick.
+    #[inline(always)]
+    pub fn fast_tick(&mut self, dda: &mut Dda) -> Option<StepOutput> {
+        if self.fast_left == 0 {
+            return None;
+        }
+        self.fast_left -= 1;
+        self.ticks += 1;
+        let step = dda.tick();
+        self.last_dir = step.dir();
+        if step.rise() != 0 {
+            // A soft-limit fault here zeroes `fast_left`: the next tick is a full one.
+            self.count(step);
+        }
+        Some(step)
+    }
+
+    /// End of a full tick: grants the next [`SUPERVISE_TICKS`]` - 1` ticks to
+    /// [`Machine::fast_tick`] when nothing but the DDA has work. `raw`: this tick's inputs
+    /// before the debounce.
+    #[inline]
+    pub(super) fn arm_fast(&mut self, raw: &Inputs) {
+        let inputs_quiet = raw.limit_min | raw.limit_max == 0
+            && !raw.estop
+            && raw.sensor_faults == 0
+            && raw.link_ok
+            && !raw.tick_overrun
+            && self.switch_filter.quiet();
+        let machine_quiet = matches!(
+            self.state,
+            MachineState::Idle
+                | MachineState::Ready
+                | MachineState::Running
+                | MachineState::Holding
+        ) && self.active == 0
+            && !(self.frozen || self.abort_pending || self.hold_pending || self.resume_pending)
+            && !(self.starved || self.event_job || self.z_job)
+            && self.jog.is_none();
+        if inputs_quiet && machine_quiet {
+            self.fast_left = SUPERVISE_TICKS - 1;
+            // The full tick that ends this run keeps the job's books.
+            self.job_watch_in = 1;
+        } else {
+            self.fast_left = 0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

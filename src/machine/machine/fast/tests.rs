@@ -1,0 +1,159 @@
+//! The step-only tick against the full tick: the same steps, faults seen within its bound.
+
+use super::SUPERVISE_TICKS;
+use crate::dda::{Dda, Preparer, StepOutput};
+use crate::machine::{homed, Inputs, Machine, MachineCommand, MachineState};
+use crate::planner::{Move, Planner};
+use crate::protocol::FaultCode;
+use crate::scenarios::faults::{config, Case};
+
+/// A homed machine of `case`'s config running `moves` (steps on X and Y), everything admitted
+/// and in the DDA.
+fn running(case: Case, moves: &[[i32; 2]]) -> (Machine, Dda, Preparer) {
+    let cfg = config(case);
+    let (mut m, mut dda, mut prep) = homed(cfg);
+    let mut p = Planner::new(&cfg.wire.machine);
+    for mv in moves {
+        p.push(&Move { steps: [mv[0], mv[1], 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+    }
+    p.finish();
+    while let Some(seg) = p.pop() {
+        m.command(MachineCommand::Queue(&seg), &mut dda).unwrap();
+        dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+    }
+    m.command(MachineCommand::Start, &mut dda).unwrap();
+    (m, dda, prep)
+}
+
+/// What a run did, tick by tick.
+struct Run {
+    steps: Vec<StepOutput>,
+    fast_ticks: usize,
+    /// The tick on which the machine left `Running`.
+    left_running: Option<usize>,
+}
+
+/// Ticks `ticks` times as the link firmware does (`fast`: a step-only tick whenever the machine
+/// grants one, else a full tick with `inputs(t)`), or with full ticks only.
+fn run(
+    (mut m, mut dda, mut prep): (Machine, Dda, Preparer),
+    ticks: usize,
+    fast: bool,
+    inputs: impl Fn(usize) -> Inputs,
+) -> (Run, Machine) {
+    let mut r = Run { steps: Vec::new(), fast_ticks: 0, left_running: None };
+    for t in 0..ticks {
+        let step = match if fast { m.fast_tick(&mut dda) } else { None } {
+            Some(s) => {
+                r.fast_ticks += 1;
+                s
+            }
+            None => m.tick(&mut dda, &inputs(t)).step,
+        };
+        r.steps.push(step);
+        if m.state() != MachineState::Running && r.left_running.is_none() {
+            r.left_running = Some(t);
+        }
+        if m.wants_background() {
+            m.background(&mut dda, &mut prep);
+        }
+    }
+    (r, m)
+}
+
+fn assert_same_pins(a: &[StepOutput], b: &[StepOutput]) {
+    assert_eq!(a.len(), b.len());
+    if let Some(t) = (0..a.len()).find(|&t| a[t] != b[t]) {
+        panic!("the pins differ first on tick {t}: {:?} against {:?}", a[t], b[t]);
+    }
+}
+
+const JOB: [[i32; 2]; 3] = [[3_000, 1_000], [-500, 2_000], [1_200, -800]];
+const JOB_TICKS: usize = 200_000;
+
+#[test]
+fn a_quiet_job_steps_exactly_as_with_full_ticks_and_mostly_step_only() {
+    let (plain, pm) = run(running(Case::EStop, &JOB), JOB_TICKS, false, |_| Inputs::QUIET);
+    let (fast, fm) = run(running(Case::EStop, &JOB), JOB_TICKS, true, |_| Inputs::QUIET);
+    assert_eq!(plain.fast_ticks, 0);
+    assert_same_pins(&fast.steps, &plain.steps);
+    assert_eq!(fm.positions(), pm.positions());
+    assert_eq!(fm.state(), MachineState::Ready);
+    let (end_plain, end_fast) = (plain.left_running.unwrap(), fast.left_running.unwrap());
+    // The job ends on a full tick: at most one supervision period later.
+    assert!(end_fast >= end_plain && end_fast - end_plain < SUPERVISE_TICKS as usize);
+    // All but one tick in SUPERVISE_TICKS is step-only, running or idle.
+    let full = JOB_TICKS - fast.fast_ticks;
+    assert!(full <= JOB_TICKS / SUPERVISE_TICKS as usize + 2, "{full} full ticks");
+}
+
+#[test]
+fn a_limit_switch_is_seen_within_one_supervision_period() {
+    for close_at in [1_000usize, 1_003, 1_007, 5_555] {
+        let inputs =
+            |t: usize| Inputs { limit_max: if t >= close_at { 1 } else { 0 }, ..Inputs::QUIET };
+        let (plain, pm) = run(running(Case::EStop, &JOB), 20_000, false, inputs);
+        let (fast, fm) = run(running(Case::EStop, &JOB), 20_000, true, inputs);
+        for m in [&pm, &fm] {
+            assert_eq!(m.state(), MachineState::Fault);
+            assert!(m.faults().has(FaultCode::LimitSwitch));
+        }
+        let (tp, tf) = (plain.left_running.unwrap(), fast.left_running.unwrap());
+        assert!(tf >= tp && tf - tp < SUPERVISE_TICKS as usize, "close {close_at}: {tp} {tf}");
+        assert_same_pins(&fast.steps[..tp], &plain.steps[..tp]);
+    }
+}
+
+#[test]
+fn a_command_makes_the_next_tick_a_full_one() {
+    let (mut m, mut dda, _) = running(Case::EStop, &JOB);
+    m.tick(&mut dda, &Inputs::QUIET);
+    assert!(m.fast_tick(&mut dda).is_some());
+    m.command(MachineCommand::Hold, &mut dda).unwrap();
+    assert!(m.fast_tick(&mut dda).is_none(), "a hold waits for no step-only tick");
+    m.tick(&mut dda, &Inputs::QUIET);
+    assert_eq!(m.state(), MachineState::Holding);
+    // Holding on the path is quiet too.
+    assert!(m.fast_tick(&mut dda).is_some());
+}
+
+#[test]
+fn a_switch_being_timed_keeps_every_tick_full() {
+    let (mut m, mut dda, _) = running(Case::EStop, &JOB);
+    let c = m.config().wire;
+    let debounce = c.inputs.debounce_ticks(c.machine.tick_hz);
+    assert!(debounce > 2);
+    // Closed for less than the debounce: timed on every tick, then forgotten.
+    for _ in 0..debounce - 1 {
+        m.tick(&mut dda, &Inputs { limit_min: 1, ..Inputs::QUIET });
+        assert!(m.fast_tick(&mut dda).is_none(), "a switch being timed");
+    }
+    m.tick(&mut dda, &Inputs::QUIET);
+    assert_eq!(m.state(), MachineState::Running);
+    assert!(m.fast_tick(&mut dda).is_some());
+}
+
+#[test]
+fn a_soft_limit_crossed_on_a_step_only_tick_latches_on_that_tick() {
+    // Admitted inside the limits; the DDA is handed a longer move, as a wrong segment would be.
+    let cfg = config(Case::SoftLimitRun);
+    let build = || {
+        let (mut m, mut dda, mut prep) = homed(cfg);
+        let mut p = Planner::new(&cfg.wire.machine);
+        p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+        p.finish();
+        m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
+        let mut p = Planner::new(&cfg.wire.machine);
+        p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+        p.finish();
+        dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
+        m.command(MachineCommand::Start, &mut dda).unwrap();
+        (m, dda, prep)
+    };
+    let (plain, pm) = run(build(), 200_000, false, |_| Inputs::QUIET);
+    let (fast, fm) = run(build(), 200_000, true, |_| Inputs::QUIET);
+    assert!(pm.faults().has(FaultCode::SoftLimit) && fm.faults().has(FaultCode::SoftLimit));
+    assert_eq!(fast.left_running, plain.left_running);
+    assert_eq!(fm.positions(), pm.positions());
+    assert!(fast.fast_ticks > 0);
+}
