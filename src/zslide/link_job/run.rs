@@ -1,0 +1,125 @@
+//! One Z run's state inside the job: the generator for the table's form, the pin stage of its
+//! two axes, and how a checked spec becomes a run ([`prepare_run`]).
+
+use super::spec::{ZJobSpec, ZStartError};
+use super::upload::LinkTable;
+use crate::zslide::command::{ZCommandConfig, ZGen, ZUpdate};
+use crate::zslide::output::{DacScale, StepScale};
+use crate::zslide::table::MAX_WIDTH;
+
+#[derive(Clone, Debug)]
+pub(super) enum Gen {
+    Power(ZGen<4>),
+    Harmonic(ZGen<MAX_WIDTH>),
+}
+
+/// Pin stage for the job's two axes: at most one rise per axis every other tick, DIR written a
+/// tick after the last rise and a tick before the next (the DDA's and the playback's rules).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct Pins {
+    pub(super) dir: u8,
+    pub(super) rose_last: u8,
+}
+
+impl Pins {
+    /// One axis toward `target - position`; returns (rise, dir_write) bits and moves `position`.
+    #[inline]
+    pub(super) fn axis(
+        &mut self,
+        bit: u8,
+        negative_is_up: bool,
+        delta: i64,
+        position: &mut i64,
+    ) -> (u8, u8) {
+        if delta == 0 || self.rose_last & bit != 0 {
+            return (0, 0);
+        }
+        let up = delta > 0;
+        let neg = if up != negative_is_up { 0 } else { bit };
+        if neg != self.dir & bit {
+            self.dir = (self.dir & !bit) | neg;
+            return (0, bit);
+        }
+        *position += if up { 1 } else { -1 };
+        (bit, 0)
+    }
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct ZRun {
+    pub(super) spec: ZJobSpec,
+    pub(super) gen: Gen,
+    pub(super) x_in_q24: i32,
+    /// X axis steps emitted (relative to the start), Z steps emitted.
+    pub(super) x_steps: i64,
+    pub(super) z_steps: i64,
+    pub(super) x_bit: u8,
+    pub(super) z_bit: u8,
+    pub(super) steps: Option<StepScale>,
+    pub(super) dac: Option<DacScale>,
+    pub(super) dac_code: u16,
+    /// A command outside the DAC's range (latched: `ZSlideLimit`).
+    pub(super) dac_fault: bool,
+    pub(super) pins: Pins,
+    /// The generator's last update (in its own time unit: [`ZRun::update_shift`] ticks).
+    pub(super) last: ZUpdate,
+    /// This tick's command (the last update taken forward to now).
+    pub(super) command: ZUpdate,
+    /// The generator updates every `2^update_shift` ticks; the ticks between take its command
+    /// forward by its own derivatives ([`ZUpdate::shifted`]).
+    pub(super) update_shift: u8,
+    /// Ticks since the last update, `0..2^update_shift`.
+    pub(super) update_phase: u8,
+    /// Largest |command - output| while following, inches Q32.
+    pub(super) max_following_in_q32: i64,
+}
+
+/// A run prepared by [`ZJob::prepare`], for [`ZJob::begin`].
+#[derive(Clone, Debug)]
+pub struct ZPrepared(pub(super) ZRun);
+
+pub(super) fn prepare_run(
+    table: &LinkTable,
+    speed: i32,
+    spec: &ZJobSpec,
+    (cfg, update_shift): (ZCommandConfig, u8),
+    steps: Option<StepScale>,
+    dac: Option<DacScale>,
+    z_axis: Option<u8>,
+) -> Result<ZRun, ZStartError> {
+    let x = spec.x_start_in_q24;
+    // The slide is at rest at the job's start: Z = 0 relative to where it stands.
+    let gen = match table {
+        LinkTable::None => return Err(ZStartError::NoTable),
+        LinkTable::Power(t) => {
+            let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
+            g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
+            Gen::Power(g)
+        }
+        LinkTable::Harmonic(t) => {
+            let mut g = ZGen::new(t, cfg, 0).map_err(|_| ZStartError::Config)?;
+            g.start(t, x, speed, 0).map_err(ZStartError::Fault)?;
+            Gen::Harmonic(g)
+        }
+    };
+    let dac_code = dac.and_then(|d| d.code(0).ok()).unwrap_or(crate::machine::Z_DAC_MID_SCALE);
+    Ok(ZRun {
+        spec: *spec,
+        gen,
+        x_in_q24: x,
+        x_steps: 0,
+        z_steps: 0,
+        x_bit: 1 << spec.x_axis,
+        z_bit: z_axis.map(|a| 1u8 << a).unwrap_or(0),
+        steps,
+        dac,
+        dac_code,
+        dac_fault: false,
+        pins: Pins::default(),
+        last: ZUpdate::default(),
+        command: ZUpdate::default(),
+        update_shift,
+        update_phase: 0,
+        max_following_in_q32: 0,
+    })
+}
