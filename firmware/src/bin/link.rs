@@ -212,9 +212,12 @@ mod app {
             sensor_faults: 0,
             link_ok: LINK_OK.load(Relaxed),
             tick_overrun: *l.overran,
+            probe: raw.probe,
         };
         let port = cx.shared.step_port;
         cx.shared.motion.lock(|m| {
+            #[cfg(feature = "sim-inputs")]
+            let inputs = link::sim::with_probe(m, &inputs);
             link::zslide::sense(l.spindle, &mut m.z);
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
