@@ -3,33 +3,14 @@
 //! surface: the trip latches and stops there, the rest of the move is dropped, a miss of an
 //! error kind and a wrong initial state are faults.
 
-use super::tests::{config, seg};
+use super::tests::seg;
+use super::tests_outputs::{open_with, req, status};
 use super::*;
 use crate::machine::{MachineState, ProbeKind, ProbePhase};
-
-fn req(seq: u32, body: RequestBody) -> Request {
-    Request { seq, body }
-}
-
-fn open(caps: u32) -> (BoardLink, SimTarget) {
-    let mut link = BoardLink::new("probe-test", caps);
-    let mut t = SimTarget::new(config(), 8);
-    let r =
-        link.handle(&req(0, RequestBody::Hello { version: PROTOCOL_VERSION, nonce: 5 }), &mut t);
-    assert!(matches!(r, Response::Ack { .. }), "{r:?}");
-    (link, t)
-}
 
 fn ack(link: &mut BoardLink, t: &mut SimTarget, seq: u32, body: RequestBody) {
     let r = link.handle(&req(seq, body.clone()), t);
     assert!(matches!(r, Response::Ack { .. }), "{body:?}: {r:?}");
-}
-
-fn status(link: &mut BoardLink, t: &mut SimTarget, seq: u32) -> Status {
-    match link.handle(&req(seq, RequestBody::GetStatus), t) {
-        Response::Ack { reply: Reply::Status(s), .. } => s,
-        other => panic!("{other:?}"),
-    }
 }
 
 /// Arms `kind`, queues X moves of `xs` steps and starts; then runs the queue dry.
@@ -69,10 +50,10 @@ fn arm_probe_and_the_status_fields_round_trip() {
 
 #[test]
 fn arm_probe_needs_the_capability_and_a_ready_machine() {
-    let (mut link, mut t) = open(CAP_DDA);
+    let (mut link, mut t) = open_with(CAP_DDA);
     let r = link.handle(&req(1, RequestBody::ArmProbe(ProbeKind::Toward)), &mut t);
     assert!(matches!(r, Response::Nak { code: ErrorCode::Unsupported, .. }), "{r:?}");
-    let (mut link, mut t) = open(CAP_DDA | CAP_PROBE);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_PROBE);
     ack(
         &mut link,
         &mut t,
@@ -97,7 +78,7 @@ fn arm_probe_needs_the_capability_and_a_ready_machine() {
 
 #[test]
 fn a_probe_move_trips_on_the_surface_and_drops_the_rest() {
-    let (mut link, mut t) = open(CAP_DDA | CAP_PROBE);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_PROBE);
     t.sim_probe = Some(SimProbeSurface { axis: 0, at_steps: 1_234, below: false });
     let st = probe_move(&mut link, &mut t, ProbeKind::TowardError, &[1_000, 1_000, 1_000]);
     assert_eq!(ProbePhase::from_u8(st.probe_phase), ProbePhase::Tripped);
@@ -126,20 +107,20 @@ fn misses_and_wrong_initial_states_are_the_probe_faults() {
     for (kind, fault) in
         [(ProbeKind::TowardError, FaultCode::ProbeFail.bit()), (ProbeKind::Toward, 0)]
     {
-        let (mut link, mut t) = open(CAP_DDA | CAP_PROBE);
+        let (mut link, mut t) = open_with(CAP_DDA | CAP_PROBE);
         let st = probe_move(&mut link, &mut t, kind, &[500]);
         assert_eq!(ProbePhase::from_u8(st.probe_phase), ProbePhase::Missed, "{kind:?}");
         assert_eq!((st.positions[0], st.faults), (500, fault), "{kind:?}");
     }
     // In contact everywhere: an away move trips at once, a toward move is refused.
-    let (mut link, mut t) = open(CAP_DDA | CAP_PROBE);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_PROBE);
     t.sim_probe = Some(SimProbeSurface { axis: 0, at_steps: 0, below: true });
     let st = probe_move(&mut link, &mut t, ProbeKind::TowardError, &[-500]);
     assert_eq!(ProbePhase::from_u8(st.probe_phase), ProbePhase::Refused);
     assert_eq!((st.positions[0], st.faults), (0, FaultCode::ProbeInitial.bit()));
     assert_eq!(st.machine, MachineState::Fault);
     // Away from the surface at 0: G38.4 leaves contact one step up.
-    let (mut link, mut t) = open(CAP_DDA | CAP_PROBE);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_PROBE);
     t.sim_probe = Some(SimProbeSurface { axis: 0, at_steps: 0, below: true });
     let st = probe_move(&mut link, &mut t, ProbeKind::AwayError, &[500]);
     assert_eq!(ProbePhase::from_u8(st.probe_phase), ProbePhase::Tripped);
@@ -151,10 +132,10 @@ fn misses_and_wrong_initial_states_are_the_probe_faults() {
 fn the_sim_probe_hook_sets_the_surface() {
     let surface = SimProbeSurface { axis: 2, at_steps: -256, below: true };
     let body = RequestBody::Sim(SimRequest::Probe { surface: Some(surface) });
-    let (mut link, mut t) = open(CAP_DDA | CAP_SIM_INPUTS);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_SIM_INPUTS);
     let r = link.handle(&req(1, body.clone()), &mut t);
     assert!(matches!(r, Response::Nak { code: ErrorCode::Unsupported, .. }), "needs CAP_PROBE");
-    let (mut link, mut t) = open(CAP_DDA | CAP_SIM_INPUTS | CAP_PROBE);
+    let (mut link, mut t) = open_with(CAP_DDA | CAP_SIM_INPUTS | CAP_PROBE);
     ack(&mut link, &mut t, 1, body);
     assert_eq!(t.sim_probe, Some(surface));
     assert!(!surface.active(&[0; 6]) && surface.active(&[0, 0, -256, 0, 0, 0]));
