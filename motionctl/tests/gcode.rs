@@ -187,7 +187,7 @@ fn errors_carry_line_column_and_what_was_expected() {
         ("%\n(ok)\n  G0 X1 %", "gcode:3:9: error: Bad character '%' used"),
         // What this machine or board cannot do, named with its line.
         ("G0 A1", "gcode:1:1: error: moves A to 1.0000 but the machine has no A axis"),
-        ("G38.2 Z-5 F100", "gcode:1:1: error: G38.x probe move: the board has no probe input yet"),
+        ("G38.2 Z-5 F100", "gcode:1:1: error: G38.x probe move: the board runs probe moves (ArmProbe), but `run` does not drive them yet"),
     ];
     let mut failures = Vec::new();
     for (src, want) in cases {

@@ -5,6 +5,9 @@
 //! e-stop is asymmetric: it trips on its first asserted tick (never delay a stop) and counts as
 //! released only after it has stayed released for the debounce time.
 //!
+//! The touch probe is debounced on both edges with the same time (a probe's contact chatters
+//! like a switch's): a probe move trips on its debounced level (`super::probe`).
+//!
 //! The homing sequencer latches on the raw switch edge (as grbl does: a debounce delay at the
 //! latch speed would move the home point); faults and jog-off see the filtered switches.
 //!
@@ -110,11 +113,13 @@ impl DebouncedBank {
 const MAX_SHIFT: u32 = 8;
 
 /// The machine's switch inputs through their debouncers: the limit switches as one bank (each
-/// switch on its own), the e-stop tripping at once and releasing after the debounce.
+/// switch on its own), the e-stop tripping at once and releasing after the debounce, the probe
+/// debounced on both edges.
 #[derive(Clone, Debug)]
 pub struct SwitchFilter {
     limits: DebouncedBank,
     estop: Debouncer,
+    probe: Debouncer,
 }
 
 impl SwitchFilter {
@@ -124,20 +129,30 @@ impl SwitchFilter {
         SwitchFilter {
             limits: DebouncedBank::new(debounce_ticks, 0),
             estop: Debouncer::trips_at_once(debounce_ticks, false),
+            probe: Debouncer::new(debounce_ticks, false),
         }
+    }
+
+    /// The probe input as the filter believes it now.
+    pub const fn probe_level(&self) -> bool {
+        self.probe.level()
     }
 
     /// A new debounce time; the believed levels stay.
     pub fn set_ticks(&mut self, debounce_ticks: u16) {
         self.limits.ticks = debounce_ticks;
         self.estop.ticks = debounce_ticks;
+        self.probe.ticks = debounce_ticks;
     }
 
-    /// Every switch released and the e-stop closed, believed and not being timed: a tick that
-    /// reads the same would change nothing.
+    /// Every switch released, the e-stop closed and the probe steady, believed and not being
+    /// timed: a tick that reads the same would change nothing.
     #[inline]
     pub fn quiet(&self) -> bool {
-        self.limits.stable | self.limits.pending == 0 && !self.estop.stable && self.estop.count == 0
+        self.limits.stable | self.limits.pending == 0
+            && !self.estop.stable
+            && self.estop.count == 0
+            && self.probe.count == 0
     }
 
     /// `raw` with the switches and e-stop replaced by their filtered levels. Nearly every tick
@@ -148,7 +163,9 @@ impl SwitchFilter {
         let word = raw.limit_min as u32 | (raw.limit_max as u32) << MAX_SHIFT;
         let steady = (word ^ self.limits.stable) | self.limits.pending == 0
             && raw.estop == self.estop.stable
-            && self.estop.count == 0;
+            && self.estop.count == 0
+            && raw.probe == self.probe.stable
+            && self.probe.count == 0;
         if steady {
             return *raw;
         }
@@ -163,6 +180,7 @@ impl SwitchFilter {
             limit_min: limits as u8,
             limit_max: (limits >> MAX_SHIFT) as u8,
             estop: self.estop.update(raw.estop),
+            probe: self.probe.update(raw.probe),
             ..*raw
         }
     }

@@ -43,7 +43,9 @@ pub const fn reaction(code: FaultCode) -> Reaction {
         | FaultCode::SegmentRejected
         | FaultCode::BoardSetup
         | FaultCode::TickRate
-        | FaultCode::Panicked => Reaction::Stop,
+        | FaultCode::Panicked
+        | FaultCode::ProbeInitial
+        | FaultCode::ProbeFail => Reaction::Stop,
         FaultCode::QueueUnderrun
         | FaultCode::TickOverrun
         | FaultCode::LinkLost
@@ -75,7 +77,9 @@ pub const fn cause_gone_when(code: FaultCode) -> &'static str {
         | FaultCode::WatchdogReset
         | FaultCode::SegmentRejected
         | FaultCode::BoardSetup
-        | FaultCode::Panicked => "at once (an event, not a level)",
+        | FaultCode::Panicked
+        | FaultCode::ProbeInitial
+        | FaultCode::ProbeFail => "at once (an event, not a level)",
         FaultCode::SensorFault => "sensor input clear",
         FaultCode::FollowingError => {
             "at once from the machine's monitor (it re-zeroes), else the sensor's bit clear; homing lost (home again)"

@@ -17,10 +17,11 @@ use super::homing::{HomeEvent, Homing};
 use super::jog_off::{JogEvent, JogOff};
 use super::limits::SoftLimits;
 use super::outputs::Outputs;
+use super::probe::{ProbeKind, ProbeRun};
 use super::reset_cause::ResetCause;
 use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
 use crate::config::{ConfigError, MAX_AXES};
-use crate::dda::{Command, Dda, Preparer, StepOutput, READY_DEPTH};
+use crate::dda::{Command, Dda, MotionState, Preparer, StepOutput, READY_DEPTH};
 use crate::planner::Planner;
 use crate::protocol::{ErrorCode, FaultCode, WireState};
 use crate::segment::{Segment, SegmentError};
@@ -51,6 +52,8 @@ pub struct Inputs {
     pub link_ok: bool,
     /// The previous tick overran (from [`super::OverrunDetector`]).
     pub tick_overrun: bool,
+    /// The touch probe is triggered (in contact), raw: the machine debounces it.
+    pub probe: bool,
 }
 
 impl Inputs {
@@ -62,6 +65,7 @@ impl Inputs {
         sensor_faults: 0,
         link_ok: true,
         tick_overrun: false,
+        probe: false,
     };
 }
 
@@ -294,11 +298,14 @@ pub struct Machine {
     /// Commanded (the step counters) against measured, for axes with feedback.
     following: FollowingMonitor,
     tick_overruns: u32,
-    /// Debounces the limit switches and the e-stop for the fault checks and jog-off.
+    /// Debounces the limit switches and the e-stop for the fault checks and jog-off, and the
+    /// probe for probe moves.
     switch_filter: SwitchFilter,
     /// Step-only ticks left before the next full tick ([`Machine::fast_tick`]); 0 after any
     /// command, fault or state change.
     fast_left: u8,
+    /// The probe move (G38.x): armed, watched, its result.
+    probe: ProbeRun,
 }
 
 impl Default for Machine {
@@ -350,6 +357,7 @@ impl Machine {
                 cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz),
             ),
             fast_left: 0,
+            probe: ProbeRun::new(),
         }
     }
 
@@ -453,6 +461,33 @@ impl Machine {
 
     pub fn homing(&self) -> &Homing {
         &self.homing
+    }
+
+    /// The probe move: armed, running, or the last one's result and latched position.
+    pub fn probe(&self) -> &ProbeRun {
+        &self.probe
+    }
+
+    /// True once after a tripped probe move stopped: the caller drops the segments of the move
+    /// it still holds (its link queue) before it feeds again.
+    pub fn take_probe_discard(&mut self) -> bool {
+        self.probe.take_discard()
+    }
+
+    /// The probe input, debounced.
+    pub fn probe_input(&self) -> bool {
+        self.switch_filter.probe_level()
+    }
+
+    /// Marks the next `Start` as a probe move of `kind`: `Ready`, nothing admitted, no event,
+    /// Z or copy job. The queued segments then run as the probe move (see [`super::probe`]).
+    pub fn arm_probe(&mut self, kind: ProbeKind, dda: &Dda) -> Result<(), Refusal> {
+        let busy = self.in_flight(dda) != 0 || self.events_queued || self.event_job || self.z_job;
+        if self.state != MachineState::Ready || busy || !dda.is_idle() {
+            return Err(Refusal::OutOfState(self.state));
+        }
+        self.probe.arm(kind);
+        Ok(())
     }
 
     /// A `JogOff` move is under way.
@@ -563,6 +598,7 @@ impl Machine {
                 self.following.resync();
                 self.homed = false;
                 self.homing.cancel();
+                self.probe.drop_move();
                 self.jog = None;
                 self.freeze();
             }
@@ -577,19 +613,28 @@ impl Machine {
                 self.events_queued = true;
             }
             MachineCommand::StartWire | MachineCommand::StartEvents | MachineCommand::StartCopy => {
+                self.probe.drop_move();
                 self.event_job = true;
                 self.paused = false;
             }
             MachineCommand::StartZ => {
+                self.probe.drop_move();
                 self.z_job = true;
                 self.paused = false;
             }
             MachineCommand::Home => {
+                self.probe.drop_move();
                 self.events_queued = false;
                 self.homed = false;
                 self.homing = Homing::start(&self.cfg);
             }
-            MachineCommand::Start => {}
+            MachineCommand::Start => {
+                if let Err(fault) = self.probe.start(self.switch_filter.probe_level()) {
+                    // Nothing moves: the fault is the answer (grbl's ALARM:4).
+                    self.raise(fault);
+                    return Ok(self.state);
+                }
+            }
             MachineCommand::Hold => {
                 self.paused = true;
                 dda.apply(Command::Hold);
@@ -602,6 +647,7 @@ impl Machine {
                 dda.apply(Command::Resume);
             }
             MachineCommand::Abort => {
+                self.probe.drop_move();
                 self.homing.cancel();
                 self.jog = None;
                 self.freeze();
@@ -613,6 +659,7 @@ impl Machine {
                     self.following.resync();
                 }
                 self.latch.clear();
+                self.probe.drop_move();
                 self.homing.cancel();
                 self.jog = None;
                 self.hold_pending = false;
@@ -670,6 +717,9 @@ impl Machine {
         self.last_dir = step.dir();
         if step.rise() != 0 {
             self.count(step);
+        }
+        if self.probe.watching() {
+            self.watch_probe(dda, inp.probe);
         }
         match self.state {
             MachineState::Homing => self.watch_homing(dda, raw),
@@ -787,6 +837,23 @@ impl Machine {
         }
     }
 
+    /// A probe move runs: on the trip, latch every axis's machine position and hold (the DDA
+    /// decelerates on the path); once it is at rest, stop (the background aborts the rest of the
+    /// move) so the job ends where the axes came to rest.
+    #[cold]
+    #[inline(never)]
+    fn watch_probe(&mut self, dda: &Dda, probe: bool) {
+        if self.probe.stopping() {
+            if matches!(dda.state(), MotionState::Held | MotionState::Idle) {
+                self.probe.stopped();
+                self.freeze();
+            }
+        } else if self.probe.trips(probe) {
+            self.probe.trip(self.positions());
+            self.hold_pending = true;
+        }
+    }
+
     /// Counts the tick's rising edges, and checks the soft limits where the position changed.
     #[cold]
     fn count(&mut self, step: StepOutput) {
@@ -881,6 +948,11 @@ impl Machine {
     fn watch_job(&mut self, dda: &Dda) {
         let in_flight = self.in_flight(dda);
         if in_flight == 0 && dda.is_idle() {
+            if let Some(fault) = self.probe.job_end() {
+                // An error-kind probe move ended without a trip (grbl's ALARM:5).
+                self.raise(fault);
+                return;
+            }
             self.enter(MachineState::Ready);
             return;
         }
@@ -965,6 +1037,7 @@ impl Machine {
         }
         self.starved = false;
         self.homing.cancel();
+        self.probe.drop_move();
         self.enter(MachineState::Fault);
     }
 

@@ -5,7 +5,8 @@
 //! * [`faults`]: the fault latch and the reaction per fault class.
 //! * [`machine`]: [`Machine`], which the tick and control tasks drive.
 //! * [`homing`], [`limits`], [`outputs`]: homing sequencer, soft limits, safe outputs.
-//! * [`debounce`]: limit switches and e-stop filtered before the machine acts on them.
+//! * [`debounce`]: limit switches, e-stop and probe filtered before the machine acts on them.
+//! * [`probe`]: probe moves (G38.x): the trip, the latched position, the probe faults.
 //! * [`following`]: the following-error monitor (commanded vs measured, axes with feedback).
 //! * [`watchdog`]: watchdog feeding gate and tick-overrun detector.
 //! * [`reset_cause`]: why the MCU reset (RCC_CSR), so a watchdog reset boots into a fault.
@@ -23,6 +24,7 @@ pub mod limits;
 pub mod machine;
 pub mod outputs;
 pub mod persist;
+pub mod probe;
 pub mod ram_flash;
 pub mod reset_cause;
 pub mod state;
@@ -36,6 +38,7 @@ pub use machine::{
     BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, StepSource, TickOut,
 };
 pub use outputs::{Outputs, Z_DAC_MID_SCALE};
+pub use probe::{ProbeKind, ProbePhase, ProbeRun};
 pub use reset_cause::ResetCause;
 pub use state::{cell, Cell, CommandKind, MachineState};
 pub use watchdog::{OverrunDetector, WatchdogGate};

@@ -159,6 +159,8 @@ coded_enum! {
         BoardSetup = 22 => ("BoardSetup", "A board peripheral refused its configuration at start-up (the spindle encoder timer): jobs that need it cannot run; check the board and restart it."),
         TickRate = 23 => ("TickRate", "The stored tick rate is not one this board's timer can make: safe defaults until a configuration with a supported rate is set."),
         Panicked = 24 => ("Panicked", "The firmware stopped on an internal error and restarted; `motionctl status` and the boot log name the source location. Any job was lost."),
+        ProbeInitial = 25 => ("ProbeInitial", "A probe move (G38.x) started with the probe already in the state that ends it (in contact for G38.2/G38.3, open for G38.4/G38.5; grbl ALARM:4): nothing moved."),
+        ProbeFail = 26 => ("ProbeFail", "A G38.2 or G38.4 probe move ended without the probe changing state (no contact within travel; grbl ALARM:5)."),
     }
 }
 

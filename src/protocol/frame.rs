@@ -16,8 +16,9 @@ use serde::Serialize;
 pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Largest postcard-encoded message (without CRC). The largest real messages are the
-/// `SetConfig` request and the `Config` reply; a test checks they fit.
-pub const MAX_MESSAGE: usize = 320;
+/// `SetConfig` request, the `Config` reply and a `Status` at extreme values; a test checks they
+/// fit.
+pub const MAX_MESSAGE: usize = 384;
 /// Bytes of CRC after the message.
 pub const CRC_LEN: usize = 4;
 

@@ -13,11 +13,11 @@ use crate::config::{
     AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, TickTiming, MAX_AXES,
 };
 use crate::dda::MotionState;
-use crate::machine::{HomeAxis, MachineState};
+use crate::machine::{HomeAxis, MachineState, ProbeKind};
 use crate::segment::Rate;
 use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
 
-pub const PROTOCOL_VERSION: u16 = 7;
+pub const PROTOCOL_VERSION: u16 = 8;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].
@@ -61,6 +61,8 @@ pub const CAP_FORCE_JOB: u32 = 1 << 10;
 // -- copy mode --
 /// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
 pub const CAP_COPY_JOB: u32 = 1 << 11;
+/// `ArmProbe` (G38.x probe moves on the board's debounced probe input) is honoured.
+pub const CAP_PROBE: u32 = 1 << 12;
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -172,6 +174,14 @@ pub enum RequestBody {
     /// (e-stop and the other `Kill` reactions) switch these off too. The host sends it once the
     /// motion before it is done (program order); `Status::outputs` shows the result.
     SetProgramOutputs(ProgramOutputs),
+    /// Marks the next `Start` as a probe move of this kind (G38.2..G38.5; the table's Start
+    /// column, but only in `Ready` with nothing queued and no other job armed; needs
+    /// `CAP_PROBE`): the segments queued after it run as the probe move, watched by the tick on
+    /// the debounced probe input. The trip latches every axis's position
+    /// (`Status::probe_steps`), the machine stops with a feed-hold deceleration and drops the
+    /// rest of the move, and the job ends in `Ready`; see `src/machine/probe.rs` and
+    /// `Status::probe_phase`.
+    ArmProbe(ProbeKind),
     /// A simulator board's test hook ([`SimRequest`]; only with `CAP_SIM_INPUTS`, else
     /// `Unsupported`). Compiled only with the `sim-inputs` feature: a board built without it
     /// does not decode the variant and answers it `Unsupported` all the same.
@@ -184,7 +194,7 @@ pub enum RequestBody {
 
 /// The postcard index of `RequestBody::Sim`, known with and without the `sim-inputs` feature
 /// (a board without it recognises the request it cannot decode).
-pub const KIND_SIM: u8 = 26;
+pub const KIND_SIM: u8 = 27;
 
 // -- force job --
 /// Contact strategy of a force job (`motion::force::control::ContactStrategy`).
@@ -379,6 +389,7 @@ impl RequestBody {
             RequestBody::StartCopy { .. } => 23,
             RequestBody::ReadTeach { .. } => 24,
             RequestBody::SetProgramOutputs(_) => 25,
+            RequestBody::ArmProbe(_) => 26,
             #[cfg(feature = "sim-inputs")]
             RequestBody::Sim(_) => KIND_SIM,
         }
@@ -651,6 +662,12 @@ pub struct Status {
     /// The program outputs the board drives now (`SetProgramOutputs`), `OUT_*` bits: bit 0
     /// spindle on, bit 1 spindle counterclockwise (with bit 0), bit 2 mist, bit 3 flood.
     pub outputs: u8,
+    /// The current (or last) probe move: `machine::ProbePhase` as u8 (0 none, 1 armed,
+    /// 2 moving, 3 tripped, 4 missed, 5 refused, 6 dropped), the machine position of every axis
+    /// latched at the trip (steps; meaningful when tripped), and the debounced probe input now.
+    pub probe_phase: u8,
+    pub probe_steps: [i64; MAX_AXES],
+    pub probe_input: bool,
 }
 
 /// Per-axis scale and soft limits, alongside the step-space `MachineConfig`.

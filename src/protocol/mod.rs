@@ -46,7 +46,7 @@ pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_ME
 pub use sim::SimRequest;
 #[cfg(any(test, feature = "sim-inputs"))]
 pub use sim::{CopySim, SimTarget};
-pub use sim::{SimForceFault, SimMillingParams};
+pub use sim::{SimForceFault, SimMillingParams, SimProbeSurface};
 
 #[cfg(test)]
 mod tests;
@@ -59,3 +59,5 @@ mod force_tests;
 mod tests_copy;
 #[cfg(test)]
 mod tests_outputs;
+#[cfg(test)]
+mod tests_probe;

@@ -41,7 +41,8 @@
 //! | ReadTeach (not a command) | nothing |
 //! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
 //! | SetProgramOutputs (not a command) | no e-stop latched or pressed (`OutOfState`) |
-//! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_FORCE_JOB` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
+//! | ArmProbe (Start column) | `CAP_PROBE` (`Unsupported`), nothing queued, no other job armed, motion at rest (`OutOfState`) |
+//! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_FORCE_JOB`, for `Probe` also `CAP_PROBE` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
 //!
 //! A board built without the `sim-inputs` feature cannot decode `Sim`; it answers it
 //! `Unsupported` (seq consumed) as a board with the feature but without `CAP_SIM_INPUTS` does.
@@ -52,7 +53,7 @@ use super::frame::FrameError;
 use super::messages::*;
 use super::program_outputs::ProgramOutputs;
 use crate::config::{ConfigError, MAX_AXES};
-use crate::machine::{cell, Cell, CommandKind, MachineState};
+use crate::machine::{cell, Cell, CommandKind, MachineState, ProbeKind};
 use crate::polar::feed::check_block;
 use crate::polar::playback::SizeScale;
 use crate::segment::{Rate, Segment};
@@ -180,6 +181,12 @@ pub trait LinkTarget {
     fn set_program_outputs(&mut self, _o: ProgramOutputs) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+
+    /// Marks the next `Start` as a probe move of `kind` (`ArmProbe`); `OutOfState` with
+    /// something queued or another job armed. Targets without a probe input: `Unsupported`.
+    fn arm_probe(&mut self, _kind: ProbeKind) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
 }
 
 /// `ArmWire`'s parameters are usable: counts and limits at least 1, overrides in (0, 2.0].
@@ -202,7 +209,8 @@ pub const fn command_kind(body: &RequestBody) -> Option<CommandKind> {
         | RequestBody::StartPlayback { .. }
         | RequestBody::ArmWire(_)
         | RequestBody::StartCopy { .. }
-        | RequestBody::ArmForce(_) => CommandKind::Start,
+        | RequestBody::ArmForce(_)
+        | RequestBody::ArmProbe(_) => CommandKind::Start,
         RequestBody::Hold => CommandKind::Hold,
         RequestBody::Resume => CommandKind::Resume,
         RequestBody::Abort => CommandKind::Abort,
@@ -722,6 +730,16 @@ impl BoardLink {
                 sim(self.capabilities, s, t)?;
                 Ok(Reply::None)
             }
+            RequestBody::ArmProbe(kind) => {
+                if self.capabilities & CAP_PROBE == 0 {
+                    return Err(plain(ErrorCode::Unsupported));
+                }
+                t.arm_probe(*kind).map_err(|code| match code {
+                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
+                    _ => plain(code),
+                })?;
+                Ok(Reply::None)
+            }
             RequestBody::SetProgramOutputs(o) => {
                 t.set_program_outputs(*o).map_err(|code| match code {
                     ErrorCode::OutOfState => (code, NakDetail::State(machine)),
@@ -750,6 +768,7 @@ fn sim(
 ) -> Result<(), (ErrorCode, NakDetail)> {
     let needs = match req {
         SimRequest::Milling(_) => CAP_SIM_INPUTS | CAP_FORCE_JOB,
+        SimRequest::Probe { .. } => CAP_SIM_INPUTS | CAP_PROBE,
         _ => CAP_SIM_INPUTS,
     };
     if capabilities & needs != needs {

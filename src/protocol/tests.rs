@@ -114,6 +114,9 @@ fn extreme_status() -> Status {
             starve_holds: u32::MAX,
         },
         outputs: u8::MAX,
+        probe_phase: u8::MAX,
+        probe_steps: [i64::MIN; MAX_AXES],
+        probe_input: true,
     }
 }
 

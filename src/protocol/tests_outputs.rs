@@ -5,12 +5,13 @@ use super::tests::config;
 use super::*;
 use crate::machine::{MachineState, Outputs};
 
-fn req(seq: u32, body: RequestBody) -> Request {
+pub(super) fn req(seq: u32, body: RequestBody) -> Request {
     Request { seq, body }
 }
 
-fn open() -> (BoardLink, SimTarget) {
-    let mut link = BoardLink::new("outputs-test", CAP_DDA);
+/// A session with a fresh [`SimTarget`] announcing `caps`.
+pub(super) fn open_with(caps: u32) -> (BoardLink, SimTarget) {
+    let mut link = BoardLink::new("outputs-test", caps);
     let mut t = SimTarget::new(config(), 8);
     let r =
         link.handle(&req(0, RequestBody::Hello { version: PROTOCOL_VERSION, nonce: 3 }), &mut t);
@@ -18,7 +19,11 @@ fn open() -> (BoardLink, SimTarget) {
     (link, t)
 }
 
-fn status(link: &mut BoardLink, t: &mut SimTarget, seq: u32) -> Status {
+fn open() -> (BoardLink, SimTarget) {
+    open_with(CAP_DDA)
+}
+
+pub(super) fn status(link: &mut BoardLink, t: &mut SimTarget, seq: u32) -> Status {
     match link.handle(&req(seq, RequestBody::GetStatus), t) {
         Response::Ack { reply: Reply::Status(s), .. } => s,
         other => panic!("{other:?}"),

@@ -13,7 +13,8 @@ pub struct RawInputs {
     pub limit_max: u8,
     /// The wire-lag switch reports a stall (the wire controller debounces it itself).
     pub wire_stall: bool,
-    /// The touch probe is triggered (no firmware consumes it yet).
+    /// The touch probe is triggered (in contact), raw: the machine debounces it and watches it
+    /// during probe moves (G38.x).
     pub probe: bool,
 }
 
@@ -24,6 +25,9 @@ pub trait MachineIo {
     /// whose pins for them are taken by another option does not: `SetProgramOutputs` is then
     /// refused as unsupported instead of reporting outputs nothing switches).
     const PROGRAM_OUTPUTS: bool;
+    /// `write` drives a mist coolant output (M7); without one, `SetProgramOutputs` with mist on
+    /// is refused as unsupported.
+    const MIST: bool;
     /// Sets the simulated wire-stall switch; false where not honoured.
     fn inject_wire_stall(stalled: bool) -> bool;
     /// Every input, once per tick. Bounded, no division.

@@ -108,7 +108,7 @@ impl board_contract::Board for Board {
         let clocks = clocks::init(&dp.RCC, &dp.PWR, &dp.FLASH);
         clocks::enable_peripherals(&dp.RCC);
         pins::init(&dp.GPIOA, &dp.GPIOB, &dp.GPIOC, &dp.GPIOD);
-        pins::init_program_outputs(&dp.GPIOC, &dp.GPIOD);
+        pins::init_program_outputs(&dp.GPIOC);
         let copy_encoders = CopyEncoders::new(dp.TIM5, dp.TIM3, &dp.RCC, &dp.GPIOA, &dp.GPIOB);
         force_adc::init_common(&dp.ADC_COMMON);
         // In SRAM (memory.x: the CCM is not DMA-capable and unused); init runs once, so `Some`.

@@ -1,18 +1,19 @@
 //! The safety inputs and process outputs the machine reads and drives every tick: e-stop, the
 //! 12 limit switches and the wire-stall switch in; spindle enable and direction, mist and flood
-//! coolant, wire power and the Z-slide DAC out.
+//! coolant, wire power and the Z-slide DAC out; the touch probe in.
 //!
 //! The limit switches are read as three port words (12 `InputPin` reads a tick would cost four
 //! times as much) and the e-stop as an `InputPin` (an unreadable pin reads tripped), both raw:
 //! the machine debounces them with the configured `switch_debounce_us`
-//! (`motion::machine::debounce`), the same on every board. The touch probe has no pin on this
-//! board (its pin, PD2, drives the mist coolant; nothing reads a probe yet): it reads
-//! untriggered. The wire-stall switch is passed raw: the wire controller debounces it with the
+//! (`motion::machine::debounce`), the same on every board, and so the touch probe on PD2
+//! (closed to ground = contact; the machine debounces it with the same time and watches it
+//! during probe moves). The board has no mist output (PD2 is the probe's): M7 is refused. The
+//! wire-stall switch is passed raw: the wire controller debounces it with the
 //! job's own `debounce_ticks`. Outputs go through their ports' BSRR (atomic set/reset, no
 //! read-modify-write against the step port's writes to GPIOC).
 
 use super::pins::{
-    self, GpioIn, Port, ESTOP, FLOOD, LIMIT_MAX, LIMIT_MIN, MIST, PROGRAM_OUTPUTS_ROUTED,
+    self, GpioIn, Port, ESTOP, FLOOD, LIMIT_MAX, LIMIT_MIN, PROBE, PROGRAM_OUTPUTS_ROUTED,
     SPINDLE_DIR, SPINDLE_EN, WIRE_POWER, WIRE_STALL,
 };
 use super::z_dac::ZDac;
@@ -53,16 +54,17 @@ impl MachineIo {
 impl board_contract::MachineIo for MachineIo {
     /// The real board reads real inputs: no `Sim(Inject)`.
     const SIM_INPUTS: bool = false;
-    /// Spindle direction, flood and mist on PC14, PC15 and PD2, unless an SPI option took
-    /// PC14/PC15.
+    /// Spindle direction and flood on PC14 and PC15, unless an SPI option took them.
     const PROGRAM_OUTPUTS: bool = PROGRAM_OUTPUTS_ROUTED;
+    /// No mist output: PD2 is the touch probe's.
+    const MIST: bool = false;
 
     /// `Sim(Inject)` is not honoured here (false: refused).
     fn inject_wire_stall(_stalled: bool) -> bool {
         false
     }
 
-    /// Every input, active levels resolved; no probe (see the module docs).
+    /// Every input, active levels resolved (see the module docs).
     #[inline]
     fn read(&mut self) -> RawInputs {
         let (a, b, c) = (pins::idr(Port::A), pins::idr(Port::B), pins::idr(Port::C));
@@ -72,7 +74,8 @@ impl board_contract::MachineIo for MachineIo {
             limit_max: gather(&LIMIT_MAX, a, b, c),
             // Closed to ground (pulled up): low = stalled.
             wire_stall: (a >> WIRE_STALL) & 1 == 0,
-            probe: false,
+            // Closed to ground (pulled up): low = contact.
+            probe: (pins::idr(Port::D) >> PROBE) & 1 == 0,
         }
     }
 
@@ -87,14 +90,9 @@ impl board_contract::MachineIo for MachineIo {
         unsafe { (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(bits)) };
         if PROGRAM_OUTPUTS_ROUTED {
             let c = on(o.spindle_ccw, SPINDLE_DIR.1 as u32) | on(o.flood, FLOOD.1 as u32);
-            let d = on(o.mist, MIST.1 as u32);
             // SAFETY: as above; only the direction and flood bits of GPIOC (the step port's
-            // bits are untouched: BSRR sets and resets only the bits written as 1) and the mist
-            // bit of GPIOD.
-            unsafe {
-                (*pac::GPIOC::ptr()).bsrr().write(|w| w.bits(c));
-                (*pac::GPIOD::ptr()).bsrr().write(|w| w.bits(d));
-            }
+            // bits are untouched: BSRR sets and resets only the bits written as 1).
+            unsafe { (*pac::GPIOC::ptr()).bsrr().write(|w| w.bits(c)) };
         }
         let _ = self.z_dac.write(o.z_dac);
     }

@@ -54,14 +54,16 @@ pub const SPINDLE_EN: u32 = 0;
 pub const WIRE_POWER: u32 = 1;
 /// Wire-lag micro-switch on GPIOA, closed to ground = stalled.
 pub const WIRE_STALL: u32 = 8;
-/// Program outputs (G-code M3/M4, M7, M8), active high, off (and clockwise) from reset:
-/// spindle direction on PC14 (high = counterclockwise, M4), flood coolant on PC15, mist coolant
-/// on PD2. PC14/PC15 were the LQFP64's last free pins and PD2 its only port-D pin, which the
-/// touch probe held; nothing reads the probe yet (G38.x is refused), so the coolant took it.
+/// Program outputs (G-code M3/M4, M8), active high, off (and clockwise) from reset: spindle
+/// direction on PC14 (high = counterclockwise, M4), flood coolant on PC15. PC14/PC15 were the
+/// LQFP64's last free pins; PD2, its only port-D pin, is the touch probe's ([`PROBE`]), so the
+/// board has no mist output and refuses M7 (as grbl does by default, without `ENABLE_M7`).
 /// PC13..PC15 are slow, low-current pins: they drive relay or SSR driver inputs, not loads.
 pub const SPINDLE_DIR: (Port, u8) = (Port::C, 14);
 pub const FLOOD: (Port, u8) = (Port::C, 15);
-pub const MIST: (Port, u8) = (Port::D, 2);
+/// Touch probe on GPIOD, pulled up, closed to ground = in contact (grbl's default polarity: a
+/// probe plate or a normally-open touch probe switching to ground).
+pub const PROBE: u32 = 2;
 
 const fn pin(name: &'static str, port: Port, pin: u8, mode: Mode) -> Pin {
     Pin { name, port, pin, mode }
@@ -71,7 +73,7 @@ const LOW: Mode = Mode::Output { high: false };
 
 const IN: Mode = Mode::InputPullUp;
 
-pub const PINS: [Pin; 40] = [
+pub const PINS: [Pin; 41] = [
     pin("STEP0", Port::C, 0, LOW),
     pin("STEP1", Port::C, 1, LOW),
     pin("STEP2", Port::C, 2, LOW),
@@ -102,6 +104,7 @@ pub const PINS: [Pin; 40] = [
     pin("SPINDLE_EN", Port::B, SPINDLE_EN as u8, LOW),
     pin("WIRE_POWER", Port::B, WIRE_POWER as u8, LOW),
     pin("WIRE_STALL", Port::A, WIRE_STALL as u8, IN),
+    pin("PROBE", Port::D, PROBE as u8, IN),
     // Limit switches, normally closed to ground: open (high) = tripped or a broken wire.
     pin("LIMIT_MIN0", LIMIT_MIN[0].0, LIMIT_MIN[0].1, IN),
     pin("LIMIT_MIN1", LIMIT_MIN[1].0, LIMIT_MIN[1].1, IN),
@@ -167,13 +170,10 @@ pub const COPY_ENCODERS_ROUTED: bool = {
 // turning copy mode off.
 const _: () = assert!(COPY_ENCODERS_ROUTED, "a copy encoder pin is assigned to something else");
 
-/// The program outputs' pins ([`SPINDLE_DIR`], [`FLOOD`], [`MIST`]), configured by
+/// The program outputs' pins ([`SPINDLE_DIR`], [`FLOOD`]), configured by
 /// [`init_program_outputs`] when [`PROGRAM_OUTPUTS_ROUTED`].
-pub const PROGRAM_OUTPUT_PINS: [Pin; 3] = [
-    pin("SPINDLE_DIR", SPINDLE_DIR.0, SPINDLE_DIR.1, LOW),
-    pin("FLOOD", FLOOD.0, FLOOD.1, LOW),
-    pin("MIST", MIST.0, MIST.1, LOW),
-];
+pub const PROGRAM_OUTPUT_PINS: [Pin; 2] =
+    [pin("SPINDLE_DIR", SPINDLE_DIR.0, SPINDLE_DIR.1, LOW), pin("FLOOD", FLOOD.0, FLOOD.1, LOW)];
 
 /// The program outputs are wired: no SPI option takes PC14/PC15 (its chip select and
 /// sample/reset lines sit there).
@@ -269,7 +269,7 @@ pub fn init_copy_encoders(a: &pac::GPIOA, b: &pac::GPIOB) {
 
 /// Configures the program output pins (low: spindle clockwise, coolant off) if they are routed
 /// (see [`PROGRAM_OUTPUTS_ROUTED`]).
-pub fn init_program_outputs(c: &pac::GPIOC, d: &pac::GPIOD) {
+pub fn init_program_outputs(c: &pac::GPIOC) {
     if !PROGRAM_OUTPUTS_ROUTED {
         defmt::warn!("spindle direction and coolant not routed: an SPI option uses PC14/PC15");
         return;
@@ -277,8 +277,7 @@ pub fn init_program_outputs(c: &pac::GPIOC, d: &pac::GPIOD) {
     for p in &PROGRAM_OUTPUT_PINS {
         match p.port {
             Port::C => configure!(c, p),
-            Port::D => configure!(d, p),
-            Port::A | Port::B => {}
+            Port::A | Port::B | Port::D => {}
         }
     }
 }

@@ -32,6 +32,8 @@ impl board_contract::MachineIo for MachineIo {
     /// Simulated: the spindle direction and coolant are kept in the machine's outputs and
     /// reported in `Status::outputs`.
     const PROGRAM_OUTPUTS: bool = true;
+    /// Simulated, like the other program outputs.
+    const MIST: bool = true;
 
     /// Sets the simulated wire-stall switch from the next tick on; true (honoured).
     fn inject_wire_stall(stalled: bool) -> bool {

@@ -233,10 +233,13 @@ mod app {
             sensor_faults: 0,
             link_ok: LINK_OK.load(Relaxed),
             tick_overrun: *l.overran,
+            probe: raw.probe,
         };
         let still = copy_counts == *l.copy_counts;
         *l.copy_counts = copy_counts;
         cx.shared.motion.lock(|m| {
+            #[cfg(feature = "sim-inputs")]
+            let inputs = link::sim::with_probe(m, &inputs);
             link::zslide::sense(l.spindle, &mut m.z);
             *l.spindle_at_rest = l.spindle.at_rest();
             *l.plain = false;

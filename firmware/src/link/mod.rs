@@ -33,7 +33,7 @@ use motion::polar::playback::{Playback, SizeScale};
 use motion::protocol::WireState;
 use motion::protocol::CAP_ZSLIDE_JOB;
 use motion::protocol::{
-    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE,
+    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
 use motion::zslide::link_job::ZJob;
@@ -52,7 +52,7 @@ mod last_job;
 mod session;
 /// The simulator board's test hooks (`Sim` requests).
 #[cfg(feature = "sim-inputs")]
-mod sim;
+pub mod sim;
 mod target;
 /// Wire-manipulator jobs (`ArmWire`).
 pub mod wire;
@@ -109,6 +109,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_EVENTS
     | CAP_WIRE_JOB
     | CAP_ZSLIDE_JOB
+    | CAP_PROBE
     | if force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
     | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
@@ -129,6 +130,9 @@ pub struct Motion {
     pub copy: copy::CopyState,
     /// The simulated plant the next force job samples.
     pub force: force::ForceSlot,
+    /// The simulated probe surface (`Sim(Probe)`), evaluated from the step counters every tick.
+    #[cfg(feature = "sim-inputs")]
+    pub sim_probe: Option<motion::protocol::SimProbeSurface>,
 }
 
 impl Motion {
@@ -160,6 +164,8 @@ impl Motion {
                 z: ZJob::new(),
                 copy: copy::CopyState::new(),
                 force: force::ForceSlot::default(),
+                #[cfg(feature = "sim-inputs")]
+                sim_probe: None,
             },
             preparer,
         ))

@@ -106,9 +106,15 @@ impl Link {
         motion: &mut impl Mutex<T = Motion>,
     ) -> Option<Result<Prepared, (u32, SegmentError)>> {
         let prep = &mut self.feed.preparer;
+        let queue = &mut self.feed.queue;
         let may_feed = motion.lock(|m| {
             if m.machine.wants_background() {
                 m.machine.background(&mut m.dda, prep);
+            }
+            // A tripped probe move stopped: the rest of it goes before anything is fed (in the
+            // same critical section as the abort, so no segment of it reaches the DDA).
+            if m.machine.take_probe_discard() {
+                queue.clear();
             }
             m.machine.may_feed() && m.dda.ready_free() > 0
         });

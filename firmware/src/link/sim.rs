@@ -4,6 +4,7 @@
 //! hook still asks the board, so a build with the feature on a board without the simulated
 //! input answers `Unsupported` too.
 
+use motion::machine::Inputs;
 use motion::protocol::{ErrorCode, SimMillingParams, SimRequest};
 use rtic::Mutex;
 
@@ -23,11 +24,29 @@ pub fn apply(motion: &mut impl Mutex<T = Motion>, req: &SimRequest) -> Result<()
         SimRequest::Encoders { arm_counts, carriage_counts } => {
             board::CopyEncoders::set_sim_target([arm_counts, carriage_counts])
         }
+        SimRequest::Probe { surface } => {
+            if !board::MachineIo::SIM_INPUTS {
+                return Err(ErrorCode::Unsupported);
+            }
+            motion.lock(|m| m.sim_probe = surface);
+            true
+        }
     };
     if done {
         Ok(())
     } else {
         Err(ErrorCode::Unsupported)
+    }
+}
+
+/// The tick's inputs with the simulated probe (`Sim(Probe)`) read from the machine's step
+/// counters, when a surface is set (interrupt rate: one test without one; with one, the
+/// 6-axis position sum and a compare).
+#[inline]
+pub fn with_probe(m: &Motion, inputs: &Inputs) -> Inputs {
+    match m.sim_probe {
+        Some(s) => Inputs { probe: inputs.probe || s.active(&m.machine.positions()), ..*inputs },
+        None => *inputs,
     }
 }
 

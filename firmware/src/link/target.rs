@@ -6,7 +6,7 @@ use core::sync::atomic::Ordering::Relaxed;
 
 use motion::config::MAX_AXES;
 use motion::dda::{Command, Preparer};
-use motion::machine::{BoardConfig, MachineCommand, MachineState, Refusal};
+use motion::machine::{BoardConfig, MachineCommand, MachineState, ProbeKind, Refusal};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
@@ -152,6 +152,9 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                     ..BoardCounters::default()
                 },
                 outputs: ProgramOutputs::of(&mc.outputs()).bits(),
+                probe_phase: mc.probe().phase() as u8,
+                probe_steps: mc.probe().latched_steps(),
+                probe_input: mc.probe_input(),
                 ..Status::default()
             };
             wire::status(m, &mut s);
@@ -394,6 +397,18 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         Some(self.with(|m| copy::resend(&self.link.teach, m)))
     }
 
+    /// The next `Start` runs a probe move: nothing queued or armed besides it.
+    fn arm_probe(&mut self, kind: ProbeKind) -> Result<(), ErrorCode> {
+        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
+        let r = self.motion.get_mut().lock(|m| {
+            if !empty || wire::live(m) || force::live(m) || copy::live(m) {
+                return Err(ErrorCode::OutOfState);
+            }
+            m.machine.arm_probe(kind, &m.dda).map_err(|e| e.error_code())
+        });
+        r
+    }
+
     #[cfg(feature = "sim-inputs")]
     fn sim(&mut self, req: &motion::protocol::SimRequest) -> Result<(), ErrorCode> {
         let motion: &mut M = self.motion.get_mut();
@@ -404,7 +419,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     /// board's pins; the wire power and the Z DAC stay the wire and Z jobs'. The machine refuses
     /// while an e-stop is latched or pressed; a board without the pins refuses as unsupported.
     fn set_program_outputs(&mut self, o: ProgramOutputs) -> Result<(), ErrorCode> {
-        if !board::MachineIo::PROGRAM_OUTPUTS {
+        if !board::MachineIo::PROGRAM_OUTPUTS || (o.mist && !board::MachineIo::MIST) {
             return Err(ErrorCode::Unsupported);
         }
         let set = self.motion.get_mut().lock(|m| {

@@ -4,8 +4,8 @@
 //! [`CHORD_TOLERANCE_MM`], grbl's `$12`).
 //!
 //! A program with any error is refused as a whole, before anything moves; every error is listed.
-//! What the board cannot do yet (probe moves, spindle-synchronised motion) is refused with a
-//! message saying so; what it cannot switch (M62..M68 outputs) is reported as a warning and not
+//! What the board or `run` cannot do yet (probe moves: the board has them, `run` does not
+//! drive them yet; spindle-synchronised motion) is refused with a message saying so; what it cannot switch (M62..M68 outputs) is reported as a warning and not
 //! executed. The spindle (M3, M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`]
 //! each time one of them switches, carrying all of them; a dwell (G4) is a stop at rest the
 //! runner times.
@@ -258,10 +258,9 @@ impl<'a> Converter<'a> {
                 (curves::flatten(m, self.machine.arc_tolerance_mm), Feed::MmPerMin(*feed_mm_min))
             }
             Motion::Probe { .. } => {
-                return Err(
-                    "G38.x probe move: the board has no probe input yet; `run` refuses probing"
-                        .into(),
-                )
+                return Err("G38.x probe move: the board runs probe moves (ArmProbe), but `run` \
+                    does not drive them yet; `run` refuses probing"
+                    .into())
             }
             Motion::RigidTap { .. } => {
                 return Err("G33.1 rigid tapping needs spindle synchronisation".into())

@@ -140,6 +140,11 @@ pub mod alarm {
     pub const HARD_LIMIT: u8 = 1;
     pub const SOFT_LIMIT: u8 = 2;
     pub const ABORT_CYCLE: u8 = 3;
+    /// Probe fail: not in the expected initial state before the cycle (the board's
+    /// `ProbeInitial`).
+    pub const PROBE_FAIL_INITIAL: u8 = 4;
+    /// Probe fail: no contact within the travel (G38.2, G38.4; the board's `ProbeFail`).
+    pub const PROBE_FAIL_CONTACT: u8 = 5;
     pub const HOMING_FAIL_RESET: u8 = 6;
     /// grblHAL's e-stop alarm.
     pub const ESTOP: u8 = 10;

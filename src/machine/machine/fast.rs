@@ -2,12 +2,12 @@
 //!
 //! A full tick ([`Machine::tick`]) reads and debounces the inputs, watches the faults, applies
 //! holds, keeps the job's books and leaves the outputs. While all of that is quiet -- inputs
-//! released and steady, no fault cause, no pending hold or resume, no homing, jog, event or Z job
-//! -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be [`Machine::fast_tick`]s: the DDA tick, the
-//! step counters and the soft-limit check on the axes that stepped, nothing else. The board
-//! skips reading its inputs on those ticks too. A full tick then comes round at least every
-//! [`SUPERVISE_TICKS`] ticks, and at once after any command, fault, output change or background
-//! work (each sets the count to 0).
+//! released and steady, no fault cause, no pending hold or resume, no homing, jog, event or Z
+//! job, no probe move -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be [`Machine::fast_tick`]s:
+//! the DDA tick, the step counters and the soft-limit check on the axes that stepped, nothing
+//! else. The board skips reading its inputs on those ticks too. A full tick then comes round at
+//! least every [`SUPERVISE_TICKS`] ticks, and at once after any command, fault, output change or
+//! background work (each sets the count to 0).
 //!
 //! What that costs in reaction time, at the 100 kHz default tick: a limit switch or sensor fault
 //! is seen at most `SUPERVISE_TICKS - 1` ticks (70 us) later, against a 2 ms switch debounce; the
@@ -54,6 +54,7 @@ impl Machine {
             && raw.sensor_faults == 0
             && raw.link_ok
             && !raw.tick_overrun
+            && raw.probe == self.switch_filter.probe_level()
             && self.switch_filter.quiet();
         let machine_quiet = matches!(
             self.state,
@@ -63,7 +64,7 @@ impl Machine {
                 | MachineState::Holding
         ) && self.active == 0
             && !(self.frozen || self.abort_pending || self.hold_pending || self.resume_pending)
-            && !(self.starved || self.event_job || self.z_job)
+            && !(self.starved || self.event_job || self.z_job || self.probe.watching())
             && self.jog.is_none();
         if inputs_quiet && machine_quiet {
             self.fast_left = SUPERVISE_TICKS - 1;

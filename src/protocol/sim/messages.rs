@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::config::MAX_AXES;
+
 /// A test hook of a simulator board (only with `CAP_SIM_INPUTS`, else `Unsupported`). Not a
 /// machine command: accepted in every machine state.
 #[cfg(feature = "sim-inputs")]
@@ -21,6 +23,32 @@ pub enum SimRequest {
     /// The counts the simulated arm and carriage encoders slew to, one count per
     /// `polar::copy_link::SIM_TICKS_PER_COUNT` ticks each.
     Encoders { arm_counts: i32, carriage_counts: i32 },
+    /// The simulated probe's surface from the next tick on (`None`: the probe never touches).
+    /// The board evaluates it from its step counters every tick, then debounces it like a
+    /// real probe input.
+    Probe { surface: Option<SimProbeSurface> },
+}
+
+/// A simulated probe surface (`SimRequest::Probe`): the probe input reads active while axis
+/// `axis`'s machine position is at or below `at_steps` (`below`), or at or above it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SimProbeSurface {
+    pub axis: u8,
+    pub at_steps: i64,
+    pub below: bool,
+}
+
+impl SimProbeSurface {
+    /// The probe level at machine `positions` (an axis beyond the positions never touches).
+    /// Interrupt rate: a load and a compare.
+    #[inline]
+    pub fn active(&self, positions: &[i64; MAX_AXES]) -> bool {
+        match positions.get(self.axis as usize) {
+            Some(&p) if self.below => p <= self.at_steps,
+            Some(&p) => p >= self.at_steps,
+            None => false,
+        }
+    }
 }
 
 /// A fault the simulated plant injects once the tool is `fault_at_um` into the work.

@@ -22,7 +22,7 @@ mod target;
 pub use copy::CopySim;
 #[cfg(feature = "sim-inputs")]
 pub use messages::SimRequest;
-pub use messages::{SimForceFault, SimMillingParams};
+pub use messages::{SimForceFault, SimMillingParams, SimProbeSurface};
 #[cfg(any(test, feature = "sim-inputs"))]
 pub use target::{SimTarget, SIM_EVENT_BLOCKS, SIM_QUEUE_MAX};
 

@@ -11,11 +11,13 @@
 
 use heapless::Deque;
 
-use super::messages::SimMillingParams;
 #[cfg(feature = "sim-inputs")]
 use super::messages::SimRequest;
+use super::messages::{SimMillingParams, SimProbeSurface};
 use crate::config::MAX_AXES;
-use crate::machine::{cell, reaction, Cell, CommandKind, MachineState, Outputs, Reaction};
+use crate::machine::{
+    cell, reaction, Cell, CommandKind, MachineState, Outputs, ProbeKind, ProbeRun, Reaction,
+};
 use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::protocol::errors::{ErrorCode, FaultCode};
@@ -79,6 +81,11 @@ pub struct SimTarget {
     /// The machine's outputs (`SetProgramOutputs` switches the spindle and coolant in them; a
     /// fault whose reaction kills them forces [`Outputs::SAFE`], as the machine does).
     pub outputs: Outputs,
+    /// The probe move (`ArmProbe`): the machine's own bookkeeping, tripped against
+    /// `sim_probe` along each segment (no debounce, no deceleration: it stops at the trip).
+    pub probe: ProbeRun,
+    /// The simulated probe surface (`Sim(Probe)`); `None`: the probe never touches.
+    pub sim_probe: Option<SimProbeSurface>,
 }
 
 impl PartialEq for SimTarget {
@@ -98,6 +105,7 @@ impl PartialEq for SimTarget {
             && (self.wire_armed, self.sim_wire_stall) == (o.wire_armed, o.sim_wire_stall)
             && (self.force_armed, self.sim_milling) == (o.force_armed, o.sim_milling)
             && self.outputs == o.outputs
+            && (self.probe, self.sim_probe) == (o.probe, o.sim_probe)
     }
 }
 
@@ -135,7 +143,48 @@ impl SimTarget {
             sim_milling: None,
             starve_holds: 0,
             outputs: Outputs::SAFE,
+            probe: ProbeRun::new(),
+            sim_probe: None,
         }
+    }
+
+    /// The simulated probe input at `positions`.
+    fn probe_level(&self, positions: &[i64; MAX_AXES]) -> bool {
+        self.sim_probe.is_some_and(|s| s.active(positions))
+    }
+
+    /// A probe move's segment against the surface: the positions at the first step along it
+    /// where the probe reads the level that ends the move, if it does. The surface is a plane
+    /// across one axis, so along a straight segment the level changes at most once: a binary
+    /// search over the segment's steps (host code: it divides).
+    fn probe_trip_along(&self, seg: &Segment) -> Option<[i64; MAX_AXES]> {
+        let n = seg.steps.iter().map(|s| s.unsigned_abs()).max().unwrap_or(0) as i64;
+        let start = self.positions;
+        let at = |k: i64| {
+            let mut p = start;
+            for (p, &s) in p.iter_mut().zip(&seg.steps) {
+                *p += (s as i64 * k).checked_div(n).unwrap_or(0);
+            }
+            p
+        };
+        let trip = self.probe.kind().trip_level();
+        let hits = |k: i64| self.probe_level(&at(k)) == trip;
+        if hits(0) {
+            return Some(start);
+        }
+        if !hits(n) {
+            return None;
+        }
+        let (mut lo, mut hi) = (0, n);
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if hits(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(at(hi))
     }
 
     /// Runs an event job for `ticks` ticks as the firmware would: refill the playback from the
@@ -183,6 +232,22 @@ impl SimTarget {
             return None;
         }
         let seg = self.queue.pop_front()?;
+        if self.probe.watching() {
+            if let Some(at) = self.probe_trip_along(&seg) {
+                // As the machine: latch, stop there, drop the rest of the move; the cut
+                // segment is not done. The job ends in Ready.
+                self.probe.trip(at);
+                self.probe.stopped();
+                self.probe.take_discard();
+                self.positions = at;
+                self.tick += seg.duration_ticks as u64;
+                self.queue.clear();
+                self.planned = self.positions;
+                self.running = false;
+                self.machine = MachineState::Ready;
+                return Some(seg);
+            }
+        }
         for (p, s) in self.positions.iter_mut().zip(seg.steps) {
             *p += s as i64;
         }
@@ -194,6 +259,9 @@ impl SimTarget {
             // The job ended at rest.
             self.running = false;
             self.machine = MachineState::Ready;
+            if let Some(fault) = self.probe.job_end() {
+                self.raise_fault(fault);
+            }
         }
         Some(seg)
     }
@@ -201,6 +269,7 @@ impl SimTarget {
     /// Latches a fault: motion stops, the queue is dropped.
     pub fn raise_fault(&mut self, code: FaultCode) {
         self.faults |= code.bit();
+        self.probe.drop_move();
         if reaction(code) == Reaction::Kill {
             self.outputs = Outputs::SAFE;
         }
@@ -232,6 +301,15 @@ impl SimTarget {
         };
         if cmd == CommandKind::SetConfig {
             self.homed = false;
+        }
+        if matches!(
+            cmd,
+            CommandKind::SetConfig
+                | CommandKind::Home
+                | CommandKind::Abort
+                | CommandKind::ClearFault
+        ) {
+            self.probe.drop_move();
         }
         self.mutations += 1;
     }
@@ -292,6 +370,9 @@ impl LinkTarget for SimTarget {
             event_blocks: self.events.blocks() as u16,
             counters: BoardCounters { starve_holds: self.starve_holds, ..BoardCounters::default() },
             outputs: ProgramOutputs::of(&self.outputs).bits(),
+            probe_phase: self.probe.phase() as u8,
+            probe_steps: self.probe.latched_steps(),
+            probe_input: self.probe_level(&self.positions),
             ..Status::default()
         }
     }
@@ -338,6 +419,11 @@ impl LinkTarget for SimTarget {
     fn start(&mut self) -> Result<(), ErrorCode> {
         if self.event_job || !self.events.is_unused() {
             return Err(ErrorCode::OutOfState);
+        }
+        if let Err(fault) = self.probe.start(self.probe_level(&self.positions)) {
+            // As the machine: nothing moves, the fault is the answer.
+            self.raise_fault(fault);
+            return Ok(());
         }
         self.running = true;
         self.take(CommandKind::Start);
@@ -444,10 +530,22 @@ impl LinkTarget for SimTarget {
         match *req {
             SimRequest::Inject { wire_stall } => self.sim_wire_stall = wire_stall,
             SimRequest::Milling(params) => self.sim_milling = Some(params),
+            SimRequest::Probe { surface } => self.sim_probe = surface,
             SimRequest::Spindle { .. } | SimRequest::Encoders { .. } => {
                 return Err(ErrorCode::Unsupported)
             }
         }
+        self.mutations += 1;
+        Ok(())
+    }
+
+    fn arm_probe(&mut self, kind: ProbeKind) -> Result<(), ErrorCode> {
+        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
+        let armed = self.wire_armed.is_some() || self.force_armed.is_some();
+        if self.machine != MachineState::Ready || busy || armed {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.probe.arm(kind);
         self.mutations += 1;
         Ok(())
     }

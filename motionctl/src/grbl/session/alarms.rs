@@ -20,6 +20,8 @@ impl Bridge<'_> {
             Some(FaultCode::SoftLimit) => alarm::SOFT_LIMIT,
             Some(FaultCode::HomingFailed) => alarm::HOMING_FAIL_RESET,
             Some(FaultCode::EStop) => alarm::ESTOP,
+            Some(FaultCode::ProbeInitial) => alarm::PROBE_FAIL_INITIAL,
+            Some(FaultCode::ProbeFail) => alarm::PROBE_FAIL_CONTACT,
             Some(f) => alarm::BOARD_FAULT_BASE + f.bit().trailing_zeros() as u8,
             None => alarm::ABORT_CYCLE,
         };

@@ -2,7 +2,7 @@
 
 use super::SUPERVISE_TICKS;
 use crate::dda::{Dda, Preparer, StepOutput};
-use crate::machine::{homed, Inputs, Machine, MachineCommand, MachineState};
+use crate::machine::{homed, Inputs, Machine, MachineCommand, MachineState, ProbeKind};
 use crate::planner::{Move, Planner};
 use crate::protocol::FaultCode;
 use crate::scenarios::faults::{config, Case};
@@ -29,6 +29,8 @@ fn running(case: Case, moves: &[[i32; 2]]) -> (Machine, Dda, Preparer) {
 struct Run {
     steps: Vec<StepOutput>,
     fast_ticks: usize,
+    /// The first step-only tick.
+    first_fast: Option<usize>,
     /// The tick on which the machine left `Running`.
     left_running: Option<usize>,
 }
@@ -41,11 +43,12 @@ fn run(
     fast: bool,
     inputs: impl Fn(usize) -> Inputs,
 ) -> (Run, Machine) {
-    let mut r = Run { steps: Vec::new(), fast_ticks: 0, left_running: None };
+    let mut r = Run { steps: Vec::new(), fast_ticks: 0, first_fast: None, left_running: None };
     for t in 0..ticks {
         let step = match if fast { m.fast_tick(&mut dda) } else { None } {
             Some(s) => {
                 r.fast_ticks += 1;
+                r.first_fast.get_or_insert(t);
                 s
             }
             None => m.tick(&mut dda, &inputs(t)).step,
@@ -156,4 +159,36 @@ fn a_soft_limit_crossed_on_a_step_only_tick_latches_on_that_tick() {
     assert_eq!(fast.left_running, plain.left_running);
     assert_eq!(fm.positions(), pm.positions());
     assert!(fast.fast_ticks > 0);
+}
+
+#[test]
+fn a_probe_move_keeps_every_tick_full_and_trips_as_with_full_ticks() {
+    let cfg = config(Case::EStop);
+    let build = || {
+        let (mut m, mut dda, mut prep) = homed(cfg);
+        m.arm_probe(ProbeKind::TowardError, &dda).unwrap();
+        let mut p = Planner::new(&cfg.wire.machine);
+        p.push(&Move { steps: [0, -4_000, 0, 0, 0, 0], feed_hz: 2_000 }).unwrap();
+        p.finish();
+        let seg = p.pop().unwrap();
+        m.command(MachineCommand::Queue(&seg), &mut dda).unwrap();
+        dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+        m.command(MachineCommand::Start, &mut dda).unwrap();
+        (m, dda, prep)
+    };
+    // The probe touches after 5 000 ticks and stays in contact.
+    let inputs = |t: usize| Inputs { probe: t >= 5_000, ..Inputs::QUIET };
+    let (plain, pm) = run(build(), 60_000, false, inputs);
+    let (fast, fm) = run(build(), 60_000, true, inputs);
+    assert_same_pins(&fast.steps, &plain.steps);
+    assert_eq!(fm.probe().latched_steps(), pm.probe().latched_steps());
+    assert_eq!(fm.state(), MachineState::Ready);
+    // None while the probe is watched (the move and its stop after the trip), then the job
+    // ends within a supervision period of the full-tick run.
+    let stopped = fm.probe().latched_steps();
+    assert_ne!(stopped, [0; 6]);
+    let first_fast = fast.first_fast.unwrap();
+    assert!(first_fast > 5_000, "a step-only tick at {first_fast}, during the probe move");
+    let (end_plain, end_fast) = (plain.left_running.unwrap(), fast.left_running.unwrap());
+    assert!(end_fast >= end_plain && end_fast - end_plain < SUPERVISE_TICKS as usize);
 }
