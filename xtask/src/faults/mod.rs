@@ -172,6 +172,7 @@ pub struct Counts {
     pub total: Count,
     pub rows: Vec<(String, Count)>,
     pub gaps: Vec<String>,
+    pub failures: Vec<String>,
 }
 
 /// Reads [`JSON`].
@@ -187,9 +188,16 @@ pub fn read_counts(root: &Path) -> Result<Counts> {
         .as_object()
         .map(|m| m.iter().map(|(k, c)| (k.clone(), count(c))).collect())
         .unwrap_or_default();
-    let gaps = v["known_gaps"]
-        .as_array()
-        .map(|a| a.iter().filter_map(|g| g.as_str().map(str::to_string)).collect())
-        .unwrap_or_default();
-    Ok(Counts { total: count(&v["total"]), rows, gaps })
+    let strings = |key: &str| -> Vec<String> {
+        v[key]
+            .as_array()
+            .map(|a| a.iter().filter_map(|g| g.as_str().map(str::to_string)).collect())
+            .unwrap_or_default()
+    };
+    Ok(Counts {
+        total: count(&v["total"]),
+        rows,
+        gaps: strings("known_gaps"),
+        failures: strings("failures"),
+    })
 }

@@ -62,7 +62,10 @@ pub fn run(root: &Path, tally: &mut Tally) -> Result<()> {
     let mut targets: Vec<&str> = TESTS.iter().map(|t| t.1).collect();
     targets.dedup();
     let mut cargo = crate::cargo(root);
-    cargo.args(["test", "--workspace", "--profile", "test-fast"]).args(crate::HOST_EXCLUDES);
+    // Every listed test runs even when one fails (each is its own case).
+    cargo
+        .args(["test", "--workspace", "--profile", "test-fast", "--no-fail-fast"])
+        .args(crate::HOST_EXCLUDES);
     for t in &targets {
         cargo.args(["--test", t]);
     }

@@ -78,16 +78,35 @@ impl Qemu {
         Ok(Qemu { child, serial_port, monitor_port })
     }
 
-    /// The board's reset button: QEMU resets the machine, the firmware boots again.
+    /// The board's reset button: QEMU resets the machine, the firmware boots again. Waits for
+    /// the monitor's prompt after the command (a busy QEMU reads it late; closing the monitor
+    /// before then can lose it).
     fn reset(&self) -> Result<()> {
         let mut m = TcpStream::connect(("127.0.0.1", self.monitor_port)).context("QEMU monitor")?;
         m.write_all(b"system_reset\n")?;
-        m.set_read_timeout(Some(Duration::from_millis(500)))?;
+        m.set_read_timeout(Some(Duration::from_millis(200)))?;
+        let start = Instant::now();
+        let mut seen = Vec::new();
         let mut buf = [0u8; 512];
-        let _ = m.read(&mut buf);
+        // The banner's prompt, then the one after the command.
+        while seen.windows(PROMPT.len()).filter(|w| *w == PROMPT).count() < 2 {
+            if start.elapsed() > MONITOR_TIMEOUT {
+                bail!(
+                    "QEMU's monitor did not take system_reset: {}",
+                    String::from_utf8_lossy(&seen)
+                );
+            }
+            if let Ok(n) = m.read(&mut buf) {
+                seen.extend_from_slice(&buf[..n]);
+            }
+        }
         Ok(())
     }
 }
+
+/// QEMU's monitor prompt, and how long it may take to answer.
+const PROMPT: &[u8] = b"(qemu)";
+const MONITOR_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// A QEMU board behind a proxy.
 struct Rig {

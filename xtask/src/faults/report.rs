@@ -37,6 +37,13 @@ fn section(c: &Counts) -> String {
         "| **total** | **{}** | **{}** | **{}** |\n\n",
         total.inputs, total.injected, total.survived
     );
+    if !c.failures.is_empty() {
+        t += "Failed in this run (injected, not survived):\n\n";
+        for f in &c.failures {
+            t += &format!("- {}\n", f.lines().next().unwrap_or(""));
+        }
+        t += "\n";
+    }
     if !c.gaps.is_empty() {
         t += "Known gaps (injected, not survived, not yet fixed):\n\n";
         for g in &c.gaps {
