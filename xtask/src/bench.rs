@@ -165,6 +165,9 @@ pub fn run(root: &Path, quick: bool) -> Result<()> {
         figures.insert(k.into(), v);
     }
 
+    println!("the fault-injection suite (cargo xtask faults)");
+    figures.extend(crate::faults::report::bench(root)?.into_iter().map(|(k, v)| (k.into(), v)));
+
     println!("profiling the link firmware's whole tick handler on each capability's job");
     let isr = crate::isr_profile::run(root, &[])?;
     for (k, v) in &isr.keys {
@@ -286,7 +289,7 @@ pub fn gcode_only(root: &Path) -> Result<()> {
     Ok(())
 }
 
-fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
+pub(crate) fn write_json(path: &Path, figures: &BTreeMap<String, f64>) -> Result<()> {
     let mut obj = match std::fs::read_to_string(path) {
         Ok(s) => match serde_json::from_str::<serde_json::Value>(&s) {
             Ok(serde_json::Value::Object(o)) => o,
@@ -441,13 +444,25 @@ How these are measured:
 
 /// Rewrites the marked section of `path` with the figures table followed by `notes`.
 fn write_markdown(path: &Path, figures: &BTreeMap<String, f64>, notes: &str) -> Result<()> {
-    let section = format!("{BEGIN}\n{}{notes}{END}", table(figures));
+    let section = format!("{}{notes}", table(figures));
+    replace_section(path, (BEGIN, END), &section, INTRO)
+}
+
+/// Rewrites what lies between the `markers` of `path` with `section` (appended with the markers
+/// when they are missing; a missing file starts with `intro`).
+pub(crate) fn replace_section(
+    path: &Path,
+    (begin, end): (&str, &str),
+    section: &str,
+    intro: &str,
+) -> Result<()> {
+    let section = format!("{begin}\n{section}{end}");
     let text = match std::fs::read_to_string(path) {
-        Ok(s) => match (s.find(BEGIN), s.find(END)) {
-            (Some(b), Some(e)) if b < e => format!("{}{section}{}", &s[..b], &s[e + END.len()..]),
-            _ => format!("{}\n{section}\n", s.trim_end()),
+        Ok(s) => match (s.find(begin), s.find(end)) {
+            (Some(b), Some(e)) if b < e => format!("{}{section}{}", &s[..b], &s[e + end.len()..]),
+            _ => format!("{}\n\n{section}\n", s.trim_end()),
         },
-        Err(_) => format!("{INTRO}{section}\n"),
+        Err(_) => format!("{intro}{section}\n"),
     };
     std::fs::write(path, text)?;
     Ok(())

@@ -10,7 +10,9 @@
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
 //! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
+//! | `faults` | the fault-injection suite: board faults on the host model, reset, power cut, link drop and USART overrun bursts on the link firmware in QEMU, the config record, every bad-input class of `motionctl`; writes `target/faults.json` |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
+//! | `bench-faults` | only the fault suite's figures of `bench`: runs `faults`, rewrites the reliability section of BENCHMARKS.md, merges `faults_injected` / `faults_survived` into `target/bench.json` |
 //! | `bench-gcode` | only the G-code planning figures of `bench`: `motionctl plan` (release) of a generated 1 000 000-line surfacing file, segments/s and peak RSS, merged into `target/bench.json` |
 //! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
 //! | `isr-cycles [JOB]...` | the isr-profile jobs on the link firmware built with `isr-cycles`: the board's own count of its tick handler (instructions under QEMU, DWT cycles on an F405) |
@@ -24,6 +26,7 @@ mod bench_gcode;
 mod copy_e2e;
 mod divcheck;
 mod e2e;
+mod faults;
 mod firmware;
 mod gcode_e2e;
 mod golden;
@@ -56,8 +59,12 @@ commands:
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
   zslide-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
+  faults [--only scenarios|tests|inputs|qemu]...        the fault-injection suite (host model, simulated board, QEMU,
+                                                        motionctl's bad inputs); counts in target/faults.json
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
+  bench-faults                                          only the fault suite's figures of bench: the reliability section
+                                                        of BENCHMARKS.md, faults_* in target/bench.json
   bench-gcode                                           only the G-code planning figures: motionctl plan of a generated
                                                         1 000 000-line surfacing file (segments/s, peak RSS), merged
                                                         into target/bench.json
@@ -163,6 +170,26 @@ fn run() -> Result<()> {
             setup::ensure(&root)?;
             bench::run(&root, quick)
         }
+        "faults" => {
+            // `--only PART` (repeatable): run only these parts of the suite, for local use.
+            let mut only = Vec::new();
+            let mut it = rest.iter();
+            while let Some(a) = it.next() {
+                match (a.as_str(), it.next()) {
+                    ("--only", Some(p)) if faults::PARTS.contains(&p.as_str()) => {
+                        only.push(p.clone())
+                    }
+                    _ => bail!("usage: cargo xtask faults [--only {}]...", faults::PARTS.join("|")),
+                }
+            }
+            setup::ensure(&root)?;
+            faults::run(&root, &only)
+        }
+        "bench-faults" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            faults::report::bench_only(&root)
+        }
         "bench-gcode" => {
             no_args(cmd, rest)?;
             bench::gcode_only(&root)
@@ -249,7 +276,7 @@ fn parse_build_args(rest: &[String]) -> Result<(Board, Vec<&'static str>)> {
 }
 
 /// The firmware and board crates build for the thumb target only: host steps leave them out.
-const HOST_EXCLUDES: [&str; 8] = [
+pub(crate) const HOST_EXCLUDES: [&str; 8] = [
     "--exclude",
     "motion-firmware",
     "--exclude",
@@ -409,6 +436,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: real G-code files on the simulated board and in QEMU",
             Box::new(|| gcode_e2e::test(root)),
+        ),
+        (
+            "fault injection: power cut, reset, link drop, overrun, config, bad inputs (faults)",
+            Box::new(|| faults::run(root, &[])),
         ),
     ];
     let total = steps.len();

@@ -626,7 +626,13 @@ pub fn run(cmd: PolarCmd) -> anyhow::Result<()> {
             let mut text = String::new();
             let r = super::dump::dump(&bytes, tick_hz, &mut text);
             crate::out!("{text}");
-            r.map(|_| ()).map_err(|e| anyhow::anyhow!("{}: {e:?}", file.display()))
+            // The dump's own error line says where and what (the listing may have gone to a
+            // closed pipe or a file): the same words on stderr.
+            r.map(|_| ()).map_err(|e| {
+                let line = text.lines().rev().find_map(|l| l.strip_prefix("error: "));
+                let why = line.map_or_else(|| format!("{e:?}"), str::to_string);
+                anyhow::anyhow!("{}: {why}", file.display())
+            })
         }
         PolarCmd::Run { file, link, speed, size, json } => {
             run_stream(&file, &link, speed, size, json)

@@ -33,9 +33,15 @@ pub enum JobError {
     TooManyPieces { step: usize, pieces: usize },
     #[error("tolerance {tol_mm} mm is not above the step quantisation margin {margin_mm} mm")]
     Tolerance { tol_mm: f64, margin_mm: f64 },
-    #[error("segment {index}: axis {axis} needs {steps} steps in {ticks} ticks (too fast)")]
+    #[error(
+        "segment {index}: axis {axis} needs {steps} steps in {ticks} ticks, faster than it can \
+         step: a lower area rate (FR)"
+    )]
     AxisRate { index: usize, axis: usize, steps: i64, ticks: u64 },
-    #[error("segment {index}: refused by the DDA: {reason:?}")]
+    #[error(
+        "segment {index}: refused by the DDA ({reason:?}): its duration or rates are out of \
+         range at this area rate (FR)"
+    )]
     Segment { index: usize, reason: SegmentError },
 }
 
