@@ -27,6 +27,7 @@ mod e2e;
 mod firmware;
 mod gcode_e2e;
 mod golden;
+mod grbl_e2e;
 mod isr_profile;
 mod milling_e2e;
 mod modcycles;
@@ -56,6 +57,7 @@ commands:
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
   zslide-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
+  grbl-e2e                                              a grbl sender streams a corpus file through motionctl grbl to QEMU, then $MILL= runs Case A
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   bench-gcode                                           only the G-code planning figures: motionctl plan of a generated
@@ -148,6 +150,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             milling_e2e::test(&root)
+        }
+        "grbl-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            grbl_e2e::test(&root)
         }
         "scenarios" => {
             no_args(cmd, rest)?;
@@ -409,6 +416,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: real G-code files on the simulated board and in QEMU",
             Box::new(|| gcode_e2e::test(root)),
+        ),
+        (
+            "end to end: a grbl sender through motionctl grbl to QEMU, then $MILL= (Case A)",
+            Box::new(|| grbl_e2e::test(root)),
         ),
     ];
     let total = steps.len();
