@@ -8,7 +8,6 @@ use crate::grbl::protocol::{alarm, error};
 use crate::grbl::settings;
 use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
-use crate::runner;
 use anyhow::Result;
 use motion::protocol::{HostConfig, RequestBody, SimForceFault, WireConfig};
 use std::path::PathBuf;
@@ -197,20 +196,10 @@ impl Bridge<'_> {
             let _ = self.s.request(RequestBody::Abort).map_err(link_err)?;
             let _ = self.s.request(RequestBody::ClearFault).map_err(link_err)?;
         }
-        let say = |m: &str| eprintln!("motionctl: {m}");
-        if let Err(e) =
-            runner::ready_board(&mut self.s, setup.wire, setup.home, "machine file", &say)
-        {
-            say(&format!("{e}; '$H' homes"));
+        if let Err(e) = self.configure(setup.wire, setup.home, "machine file")? {
+            eprintln!("motionctl: {e}; '$H' homes");
             self.alarm = Some(alarm::HOMING_REQUIRED);
         }
-        runner::ask(
-            &mut self.s,
-            RequestBody::SetStatusPeriod { ms: crate::grbl::STATUS_MS },
-            "SetStatusPeriod",
-        )?;
-        self.refresh()?;
-        self.faults_seen = self.latest.faults;
         self.rebase();
         Ok(faults)
     }
