@@ -417,10 +417,7 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             "end to end: real G-code files on the simulated board and in QEMU",
             Box::new(|| gcode_e2e::test(root)),
         ),
-        (
-            "end to end: a grbl sender through motionctl grbl to QEMU, then $MILL= (Case A)",
-            Box::new(|| grbl_e2e::test(root)),
-        ),
+
     ];
     let total = steps.len();
     let mut passed = 0;

@@ -36,6 +36,7 @@ impl Bridge<'_> {
         self.say(&format!("ALARM:{n}"));
         let names = fault_names(bits);
         let why = first.map(|f| f.description()).unwrap_or("");
+        eprintln!("motionctl: ALARM:{n}: board fault {names}: {why}");
         self.say(&format!("[MSG:board fault {names}: {why}]"));
     }
 
