@@ -220,6 +220,12 @@ impl<'a> Session<'a> {
         &*self.t
     }
 
+    /// The transport, for a runner that opens its own session on it (this one must `connect`
+    /// again after).
+    pub fn transport_mut(&mut self) -> &mut dyn Transport {
+        &mut *self.t
+    }
+
     /// The current adaptive retransmission timeout, ms.
     pub fn rto_ms(&self) -> f64 {
         self.rto.rto_ms

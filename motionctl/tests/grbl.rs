@@ -488,6 +488,48 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("ok");
     let st = r.until_status(|st| !st.contains("|A:"));
     assert!(st.ends_with("|Ov:100,100,100>"), "{st}");
+    // The real-time toggles (0xA0 flood, 0xA1 mist) switch the board at once, with motion
+    // queued and held (not after it), and the parser's coolant (`$G`) with it.
+    r.send(b"G1 X60 F300\n!");
+    r.expect("ok");
+    r.until_status(|st| st.starts_with("<Hold:0|"));
+    r.send(b"\xA0");
+    let st = r.until_status(|st| st.contains("|A:"));
+    assert!(st.starts_with("<Hold:0|MPos:41.000,") && st.ends_with("|A:F>"), "{st}");
+    r.send(b"\xA1");
+    let st = r.until_status(|st| st.ends_with("|A:FM>"));
+    assert!(st.starts_with("<Hold:0|MPos:41.000,"), "{st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M5 M7 M8 "), "{gc}");
+    r.expect("ok");
+    r.send(b"\xA0");
+    r.until_status(|st| st.ends_with("|A:M>"));
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M5 M7 T"), "{gc}");
+    r.expect("ok");
+    r.send(b"\xA1");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    assert!(st.starts_with("<Hold:0|MPos:41.000,"), "mist off before the move: {st}");
+    r.send(b"~");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:60.000,") && !st.contains("|A:"), "{st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M5 M9 "), "{gc}");
+    r.expect("ok");
+    // Not in alarm or check mode, as grbl.
+    r.send(b"$C\n");
+    r.expect("[MSG:Enabled]");
+    r.expect("ok");
+    r.send(b"\xA0");
+    assert!(!r.status().contains("|A:"));
+    r.send(b"$C\n");
+    r.expect("[MSG:Disabled]");
+    r.expect("ok");
+    r.expect("");
+    r.expect("Grbl 1.1h ['$' for help]");
     // A soft reset stops them, as grbl's does.
     r.send(b"M3\nM7\n");
     r.expect("ok");
@@ -682,4 +724,106 @@ fn startup_lines_run_after_a_reset_and_a_restart() {
         r.expect(want);
     }
     assert!(!dir.0.join("machine.grbl.toml").exists());
+}
+
+/// Lines up to the answer of a line (`ok`, `error:N`), status reports skipped: those lines,
+/// then the answer.
+fn until_answer(r: &mut Raw) -> (Vec<String>, String) {
+    let mut lines = Vec::new();
+    loop {
+        let l = r.line();
+        if l == "ok" || l.starts_with("error:") {
+            return (lines, l);
+        }
+        if !l.starts_with('<') {
+            lines.push(l);
+        }
+    }
+}
+
+#[test]
+fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
+    use motion::polar::playback::SizeScale;
+    let dir = tmp_dir("caps");
+    // An open arc of the built-in limacon stream (its first 40 blocks): about 4.6 s of board
+    // time at speed 1, so a hold lands inside it.
+    let blocks = motionctl::polar::run::blocks(motion::polar::limacon_stream::BYTES).unwrap();
+    let arc: Vec<u8> = blocks[..40].concat();
+    std::fs::write(dir.0.join("arc.bin"), &arc).unwrap();
+    let scale = SizeScale::new(3, 2).unwrap();
+    let model = motionctl::polar::run::model(&arc, motion::Rate::ONE, scale).unwrap();
+    let jobs = dir.0.to_str().unwrap().to_string();
+    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
+    let mut r = Raw::connect(&mut b);
+
+    r.send(b"$\n");
+    let help = r.line();
+    assert!(help.contains(" $MILL=job $POLAR=stream $TURN=job $WIRE=job]"), "{help}");
+    r.expect("ok");
+    // Refusals name why: a capability not behind the bridge, a missing file, a bad argument.
+    r.send(b"$TURN=part.toml\n");
+    let m = r.line();
+    assert!(m.starts_with("[MSG:") && m.contains("motionctl fourier run"), "{m}");
+    r.expect("error:20");
+    r.send(b"$POLAR=missing.bin\n");
+    let m = r.line();
+    assert!(m.starts_with("[MSG:reading ") && m.contains("missing.bin"), "{m}");
+    r.expect("error:61");
+    r.send(b"$POLAR=arc.bin 7\n");
+    let m = r.line();
+    assert!(m.contains("0.25..=2"), "{m}");
+    r.expect("error:3");
+
+    // The job runs; `?` reports Run with its position, `!` holds it where it is, `~` resumes.
+    r.send(b"$POLAR=arc.bin 1 3:2\n");
+    let st = r.until_status(|st| st.starts_with("<Run|") && !st.contains("MPos:0.000,0.000,"));
+    assert!(st.contains("|Bf:15,"), "{st}");
+    r.send(b"!");
+    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
+    std::thread::sleep(Duration::from_millis(300));
+    let still = r.status();
+    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
+    r.send(b"~");
+    let (msgs, answer) = until_answer(&mut r);
+    assert_eq!(answer, "ok", "{msgs:?}");
+    let events =
+        format!("[MSG:POLAR arc.bin: {} of {} events in 40 blocks,", model.events, model.events);
+    assert!(msgs.iter().any(|m| m.starts_with(&events)), "{msgs:?}");
+    let end = msgs.iter().find(|m| m.starts_with("[MSG:POLAR end: ")).expect("an end line");
+    let (board, host) = end.trim_end_matches(']').split_once("; host model ").unwrap();
+    assert_eq!(board.trim_start_matches("[MSG:POLAR end: "), host, "{end}");
+    assert!(msgs
+        .iter()
+        .any(|m| m == "[MSG:POLAR checks: ok (every event once, the host model's end)]"));
+
+    // The bridge's machine is back: G-code runs on it.
+    r.until_idle();
+    r.send(b"G0 X5 Y2\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:5.000,2.000,0.000|"), "{st}");
+
+    // Ctrl-X aborts a job: ALARM:3, then the welcome, as a reset during a cycle in grbl.
+    r.send(b"$POLAR=arc.bin\n");
+    r.until_status(|st| st.starts_with("<Run|"));
+    r.send(b"\x18");
+    let (mut lines, mut next) = (Vec::new(), r.line());
+    while next.starts_with('<') {
+        next = r.line();
+    }
+    lines.push(next);
+    for _ in 0..4 {
+        lines.push(r.line());
+    }
+    assert_eq!(
+        lines,
+        [
+            "ALARM:3",
+            "[MSG:arc.bin: aborted by the sender]",
+            "",
+            "Grbl 1.1h ['$' for help]",
+            "[MSG:'$H'|'$X' to unlock]"
+        ],
+    );
+    assert!(r.status().starts_with("<Alarm|"));
 }

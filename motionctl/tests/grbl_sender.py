@@ -1,12 +1,13 @@
 """Drive `motionctl grbl --pty` with a third-party grbl sender library, unmodified.
 
-Usage: grbl_sender.py PORT GCODE_FILE EXPECTED_X EXPECTED_Y EXPECTED_Z [GCODE_FILE X Y Z ...]
+Usage: grbl_sender.py [--no-jog] [--no-hold] PORT GCODE_FILE EXPECTED_X EXPECTED_Y EXPECTED_Z [GCODE_FILE X Y Z ...]
 
 grbl-streamer (pinned 2.0.2 by the caller) connects (it soft-resets and waits for the welcome),
 reads the settings, homes, and streams each GCODE_FILE with character counting from machine
 zero (the first one meanwhile gets a feed hold and a resume, and a feed override; before each
 later one the library soft-resets and rapids back to machine zero), then a jog and a jog cancel,
-and a final soft reset. Every line the library sends must be answered `ok` (the library's own
+and a final soft reset (`--no-jog` leaves the jog out, `--no-hold` the hold, resume and
+override). Every line the library sends must be answered `ok` (the library's own
 callbacks count them, per file), and the machine must end each file where its program ends
 (EXPECTED_*, mm).
 
@@ -132,8 +133,14 @@ def quiet(g, log):
 
 
 def main():
-    port = sys.argv[1]
-    rest = sys.argv[2:]
+    args = sys.argv[1:]
+    jog = "--no-jog" not in args
+    hold = "--no-hold" not in args
+    args = [a for a in args if a not in ("--no-jog", "--no-hold")]
+    if not args:
+        raise SystemExit("usage: grbl_sender.py [--no-jog] [--no-hold] PORT (GCODE_FILE X Y Z)...")
+    port = args[0]
+    rest = args[1:]
     if not rest or len(rest) % 4:
         raise SystemExit("usage: grbl_sender.py PORT (GCODE_FILE X Y Z)...")
     jobs = [
@@ -191,7 +198,7 @@ def main():
         since = len(log.state_log)
         with log.gate:
             g.job_run()
-        if n == 0:
+        if n == 0 and hold:
             wait("the job to run", lambda: log.state == "Run", 10)
             time.sleep(0.5)
             g.hold()
@@ -227,16 +234,18 @@ def main():
     job_ok = all(r[1] for r in results)
 
     # Jog and cancel it: the machine stops short of the target.
-    start = log.mpos
-    if os.environ.get("GRBL_SENDER_DEBUG"):
-        print("before jog:", log.state, g._rx_buffer_fill, log.reads[-5:], file=sys.stderr)
-    g.send_immediately("$J=G21 G91 X50 F600")
-    wait("Jog", lambda: log.state == "Jog", 10)
-    time.sleep(0.4)
-    os.write(raw, b"\x85")
-    wait("Idle after jog cancel", lambda: log.state == "Idle", 10)
-    jogged = log.mpos[0] - start[0]
-    jog_ok = 0.0 < jogged < 50.0
+    jogged, jog_ok = 0.0, True
+    if jog:
+        start = log.mpos
+        if os.environ.get("GRBL_SENDER_DEBUG"):
+            print("before jog:", log.state, g._rx_buffer_fill, log.reads[-5:], file=sys.stderr)
+        g.send_immediately("$J=G21 G91 X50 F600")
+        wait("Jog", lambda: log.state == "Jog", 10)
+        time.sleep(0.4)
+        os.write(raw, b"\x85")
+        wait("Idle after jog cancel", lambda: log.state == "Idle", 10)
+        jogged = log.mpos[0] - start[0]
+        jog_ok = 0.0 < jogged < 50.0
 
     boots = log.boots
     g.softreset()
@@ -245,7 +254,8 @@ def main():
     g.poll_stop()
     g.disconnect()
 
-    ok = job_ok and jog_ok and not log.errors and not log.alarms and "Hold:0" in log.states_seen
+    held = "Hold:0" in log.states_seen or not hold
+    ok = job_ok and jog_ok and not log.errors and not log.alarms and held
     for name, file_ok, total, acked, end, expected in results:
         print(
             "FILE %s ok=%d lines=%d acked=%d end=%s expected=%s"

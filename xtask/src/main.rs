@@ -30,6 +30,7 @@ mod faults;
 mod firmware;
 mod gcode_e2e;
 mod golden;
+mod grbl_e2e;
 mod isr_profile;
 mod milling_e2e;
 mod modcycles;
@@ -61,6 +62,7 @@ commands:
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   faults [--only scenarios|tests|inputs|qemu]...        the fault-injection suite (host model, simulated board, QEMU,
                                                         motionctl's bad inputs); counts in target/faults.json
+  grbl-e2e                                              a grbl sender streams a corpus file through motionctl grbl to QEMU, then $MILL= runs Case A
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   bench-faults                                          only the fault suite's figures of bench: the reliability section
@@ -155,6 +157,11 @@ fn run() -> Result<()> {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
             milling_e2e::test(&root)
+        }
+        "grbl-e2e" => {
+            no_args(cmd, rest)?;
+            setup::ensure(&root)?;
+            grbl_e2e::test(&root)
         }
         "scenarios" => {
             no_args(cmd, rest)?;

@@ -8,9 +8,11 @@
 //! - [`program`]: program lines one block at a time through `motion-gcode`;
 //! - [`pipeline`]: the moves into an incremental planner, segments and events out;
 //! - [`session`]: the loop between the sender and the board's link;
-//! - [`endpoint`]: the pseudo-terminal and the TCP socket.
+//! - [`endpoint`]: the pseudo-terminal and the TCP socket;
+//! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`).
 
 pub mod endpoint;
+pub mod jobs;
 pub mod pipeline;
 pub mod program;
 pub mod protocol;
@@ -22,8 +24,9 @@ use crate::board_link::LinkArgs;
 use crate::convert::{self, Program};
 use crate::job::{self, Job};
 use crate::link::Session;
+use crate::polar::sim::EventSim;
 use crate::runner;
-use crate::sim_board::{SimBoard, SIM_CAPACITY};
+use crate::sim_board::SIM_CAPACITY;
 use crate::transport::Transport;
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -34,7 +37,7 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 
 /// Status period asked of the board, ms.
-const STATUS_MS: u16 = 40;
+pub(crate) const STATUS_MS: u16 = 40;
 
 #[derive(Args, Debug)]
 pub struct GrblArgs {
@@ -55,6 +58,10 @@ pub struct GrblArgs {
     /// Serve raw TCP (grblHAL's socket stream) on HOST:PORT, one sender at a time.
     #[arg(long, value_name = "HOST:PORT")]
     pub listen: Option<String>,
+    /// Directory the capability commands' job files (`$MILL=FILE`, `$POLAR=FILE`) are read
+    /// from when relative [default: the working directory].
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub jobs: PathBuf,
     /// With --sim: machine time per wall time of the simulated board.
     #[arg(long, hide = true, value_name = "X", default_value_t = 1.0)]
     pub sim_speed: f64,
@@ -120,8 +127,14 @@ pub fn run(args: GrblArgs) -> Result<()> {
     if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
         bail!("--sim-speed must be within (0, 1000]");
     }
-    let (mut t, guard): (Box<dyn Transport>, _) = if args.link.sim && speed != 1.0 {
-        (Box::new(SimBoard::new(SIM_CAPACITY, speed)), None)
+    let (mut t, guard): (Box<dyn Transport>, _) = if args.link.sim {
+        // A simulated board that also plays event jobs (`$POLAR=`).
+        let sim = EventSim::scaled(SIM_CAPACITY, speed);
+        if args.link.noise > 0.0 {
+            (Box::new(crate::noise::Noisy::new(sim, args.link.noise, args.link.seed)), None)
+        } else {
+            (Box::new(sim), None)
+        }
     } else {
         args.link.open()?
     };
@@ -181,7 +194,14 @@ fn serve(
         }
         (None, None) => bail!("pass --pty PATH or --listen HOST:PORT"),
     };
-    let mut bridge = session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm, persist);
+    let jobs = session::JobSetup {
+        dir: args.jobs.clone(),
+        host: args.link.host_config(target),
+        home: home_ok,
+        wire,
+    };
+    let mut bridge =
+        session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm, persist).with_jobs(jobs);
     let flag = bridge.interrupt.clone();
     // Fails only if a handler is already set: keep that one.
     let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));

@@ -140,6 +140,18 @@ impl Program {
         let _ = self.run(&line);
     }
 
+    /// Sets the coolant of the modal state (what `$G` shows and later M-codes switch from)
+    /// without queueing anything: M9, then M7 and M8 as asked, their items dropped (a real-time
+    /// toggle switched the board itself).
+    pub fn set_coolant(&mut self, mist: bool, flood: bool) {
+        let words = [("M9", true), ("M7", mist), ("M8", flood)];
+        for (word, on) in words {
+            if on {
+                let _ = self.run(word);
+            }
+        }
+    }
+
     /// Values of numbered length parameters (`#5221` ...), mm. rs274 keeps them in its machine
     /// units, inches, whatever G20/G21 says.
     pub fn parameters(&mut self, numbers: &[u32]) -> Vec<f64> {
@@ -308,6 +320,27 @@ mod tests {
         assert_eq!(target(&b.steps[0]), vec![Some(8.0), Some(8.0), Some(9.0)]);
         assert!(p.run("G90 M30").is_ok());
         assert!(p.ended());
+    }
+
+    #[test]
+    fn coolant_set_without_items_shows_in_the_modal_state() {
+        let m = machine();
+        let mut p = Program::new(m, &[0.0; 3]);
+        p.set_coolant(false, true);
+        assert!(p.modal().codes().contains(&"M8".to_string()));
+        p.set_coolant(true, false);
+        let codes = p.modal().codes();
+        assert!(codes.contains(&"M7".to_string()) && !codes.contains(&"M8".to_string()));
+        // The next M-code switches from the toggled state: M3 keeps the mist.
+        let b = p.run("M3").unwrap();
+        let want = motion::protocol::ProgramOutputs {
+            spindle: motion::protocol::SpindleDir::Cw,
+            mist: true,
+            flood: false,
+        };
+        assert_eq!(b.steps, vec![Step::Item(Item::Outputs(want))]);
+        p.set_coolant(false, false);
+        assert!(p.modal().codes().contains(&"M9".to_string()));
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! they arrive, never stored as line text), the 128-byte receive buffer senders count characters
 //! against, and grbl's error and alarm numbers.
 
+use motion::protocol::ProgramOutputs;
 use std::collections::VecDeque;
 
 /// The receive buffer a character-counting sender assumes (grbl's `RX_BUFFER_SIZE`).
@@ -54,9 +55,11 @@ pub enum Realtime {
     Feed(OverrideChange),
     Rapid(u8),
     Spindle(OverrideChange),
-    /// Spindle stop, coolant toggles: accepted and not acted on (the bridge switches the spindle
-    /// and coolant in program order, from M3/M4/M5 and M7/M8/M9).
+    /// Spindle stop: accepted and not acted on (the bridge switches the spindle in program
+    /// order, from M3/M4/M5).
     Accessory(u8),
+    /// Flood (0xA0) or mist (0xA1) toggled at once.
+    Coolant(Coolant),
     /// Any other byte of 0x80..=0xFF: ignored, as grbl does.
     Ignored,
 }
@@ -73,6 +76,24 @@ impl OverrideChange {
         match self {
             OverrideChange::Reset => 100,
             OverrideChange::By(d) => (now as i16 + d as i16).clamp(10, 200) as u8,
+        }
+    }
+}
+
+/// Which coolant a toggle byte switches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coolant {
+    Flood,
+    Mist,
+}
+
+impl Coolant {
+    /// The outputs after toggling this coolant in `now` (the spindle and the other coolant
+    /// stay).
+    pub fn toggle(self, now: ProgramOutputs) -> ProgramOutputs {
+        match self {
+            Coolant::Flood => ProgramOutputs { flood: !now.flood, ..now },
+            Coolant::Mist => ProgramOutputs { mist: !now.mist, ..now },
         }
     }
 }
@@ -100,7 +121,9 @@ pub fn realtime(b: u8) -> Option<Realtime> {
         rt::SPINDLE_MINUS_10 => Realtime::Spindle(By(-10)),
         rt::SPINDLE_PLUS_1 => Realtime::Spindle(By(1)),
         rt::SPINDLE_MINUS_1 => Realtime::Spindle(By(-1)),
-        rt::SPINDLE_STOP | rt::FLOOD_TOGGLE | rt::MIST_TOGGLE => Realtime::Accessory(b),
+        rt::SPINDLE_STOP => Realtime::Accessory(b),
+        rt::FLOOD_TOGGLE => Realtime::Coolant(Coolant::Flood),
+        rt::MIST_TOGGLE => Realtime::Coolant(Coolant::Mist),
         0x80..=0xFF => Realtime::Ignored,
         _ => return None,
     })
@@ -133,6 +156,8 @@ pub mod error {
     pub const INVALID_TARGET: u8 = 33;
     pub const ARC_RADIUS_ERROR: u8 = 34;
     pub const NO_OFFSETS_IN_PLANE: u8 = 35;
+    /// A job file could not be read (grblHAL's "file open/read failed").
+    pub const FILE_READ: u8 = 61;
 }
 
 /// grbl's alarm numbers (`ALARM:N`), and the board's own faults past them (README).
@@ -314,6 +339,18 @@ mod tests {
         assert_eq!(rx.pop_line(), Some(Line::Overflow));
         assert_eq!(rx.pop_line(), Some(Line::Text("G0".into())));
         assert_eq!(rx.free(), RX_BUFFER_SIZE);
+    }
+
+    #[test]
+    fn coolant_toggles_flip_one_coolant_and_keep_the_rest() {
+        use motion::protocol::SpindleDir;
+        assert_eq!(realtime(0xA0), Some(Realtime::Coolant(Coolant::Flood)));
+        assert_eq!(realtime(0xA1), Some(Realtime::Coolant(Coolant::Mist)));
+        let cw_mist = ProgramOutputs { spindle: SpindleDir::Cw, mist: true, flood: false };
+        let all = Coolant::Flood.toggle(cw_mist);
+        assert_eq!(all, ProgramOutputs { flood: true, ..cw_mist });
+        assert_eq!(Coolant::Mist.toggle(all), ProgramOutputs { mist: false, ..all });
+        assert_eq!(Coolant::Flood.toggle(all), cw_mist);
     }
 
     #[test]

@@ -161,6 +161,17 @@ pub fn run(
     job: &MillingJob,
     opts: &MillingRunOptions,
 ) -> anyhow::Result<MillingRunReport> {
+    run_with(transport, job, opts, &mut runner::Unattended)
+}
+
+/// As [`run`], with `hook` asked every pass of the job's loop (it may hold, resume or abort the
+/// job: the grbl bridge's sender does).
+pub fn run_with(
+    transport: &mut dyn Transport,
+    job: &MillingJob,
+    opts: &MillingRunOptions,
+    hook: &mut dyn runner::JobHook,
+) -> anyhow::Result<MillingRunReport> {
     let t0 = Instant::now();
     let say = |m: &str| {
         if opts.progress {
@@ -220,6 +231,7 @@ pub fn run(
     let mut prev: std::collections::VecDeque<(u64, i64)> = Default::default();
     let window_ticks = (FEED_WINDOW_S * tick_hz) as u64;
     let mut ran = false;
+    let mut steer = runner::Steer::default();
     let x0 = base.positions[0];
     let mut record = |st: &Status, trace: &mut Vec<BoardPoint>| {
         let x = st.positions[0] - x0;
@@ -287,6 +299,10 @@ pub fn run(
         let ended = matches!(latest.machine, MachineState::Ready | MachineState::Fault);
         if ran && after_start && ended {
             break;
+        }
+        steer.step(&mut s, hook, &latest, &mut watch)?;
+        if steer.held() {
+            continue;
         }
         if let Err(why) = watch.check(latest.tick, latest.positions[0] as u64 ^ latest.tick) {
             let _ = s.request(RequestBody::Abort);

@@ -6,7 +6,8 @@
 //! -> Home if needed (and allowed) -> `SetOverride` (the speed scale) -> the stream's blocks in
 //! `QueueEvents` requests as event credits allow (the last one marked) -> `StartPlayback` once
 //! the board's block queue is full or the whole stream is queued -> wait until the job is done
-//! -> verify: events fired == events in the file, and the final (theta, r) steps == the host
+//! (a [`runner::JobHook`] may hold, resume or abort it meanwhile) -> verify: events fired ==
+//! events in the file, and the final (theta, r) steps == the host
 //! model (the firmware's own `Playback`, run here with the same size scale and speed).
 
 use crate::link::{describe_rejection, LinkFailure, Session};
@@ -166,6 +167,17 @@ pub fn run(
     bytes: &[u8],
     opts: &PolarRunOptions,
 ) -> anyhow::Result<PolarReport> {
+    run_with(transport, bytes, opts, &mut runner::Unattended)
+}
+
+/// As [`run`], with `hook` asked every pass of the job's loop once the playback started (it may
+/// hold, resume or abort the job: the grbl bridge's sender does).
+pub fn run_with(
+    transport: &mut dyn Transport,
+    bytes: &[u8],
+    opts: &PolarRunOptions,
+    hook: &mut dyn runner::JobHook,
+) -> anyhow::Result<PolarReport> {
     use anyhow::{anyhow, bail};
     let t0 = Instant::now();
     let say = |m: &str| {
@@ -228,6 +240,7 @@ pub fn run(
     let mut last_say = Instant::now();
     let slack_ticks = SLACK_SECONDS * u64::from(cfg.machine.tick_hz);
     let mut watch = runner::JobWatch::new(model.ticks, SLOWDOWN, slack_ticks, NO_PROGRESS);
+    let mut steer = runner::Steer::default();
 
     loop {
         s.pump(Duration::from_millis(5)).map_err(link)?;
@@ -337,7 +350,8 @@ pub fn run(
         if started && after_start && latest.machine == MachineState::Ready && next == blocks.len() {
             break;
         }
-        let overdue = match started {
+        steer.step(&mut s, hook, &latest, &mut watch)?;
+        let overdue = match started && !steer.held() {
             true => watch.check(latest.tick, u64::from(latest.events_fired)).err(),
             false => None,
         };

@@ -37,6 +37,14 @@ impl EventSim {
         EventSim { board, last: Instant::now(), owed_ticks: 0.0, speed }
     }
 
+    /// The same board with its segments too at `speed` times real time (the grbl bridge's
+    /// `--sim`: G-code and event jobs on one board).
+    pub fn scaled(capacity: u16, speed: f64) -> Self {
+        let mut board = SimBoard::new(capacity, speed);
+        board.board = BoardLink::new("motionctl-sim", CAPS);
+        EventSim { board, last: Instant::now(), owed_ticks: 0.0, speed }
+    }
+
     /// Runs the event playback up to now.
     fn advance(&mut self) {
         let now = Instant::now();

@@ -15,10 +15,12 @@
 //! (asking the board, bringing it to `Ready`), `outputs` (what is sent, and where the run is in
 //! it), then the run itself: `stream` (connecting, the loop and most of its steps), `replies`
 //! (what the board said), `events` (spindle, coolant, pauses and dwells between segments) and
-//! `verify` (the checks at the end).
+//! `verify` (the checks at the end). `hook` lets a capability's runner be driven (held,
+//! resumed, aborted) while it owns the link.
 
 mod board;
 mod events;
+mod hook;
 mod options;
 mod outputs;
 mod replies;
@@ -31,6 +33,7 @@ pub use board::{
     ask, ask_status, axes_of, fault_names, home, ready_board, seq_at_or_after, wire_config,
     HOMING_BOARD_SECONDS, HOMING_STUCK,
 };
+pub use hook::{JobControl, JobHook, Steer, Unattended};
 pub use options::{RunOptions, DEFAULT_STATUS_PERIOD_MS};
 pub use outputs::Outputs;
 pub use report::{counters_text, RunError, RunReport};

@@ -51,6 +51,13 @@ impl JobWatch {
         self.limit_ticks
     }
 
+    /// Board time that was not the job's (a hold its driver asked for): added to the budget,
+    /// and the progress marker's wall clock starts again.
+    pub fn extend(&mut self, ticks: u64) {
+        self.limit_ticks = self.limit_ticks.saturating_add(ticks);
+        self.marker.1 = Instant::now();
+    }
+
     /// Checks the board's `tick` and the job's progress `marker` (any count that moves while the
     /// job does); the first call starts the board-time budget.
     pub fn check(&mut self, tick: u64, marker: u64) -> Result<(), Overdue> {

@@ -14,7 +14,16 @@ impl Bridge<'_> {
         if new == 0 {
             return;
         }
-        let first = FaultCode::ALL.iter().copied().find(|f| new & f.bit() != 0);
+        self.fault_alarm(new);
+        // The board dropped its queue.
+        self.pending.retain(|_, p| !matches!(p, Pending::Batch { .. }));
+        self.rebase();
+    }
+
+    /// The alarm for the faults `bits` (the first of them in code order): raised, said with a
+    /// `[MSG:]` naming them.
+    pub(super) fn fault_alarm(&mut self, bits: u32) {
+        let first = FaultCode::ALL.iter().copied().find(|f| bits & f.bit() != 0);
         let n = match first {
             Some(FaultCode::LimitSwitch) => alarm::HARD_LIMIT,
             Some(FaultCode::SoftLimit) => alarm::SOFT_LIMIT,
@@ -27,12 +36,10 @@ impl Bridge<'_> {
         };
         self.alarm = Some(n);
         self.say(&format!("ALARM:{n}"));
-        let names = fault_names(new);
+        let names = fault_names(bits);
         let why = first.map(|f| f.description()).unwrap_or("");
+        eprintln!("motionctl: ALARM:{n}: board fault {names}: {why}");
         self.say(&format!("[MSG:board fault {names}: {why}]"));
-        // The board dropped its queue.
-        self.pending.retain(|_, p| !matches!(p, Pending::Batch { .. }));
-        self.rebase();
     }
 
     /// Says what a refused move raised; grbl's error number for its line.

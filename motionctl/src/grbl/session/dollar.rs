@@ -1,5 +1,5 @@
-//! `$` commands: help, `$$`, `$#`, `$G`, `$I`, `$N`, `$C`, `$X`, `$H`, `$SLP`; settings and jogs are
-//! dispatched to their own files.
+//! `$` commands: help, `$$`, `$#`, `$G`, `$I`, `$N`, `$C`, `$X`, `$H`, `$SLP`; settings, jogs and
+//! capability jobs are dispatched to their own files.
 
 use super::Bridge;
 use crate::grbl::protocol::{self, alarm, error};
@@ -21,7 +21,10 @@ impl Bridge<'_> {
         let idle = !self.moving();
         match cmd.as_str() {
             "$" => {
-                self.say("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]");
+                self.say(
+                    "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x \
+                     $MILL=job $POLAR=stream $TURN=job $WIRE=job]",
+                );
                 self.ok();
             }
             "$$" => {
@@ -82,6 +85,7 @@ impl Bridge<'_> {
             _ if cmd.starts_with("$N0=") || cmd.starts_with("$N1=") => {
                 self.set_startup_line(&cmd, raw, idle)?
             }
+            _ if self.capability_line(raw)? => {}
             _ if cmd.starts_with("$I=") => {
                 let text = raw.split_once('=').map_or("", |(_, t)| t).trim();
                 self.build_info = text.chars().take(80).collect();

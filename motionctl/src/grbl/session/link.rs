@@ -24,6 +24,27 @@ impl Bridge<'_> {
         }
     }
 
+    /// Sends `wire` as the board's config (`runner::ready_board`, homing if `home` allows), the
+    /// bridge's status period, and reads the board's state back. The inner error: why the board
+    /// is not ready (e.g. it must be homed and may not be).
+    pub(super) fn configure(
+        &mut self,
+        wire: motion::protocol::WireConfig,
+        home: bool,
+        what: &str,
+    ) -> Result<Result<(), String>> {
+        let say = |m: &str| eprintln!("motionctl: {m}");
+        let r = runner::ready_board(&mut self.s, wire, home, what, &say).map(drop);
+        runner::ask(
+            &mut self.s,
+            RequestBody::SetStatusPeriod { ms: crate::grbl::STATUS_MS },
+            "SetStatusPeriod",
+        )?;
+        self.refresh()?;
+        self.faults_seen = self.latest.faults;
+        Ok(r)
+    }
+
     pub(super) fn refresh(&mut self) -> Result<()> {
         let st = runner::ask_status(&mut self.s)?;
         self.latest = st;

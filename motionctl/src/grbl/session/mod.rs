@@ -16,6 +16,7 @@
 //! settings) and `jog` (`$J=`).
 
 mod alarms;
+mod capability;
 mod dollar;
 mod jog;
 mod lines;
@@ -25,6 +26,7 @@ mod settings_cmds;
 mod stop;
 mod stream;
 
+pub use capability::JobSetup;
 pub use jog::{parse_jog, Jog};
 
 use super::endpoint::Endpoint;
@@ -112,6 +114,8 @@ pub struct Bridge<'a> {
     /// The board refused queued motion: stop the rest.
     stop_wanted: bool,
     build_info: String,
+    /// Capability jobs (`$MILL=`, `$POLAR=`), when set up.
+    jobs: Option<JobSetup>,
     pub interrupt: Arc<AtomicBool>,
 }
 
@@ -179,8 +183,15 @@ impl<'a> Bridge<'a> {
             kept: Vec::new(),
             stop_wanted: false,
             build_info: String::new(),
+            jobs: None,
             interrupt: Arc::new(AtomicBool::new(false)),
         }
+    }
+
+    /// Lets senders run capability jobs (`$MILL=`, `$POLAR=`).
+    pub fn with_jobs(mut self, jobs: JobSetup) -> Self {
+        self.jobs = Some(jobs);
+        self
     }
 
     /// Serves senders until interrupted (then stops the machine) or the link fails.

@@ -1,9 +1,9 @@
 //! Real-time bytes, acted on as they arrive: `?` (the status report), feed hold, safety door,
-//! cycle start, reset, jog cancel and the overrides.
+//! cycle start, reset, jog cancel, the overrides and the coolant toggles.
 
 use super::{link_err, Bridge, Pending};
 use crate::grbl::pipeline::Out;
-use crate::grbl::protocol::{self, realtime, Realtime};
+use crate::grbl::protocol::{self, realtime, Coolant, Realtime};
 use crate::grbl::report::{Report, State};
 use crate::grbl::settings;
 use anyhow::Result;
@@ -62,9 +62,24 @@ impl Bridge<'_> {
             }
             Realtime::Rapid(v) => self.ovr[1] = v,
             Realtime::Spindle(c) => self.ovr[2] = c.apply(self.ovr[2]),
+            Realtime::Coolant(c) => self.toggle_coolant(c)?,
             Realtime::Accessory(_) | Realtime::Ignored => {}
         }
         Ok(())
+    }
+
+    /// 0xA0, 0xA1: the board's flood or mist toggled now, not behind the queued motion, and the
+    /// parser's coolant (`$G`, `A:`) with it; as grbl, only in Idle, Run and Hold.
+    fn toggle_coolant(&mut self, c: Coolant) -> Result<()> {
+        if !matches!(self.state(), State::Idle | State::Run | State::Hold { .. }) {
+            return Ok(());
+        }
+        let to = c.toggle(ProgramOutputs::from_bits(self.latest.outputs));
+        if self.prog.ended() {
+            self.new_program();
+        }
+        self.prog.set_coolant(to.mist, to.flood);
+        self.switch_outputs(to)
     }
 
     pub(super) fn send_override(&mut self) -> Result<()> {

@@ -96,21 +96,7 @@ impl Bridge<'_> {
         };
         if board {
             self.stop_motion()?;
-            let say = |m: &str| eprintln!("motionctl: {m}");
-            let r = runner::ready_board(
-                &mut self.s,
-                wire,
-                false,
-                "machine with the grbl settings",
-                &say,
-            );
-            runner::ask(
-                &mut self.s,
-                RequestBody::SetStatusPeriod { ms: crate::grbl::STATUS_MS },
-                "SetStatusPeriod",
-            )?;
-            self.refresh()?;
-            self.faults_seen = self.latest.faults;
+            let r = self.configure(wire, false, "machine with the grbl settings")?;
             if let Err(e) = r {
                 let config_now = runner::ask(&mut self.s, RequestBody::GetConfig, "GetConfig")?;
                 if config_now != Reply::Config(wire) {
