@@ -166,7 +166,7 @@ pub fn run(root: &Path, quick: bool) -> Result<()> {
     }
 
     println!("the fault-injection suite (cargo xtask faults)");
-    figures.extend(crate::faults::report::bench(root)?.into_iter().map(|(k, v)| (k.into(), v)));
+    figures.extend(faults_section(root)?.into_iter().map(|(k, v)| (k.into(), v)));
 
     println!("profiling the link firmware's whole tick handler on each capability's job");
     let isr = crate::isr_profile::run(root, &[])?;
@@ -450,6 +450,24 @@ fn write_markdown(path: &Path, figures: &BTreeMap<String, f64>, notes: &str) -> 
 
 /// Rewrites what lies between the `markers` of `path` with `section` (appended with the markers
 /// when they are missing; a missing file starts with `intro`).
+/// Runs the fault-injection suite and writes its reliability section into BENCHMARKS.md;
+/// returns its bench.json keys.
+fn faults_section(root: &Path) -> Result<Vec<(&'static str, f64)>> {
+    let (section, keys) = crate::faults::report::bench(root)?;
+    replace_section(&root.join("BENCHMARKS.md"), crate::faults::report::MARKERS, &section, "")?;
+    Ok(keys)
+}
+
+/// `cargo xtask bench-faults`: only the suite's part of `bench`, merged into bench.json.
+pub fn bench_faults(root: &Path) -> Result<()> {
+    let keys = faults_section(root)?;
+    let json = root.join("target/bench.json");
+    let map: BTreeMap<String, f64> = keys.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+    write_json(&json, &map)?;
+    println!("wrote BENCHMARKS.md (reliability) and {}", json.display());
+    Ok(())
+}
+
 pub(crate) fn replace_section(
     path: &Path,
     (begin, end): (&str, &str),
@@ -483,11 +501,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("xtask-bench-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let md = dir.join("B.md");
-        std::fs::write(&md, format!("# T\nkeep me\n{BEGIN}\nold\n{END}\ntail\n")).unwrap();
+        std::fs::write(&md, format!("# T\nkeep me\n{BEGIN}\nSTALE-SECTION\n{END}\ntail\n"))
+            .unwrap();
         write_markdown(&md, &m, NOTES).unwrap();
         let s = std::fs::read_to_string(&md).unwrap();
         assert!(s.starts_with("# T\nkeep me\n<!-- bench:begin -->\n| figure"));
-        assert!(s.ends_with("<!-- bench:end -->\ntail\n") && !s.contains("old"));
+        assert!(s.ends_with("<!-- bench:end -->\ntail\n") && !s.contains("STALE-SECTION"));
 
         let json = dir.join("bench.json");
         std::fs::write(&json, r#"{"other_capability": 7, "a": 0}"#).unwrap();

@@ -195,7 +195,7 @@ fn run() -> Result<()> {
         "bench-faults" => {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
-            faults::report::bench_only(&root)
+            bench::bench_faults(&root)
         }
         "bench-gcode" => {
             no_args(cmd, rest)?;

@@ -3,11 +3,10 @@
 
 use super::Counts;
 use anyhow::Result;
-use std::collections::BTreeMap;
 use std::path::Path;
 
-const BEGIN: &str = "<!-- faults:begin -->";
-const END: &str = "<!-- faults:end -->";
+/// Where the reliability section sits in BENCHMARKS.md.
+pub const MARKERS: (&str, &str) = ("<!-- faults:begin -->", "<!-- faults:end -->");
 
 const HOW: &str = "Measured by `cargo xtask faults` (a step of `cargo xtask test`), which writes
 `target/faults.json`; `cargo xtask bench` (or `cargo xtask bench-faults` alone) runs it and
@@ -54,28 +53,16 @@ fn section(c: &Counts) -> String {
     t + HOW
 }
 
-/// Runs the suite, writes the section into BENCHMARKS.md; the bench.json keys.
-pub fn bench(root: &Path) -> Result<Vec<(&'static str, f64)>> {
+/// Runs the suite: BENCHMARKS.md's reliability section (between [`MARKERS`]) and the
+/// bench.json keys. `cargo xtask bench` writes both.
+pub fn bench(root: &Path) -> Result<(String, Vec<(&'static str, f64)>)> {
     super::run(root, &[])?;
     let counts = super::read_counts(root)?;
-    crate::bench::replace_section(
-        &root.join("BENCHMARKS.md"),
-        (BEGIN, END),
-        &section(&counts),
-        "",
-    )?;
-    Ok(vec![
-        ("faults_injected", counts.total.injected as f64),
-        ("faults_survived", counts.total.survived as f64),
-    ])
-}
-
-/// `cargo xtask bench-faults`: only the suite's figures of `bench`, merged into bench.json.
-pub fn bench_only(root: &Path) -> Result<()> {
-    let keys = bench(root)?;
-    let json = root.join("target/bench.json");
-    let map: BTreeMap<String, f64> = keys.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-    crate::bench::write_json(&json, &map)?;
-    println!("wrote BENCHMARKS.md (reliability) and {}", json.display());
-    Ok(())
+    Ok((
+        section(&counts),
+        vec![
+            ("faults_injected", counts.total.injected as f64),
+            ("faults_survived", counts.total.survived as f64),
+        ],
+    ))
 }
