@@ -115,8 +115,38 @@ pub fn find_firmware(given: Option<&Path>, say: &dyn Fn(&str)) -> io::Result<Pat
 }
 
 /// A free TCP port on 127.0.0.1 (free when asked; QEMU binds it right after).
-fn free_port() -> io::Result<u16> {
+/// A loopback TCP port free now.
+pub fn free_port() -> io::Result<u16> {
     Ok(TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
+}
+
+/// QEMU's netduinoplus2 running `firmware` as `motionctl --qemu` runs it: deterministic time,
+/// semihosting, the UART a server on loopback `serial_port` that waits for its client, QEMU's
+/// own output to `log`. `monitor_port`: QEMU's monitor on a loopback port too (a test's reset
+/// button); none without. The one command line for every QEMU run of the link firmware.
+pub fn link_command(
+    firmware: &Path,
+    serial_port: u16,
+    monitor_port: Option<u16>,
+    log: File,
+) -> io::Result<Command> {
+    let monitor =
+        monitor_port.map_or("none".into(), |p| format!("tcp:127.0.0.1:{p},server=on,wait=off"));
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-M", "netduinoplus2", "-display", "none", "-monitor", &monitor])
+        .args(["-icount", "shift=0,sleep=off"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .arg("-serial")
+        .arg(format!("tcp:127.0.0.1:{serial_port},server=on,wait=on"))
+        .arg("-kernel")
+        .arg(firmware)
+        // Its own process group: Ctrl-C reaches motionctl only, which aborts the board and
+        // then kills QEMU.
+        .process_group(0)
+        .stdin(Stdio::null())
+        .stdout(log.try_clone()?)
+        .stderr(log);
+    Ok(cmd)
 }
 
 impl Qemu {
@@ -133,20 +163,7 @@ impl Qemu {
         let log =
             std::env::temp_dir().join(format!("motionctl-qemu-{}-{port}.log", std::process::id()));
         let log_file = File::create(&log)?;
-        let child = Command::new("qemu-system-arm")
-            .args(["-M", "netduinoplus2", "-display", "none", "-monitor", "none"])
-            .args(["-icount", "shift=0,sleep=off"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-serial")
-            .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"))
-            .arg("-kernel")
-            .arg(firmware)
-            // Its own process group: Ctrl-C reaches motionctl only, which aborts the board
-            // and then kills QEMU.
-            .process_group(0)
-            .stdin(Stdio::null())
-            .stdout(log_file.try_clone()?)
-            .stderr(log_file)
+        let child = link_command(firmware, port, None, log_file)?
             .spawn()
             .map_err(|e| io::Error::new(e.kind(), format!("cannot start qemu-system-arm: {e}")))?;
         let mut q = Qemu { child, port, firmware: firmware.to_path_buf(), log };

@@ -17,8 +17,9 @@ use super::Tally;
 use crate::e2e::summary_ints;
 use crate::firmware::{self, Board};
 use anyhow::{bail, Context, Result};
+use motionctl::qemu::{free_port, link_command};
 use std::io::{Read, Write};
-use std::net::{TcpListener, TcpStream};
+use std::net::TcpStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -52,27 +53,11 @@ impl Drop for Qemu {
     }
 }
 
-fn free_port() -> Result<u16> {
-    Ok(TcpListener::bind("127.0.0.1:0")?.local_addr()?.port())
-}
-
 impl Qemu {
     fn start(elf: &Path, log: &Path) -> Result<Qemu> {
         let (serial_port, monitor_port) = (free_port()?, free_port()?);
         let log = std::fs::File::create(log)?;
-        let child = Command::new("qemu-system-arm")
-            .args(["-M", "netduinoplus2", "-display", "none"])
-            .args(["-icount", "shift=0,sleep=off"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-monitor")
-            .arg(format!("tcp:127.0.0.1:{monitor_port},server=on,wait=off"))
-            .arg("-serial")
-            .arg(format!("tcp:127.0.0.1:{serial_port},server=on,wait=on"))
-            .arg("-kernel")
-            .arg(elf)
-            .stdin(Stdio::null())
-            .stdout(log.try_clone()?)
-            .stderr(log)
+        let child = link_command(elf, serial_port, Some(monitor_port), log)?
             .spawn()
             .context("starting qemu-system-arm")?;
         Ok(Qemu { child, serial_port, monitor_port })
