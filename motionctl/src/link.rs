@@ -24,6 +24,40 @@ pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 /// How long a single request may take to be answered.
 pub const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 
+/// Names a factor every wall-clock wait of the link and of the job watchdogs is multiplied by,
+/// for a board far slower than real time: QEMU tracing each instruction for the tick profile,
+/// on a loaded machine, runs hundreds of times slower than the board it models.
+pub const PATIENCE_ENV: &str = "MOTIONCTL_PATIENCE";
+/// The largest factor [`PATIENCE_ENV`] may give (a wait of hours is a hang, not patience).
+pub const MAX_PATIENCE: f64 = 1000.0;
+
+/// `d` times the patience factor of [`PATIENCE_ENV`] (1 when unset).
+pub fn patient(d: Duration) -> Duration {
+    d.mul_f64(patience())
+}
+
+fn patience() -> f64 {
+    static FACTOR: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *FACTOR.get_or_init(|| {
+        parse_patience(std::env::var_os(PATIENCE_ENV).as_deref()).unwrap_or_else(|e| {
+            eprintln!("warning: {e}; waiting as for a real board");
+            1.0
+        })
+    })
+}
+
+/// The patience factor a value of [`PATIENCE_ENV`] gives: 1 when unset.
+fn parse_patience(v: Option<&std::ffi::OsStr>) -> Result<f64, String> {
+    let Some(v) = v else { return Ok(1.0) };
+    match v.to_str().and_then(|s| s.trim().parse::<f64>().ok()) {
+        Some(f) if (1.0..=MAX_PATIENCE).contains(&f) => Ok(f),
+        _ => Err(format!(
+            "{PATIENCE_ENV}={} is not a number from 1 to {MAX_PATIENCE}",
+            v.to_string_lossy()
+        )),
+    }
+}
+
 /// Counters for the summary.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LinkStats {
@@ -202,7 +236,7 @@ impl<'a> Session<'a> {
             rto: RtoClock::new(cfg.rto_ms),
             last_frame: now,
             down_since: None,
-            link_timeout: LINK_TIMEOUT,
+            link_timeout: patient(LINK_TIMEOUT),
             completed: HashMap::new(),
             events: VecDeque::new(),
             notices: Vec::new(),
@@ -274,12 +308,12 @@ impl<'a> Session<'a> {
                     _ => {}
                 }
             }
-            if start.elapsed() > CONNECT_TIMEOUT {
+            if start.elapsed() > patient(CONNECT_TIMEOUT) {
                 return Err(LinkFailure::Timeout(format!(
                     "no answer to Hello from {} within {} s (is the board running the link \
                      firmware, at this speed?)",
                     self.t.describe(),
-                    CONNECT_TIMEOUT.as_secs()
+                    patient(CONNECT_TIMEOUT).as_secs()
                 )));
             }
         }
@@ -293,7 +327,7 @@ impl<'a> Session<'a> {
                 Ok(seq) => return Ok(seq),
                 Err(SendError::WindowFull) => {
                     self.pump(Duration::from_millis(5))?;
-                    if start.elapsed() > REQUEST_TIMEOUT {
+                    if start.elapsed() > patient(REQUEST_TIMEOUT) {
                         return Err(LinkFailure::Timeout(
                             "the request window never drained".into(),
                         ));
@@ -331,11 +365,11 @@ impl<'a> Session<'a> {
             }) {
                 return Err(LinkFailure::SessionLost(code));
             }
-            if start.elapsed() > REQUEST_TIMEOUT {
+            if start.elapsed() > patient(REQUEST_TIMEOUT) {
                 return Err(LinkFailure::Timeout(format!(
                     "no answer from {} within {} s",
                     self.t.describe(),
-                    REQUEST_TIMEOUT.as_secs()
+                    patient(REQUEST_TIMEOUT).as_secs()
                 )));
             }
             self.pump(Duration::from_millis(10))?;
@@ -408,7 +442,7 @@ impl<'a> Session<'a> {
                 return Err(LinkFailure::Down(format!("link to {what} lost ({why}); interrupted")));
             }
             match self.t.reconnect() {
-                Ok(()) if quiet <= RECONNECT_WINDOW => {
+                Ok(()) if quiet <= patient(RECONNECT_WINDOW) => {
                     self.stats.reconnects += 1;
                     self.decoder.reset();
                     self.last_frame = Instant::now();
@@ -429,14 +463,30 @@ impl<'a> Session<'a> {
                         quiet.as_secs_f64()
                     )));
                 }
-                Err(e) if quiet > RECONNECT_WINDOW => {
+                Err(e) if quiet > patient(RECONNECT_WINDOW) => {
                     return Err(LinkFailure::Down(format!(
                         "link to {what} lost ({why}) and not back within {} s: {e}",
-                        RECONNECT_WINDOW.as_secs()
+                        patient(RECONNECT_WINDOW).as_secs()
                     )));
                 }
                 Err(_) => std::thread::sleep(Duration::from_millis(300)),
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::ffi::OsStr;
+
+    #[test]
+    fn patience_is_one_unless_set_and_refuses_what_is_not_a_factor() {
+        assert_eq!(parse_patience(None), Ok(1.0));
+        assert_eq!(parse_patience(Some(OsStr::new(" 100 "))), Ok(100.0));
+        for bad in ["0.5", "0", "-3", "abc", "", "1e9", "NaN"] {
+            let e = parse_patience(Some(OsStr::new(bad))).unwrap_err();
+            assert!(e.contains(PATIENCE_ENV) && e.contains(bad), "{bad}: {e}");
         }
     }
 }

@@ -177,7 +177,7 @@ impl Qemu {
             }
             match Tcp::connect(&addr) {
                 Ok(t) => return Ok((q, t)),
-                Err(e) if start.elapsed() > LISTEN_TIMEOUT => {
+                Err(e) if start.elapsed() > crate::link::patient(LISTEN_TIMEOUT) => {
                     return Err(io::Error::new(
                         e.kind(),
                         format!("QEMU did not open its UART socket {addr}: {e}"),

@@ -105,6 +105,13 @@ pub trait StepSource {
     fn starved(&self) -> bool {
         false
     }
+    /// The machine may run this source's ticks as step-only ones between full ticks
+    /// ([`Machine::fast_tick_with`]): the source drives nothing but its pins on each tick, and
+    /// its end, and faults it passes to the machine, may be seen up to
+    /// [`SUPERVISE_TICKS`]` - 1` ticks later.
+    fn step_only_ticks(&self) -> bool {
+        false
+    }
 }
 
 /// The DDA as a [`StepSource`]: what [`Machine::tick`] runs.
@@ -120,6 +127,10 @@ impl StepSource for DdaSource {
     #[inline(always)]
     fn idle(&self, dda: &Dda) -> bool {
         dda.is_idle()
+    }
+
+    fn step_only_ticks(&self) -> bool {
+        true
     }
 }
 
@@ -739,7 +750,7 @@ impl Machine {
             _ => {}
         }
         self.apply_hold(dda);
-        self.arm_fast(raw);
+        self.arm_fast(raw, source.step_only_ticks());
         TickOut { step, outputs: self.outputs }
     }
 

@@ -8,7 +8,9 @@
 //! series and its two angle derivatives), a few multiplies for the limits and the blend. No
 //! division, no loops beyond the table width, no panics.
 
-use super::table::{eval_row_with_delta, rad_per_tick_q32, CoefficientTable, Interp, ZPoint};
+use super::table::{
+    eval_row_with_delta, rad_per_tick_q32, CoefficientTable, Interp, TableForm, ZPoint,
+};
 use crate::protocol::errors::FaultCode;
 
 /// Fastest spindle the generator accepts: 2^22 turn Q32 per tick (1/1024 turn per tick, 2930
@@ -263,10 +265,41 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
 
     /// One update (call once per tick, >= 20 kHz): spindle angle and speed from the source,
     /// its fault if any, the X position. Returns the command (frozen once faulted).
-    #[inline(never)]
+    #[inline]
     pub fn update<const ROWS: usize>(
         &mut self,
         table: &CoefficientTable<ROWS, WIDTH>,
+        x_in_q24: i32,
+        angle_turn_q32: u32,
+        speed_turn_q32_per_tick: i32,
+        sensor_fault: Option<FaultCode>,
+    ) -> ZUpdate {
+        let interp = self.cfg.interp;
+        self.update_from(
+            table.form(),
+            || table.coefficients(x_in_q24, interp),
+            x_in_q24,
+            angle_turn_q32,
+            speed_turn_q32_per_tick,
+            sensor_fault,
+        )
+    }
+
+    /// The interpolation [`ZGen::update`] uses (an owner that computes the coefficients ahead
+    /// of the update, [`ZGen::update_from`], must use the same).
+    pub const fn interp(&self) -> Interp {
+        self.cfg.interp
+    }
+
+    /// [`ZGen::update`] with the table's coefficients at `x_in_q24` from `coefficients` (called
+    /// at most once, after the state and speed checks): an owner may have interpolated them a
+    /// tick ahead, `table.coefficients(x_in_q24, self.interp())`, so the work of one update is
+    /// spread over two ticks. The result is the same.
+    #[inline(never)]
+    pub fn update_from(
+        &mut self,
+        form: TableForm,
+        coefficients: impl FnOnce() -> [i32; WIDTH],
         x_in_q24: i32,
         angle_turn_q32: u32,
         speed_turn_q32_per_tick: i32,
@@ -295,7 +328,7 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
         let advance =
             ((speed_turn_q32_per_tick as i64 * self.cfg.advance_ticks_q16 as i64) >> 16) as u32;
         let phi = angle_turn_q32.wrapping_add(advance);
-        let c = table.coefficients(x_in_q24, self.cfg.interp);
+        let c = coefficients();
         // X-feed term: the series at this angle over the coefficients' change since the last
         // update is dZ/dX * dX per tick (a backward difference: half a tick late, negligible).
         // Without it the servo lags by 2.7 uin at X 6.75 in the scenario's 3 in/s feed. It
@@ -306,7 +339,7 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
             *d = now.wrapping_sub(*before);
         }
         self.last_coeffs_in_q32 = c;
-        let (p, dz_x): (ZPoint, i32) = eval_row_with_delta(table.form(), &c, &dc, phi);
+        let (p, dz_x): (ZPoint, i32) = eval_row_with_delta(form, &c, &dc, phi);
         let v_x = (dz_x as i64) << 16;
         let w = rad_per_tick_q32(speed_turn_q32_per_tick);
         let v_phi = ((p.dz_dphi_in_q32 * w) >> 16) + v_x;

@@ -400,7 +400,10 @@ How these are measured:
   wait states at 168 MHz on every taken branch into flash). While a job is quiet, 7 ticks in 8
   are step-only (`Machine::fast_tick`: the DDA, the step counters and soft limits) and the 8th is
   a full tick (inputs, debounce, faults, holds, job bookkeeping, outputs, wakes): medians are
-  step-only ticks, p99 and max full ones, and the CPU figure is the mean over both.
+  step-only ticks, p99 and max full ones, and the CPU figure is the mean over both. The traced
+  QEMU runs hundreds of times slower than the board, so the profiler gives motionctl's link and
+  job watchdogs a patience factor (`MOTIONCTL_PATIENCE`, here 100) instead of wall-clock limits
+  meant for a real board.
   `isr_cycles_cruise_4axes`: median over ticks where four axes cruise; `isr_cycles_p99`/`_max`: over every tick of every job; `isr_instr_idle`: median
   instructions of a tick with nothing to do. The force chain runs in its own interrupt on both
   boards (DMA2 stream 0, the tick's priority: the real board's ADC DMA; on the QEMU board the

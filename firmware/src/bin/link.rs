@@ -5,8 +5,8 @@
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
 //! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
 //! job (after reading the spindle) during a Z job -- and drives the step port and outputs; while
-//! the machine grants it (a quiet plain job or none), 7 ticks in 8 are `Machine::fast_tick`
-//! (DDA, counters, soft limits) and read no inputs; `estop` (EXTI, 3) cuts the drivers on
+//! the machine grants it (a quiet plain job or none, or a Z job with step outputs), 7 ticks in 8
+//! are `Machine::fast_tick` (DDA or Z job, counters, soft limits) and read no inputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
@@ -37,8 +37,8 @@ mod app {
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
     use motion_firmware::board;
     use motion_firmware::link::{
-        self, Link, Motion, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK, SAVING_CONFIG,
-        WAKE_TICKS, WATCHDOG,
+        self, Link, Motion, StepOnly, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK,
+        SAVING_CONFIG, WAKE_TICKS, WATCHDOG,
     };
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
@@ -201,7 +201,8 @@ mod app {
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
-            plain: bool = false, spindle_at_rest: bool = false, copy_counts: [i32; 2] = [0; 2]])]
+            step_only: StepOnly = StepOnly::No, spindle_at_rest: bool = false,
+            copy_counts: [i32; 2] = [0; 2]])]
     fn tick(mut cx: tick::Context) {
         let l = cx.local;
         #[cfg(feature = "isr-cycles")]
@@ -209,13 +210,20 @@ mod app {
         l.tick_timer.clear_update();
         let port = cx.shared.step_port;
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
-        // the DDA with work: a plain segment job (or none), the copy encoders still, no status
-        // run due and no e-stop edge. A turning spindle's decoder still sees every tick.
-        if *l.plain && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
-            if !*l.spindle_at_rest {
-                l.spindle.update();
-            }
-            if let Some(step) = cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda)) {
+        // the job's stepping with work: a plain segment job (or none) with the copy encoders
+        // still, or a Z job with step outputs; no status run due and no e-stop edge. A turning
+        // spindle's decoder still sees every tick.
+        if *l.step_only != StepOnly::No && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+            let step = if *l.step_only == StepOnly::Z {
+                let spindle = &mut *l.spindle;
+                cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
+            } else {
+                if !*l.spindle_at_rest {
+                    l.spindle.update();
+                }
+                cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda))
+            };
+            if let Some(step) = step {
                 port.write(&step);
                 *l.wake -= 1;
                 #[cfg(feature = "isr-cycles")]
@@ -242,7 +250,7 @@ mod app {
             let inputs = link::sim::with_probe(m, &inputs);
             link::zslide::sense(l.spindle, &mut m.z);
             *l.spindle_at_rest = l.spindle.at_rest();
-            *l.plain = false;
+            *l.step_only = StepOnly::No;
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
                 out
@@ -251,11 +259,14 @@ mod app {
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
                 out
             } else if let Some(out) = link::zslide::tick(m, &inputs) {
+                *l.step_only = StepOnly::Z;
                 out
             } else if m.machine.event_job() {
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
-                *l.plain = still;
+                if still {
+                    *l.step_only = StepOnly::Plain;
+                }
                 m.machine.tick(&mut m.dda, &inputs)
             };
             port.write(&out.step);

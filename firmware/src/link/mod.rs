@@ -64,6 +64,18 @@ pub use last_job::LastJob;
 pub use session::Link;
 pub use target::Target;
 
+/// Which step-only tick the tick task tries before a full one (set by the last full tick;
+/// the machine decides whether it is granted).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepOnly {
+    /// A full tick: a capability job that takes none, or a copy encoder moving.
+    No,
+    /// The DDA's (a plain segment job, or none).
+    Plain,
+    /// A Z job's: the spindle is read first.
+    Z,
+}
+
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
 pub const SEGMENT_QUEUE: usize = 64;
 /// Transmit queue; a response that does not fit whole is dropped (the host retransmits).

@@ -11,6 +11,7 @@
 //! the table, milliseconds on the F405) in the USART task on the link's copy of the active
 //! table, outside the `Motion` lock; the lock only begins the prepared run.
 
+use motion::dda::StepOutput;
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::protocol::{ErrorCode, NakDetail, Status};
 use motion::spindle::encoder::EncoderConfig;
@@ -53,6 +54,18 @@ pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
         out.outputs.z_dac = code;
     }
     Some(out)
+}
+
+/// A step-only tick of a Z job (`Machine::fast_tick_with`), if the machine grants one: the
+/// spindle read as on every tick, then the job's tick, counters and soft limits; `None`: run a
+/// full tick (the spindle not read yet). Interrupt rate.
+#[inline(always)]
+pub fn step_only_tick(m: &mut Motion, spindle: &mut board::Spindle) -> Option<StepOutput> {
+    if !m.machine.step_only_due() {
+        return None;
+    }
+    sense(spindle, &mut m.z);
+    m.machine.fast_tick_with(&mut m.dda, &mut m.z)
 }
 
 /// `ZTableEnd`'s install (inside the `Motion` lock).

@@ -41,7 +41,7 @@ impl JobWatch {
     pub fn new(planned_ticks: u64, slowdown: f64, slack_ticks: u64, stuck_after: Duration) -> Self {
         JobWatch {
             limit_ticks: (planned_ticks as f64 * slowdown) as u64 + slack_ticks,
-            stuck_after,
+            stuck_after: crate::link::patient(stuck_after),
             start_tick: None,
             marker: (0, Instant::now()),
         }

@@ -2,8 +2,9 @@
 //!
 //! A full tick ([`Machine::tick`]) reads and debounces the inputs, watches the faults, applies
 //! holds, keeps the job's books and leaves the outputs. While all of that is quiet -- inputs
-//! released and steady, no fault cause, no pending hold or resume, no homing, jog, event or Z
-//! job, no probe move -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be [`Machine::fast_tick`]s:
+//! released and steady, no fault cause, no pending hold or resume, no homing, jog or starve, no
+//! probe move, no event or Z job unless its step source allows step-only ticks
+//! ([`StepSource::step_only_ticks`]: a Z job with step outputs does) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be [`Machine::fast_tick`]s:
 //! the DDA tick, the step counters and the soft-limit check on the axes that stepped, nothing
 //! else. The board skips reading its inputs on those ticks too. A full tick then comes round at
 //! least every [`SUPERVISE_TICKS`] ticks, and at once after any command, fault, output change or
@@ -15,7 +16,7 @@
 //! soon as it has fired. Soft limits are still checked on every step. The job bookkeeping runs on
 //! every full tick in this mode, so it keeps its [`JOB_WATCH_TICKS`] period and the starve margin.
 
-use super::{Inputs, Machine, JOB_WATCH_TICKS};
+use super::{DdaSource, Inputs, Machine, StepSource, JOB_WATCH_TICKS};
 use crate::dda::{Dda, StepOutput};
 use crate::machine::MachineState;
 
@@ -30,12 +31,24 @@ impl Machine {
     /// compares and adds beside the DDA tick.
     #[inline(always)]
     pub fn fast_tick(&mut self, dda: &mut Dda) -> Option<StepOutput> {
+        self.fast_tick_with(dda, &mut DdaSource)
+    }
+
+    /// [`Machine::fast_tick`] with the steps from `source`, the job's own (a Z job whose
+    /// [`StepSource::step_only_ticks`] allows it): only the source's tick, the step counters
+    /// and the soft limits. The job's end is then seen on the next full tick.
+    #[inline(always)]
+    pub fn fast_tick_with(
+        &mut self,
+        dda: &mut Dda,
+        source: &mut impl StepSource,
+    ) -> Option<StepOutput> {
         if self.fast_left == 0 {
             return None;
         }
         self.fast_left -= 1;
         self.ticks += 1;
-        let step = dda.tick();
+        let step = source.tick(dda, self.paused);
         self.last_dir = step.dir();
         if step.rise() != 0 {
             // A soft-limit fault here zeroes `fast_left`: the next tick is a full one.
@@ -44,29 +57,42 @@ impl Machine {
         Some(step)
     }
 
+    /// The next tick may be a step-only one ([`Machine::fast_tick`] would step): a board that
+    /// reads a sensor for the source first (the Z job's spindle) reads it only then.
+    #[inline(always)]
+    pub fn step_only_due(&self) -> bool {
+        self.fast_left != 0
+    }
+
     /// End of a full tick: grants the next [`SUPERVISE_TICKS`]` - 1` ticks to
     /// [`Machine::fast_tick`] when nothing but the DDA has work. `raw`: this tick's inputs
     /// before the debounce.
+    /// `source_ok`: the job's step source takes step-only ticks ([`StepSource::step_only_ticks`]).
     #[inline]
-    pub(super) fn arm_fast(&mut self, raw: &Inputs) {
-        let inputs_quiet = raw.limit_min | raw.limit_max == 0
+    pub(super) fn arm_fast(&mut self, raw: &Inputs, source_ok: bool) {
+        // The machine's own state first: a capability job (every tick of one comes here) is
+        // told apart by a few flag tests, before the inputs are looked at.
+        let machine_quiet = !(self.starved || self.probe.watching())
+            && (source_ok || !(self.event_job || self.z_job))
+            && self.active == 0
+            && !(self.frozen || self.abort_pending || self.hold_pending || self.resume_pending)
+            && self.jog.is_none()
+            && matches!(
+                self.state,
+                MachineState::Idle
+                    | MachineState::Ready
+                    | MachineState::Running
+                    | MachineState::Holding
+            );
+        let quiet = machine_quiet
+            && raw.limit_min | raw.limit_max == 0
             && !raw.estop
             && raw.sensor_faults == 0
             && raw.link_ok
             && !raw.tick_overrun
             && raw.probe == self.switch_filter.probe_level()
             && self.switch_filter.quiet();
-        let machine_quiet = matches!(
-            self.state,
-            MachineState::Idle
-                | MachineState::Ready
-                | MachineState::Running
-                | MachineState::Holding
-        ) && self.active == 0
-            && !(self.frozen || self.abort_pending || self.hold_pending || self.resume_pending)
-            && !(self.starved || self.event_job || self.z_job || self.probe.watching())
-            && self.jog.is_none();
-        if inputs_quiet && machine_quiet {
+        if quiet {
             self.fast_left = SUPERVISE_TICKS - 1;
             // The full tick that ends this run keeps the job's books.
             self.job_watch_in = 1;

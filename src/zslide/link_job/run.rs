@@ -3,7 +3,7 @@
 
 use super::spec::{ZJobSpec, ZStartError};
 use super::upload::LinkTable;
-use crate::zslide::command::{ZCommandConfig, ZGen, ZUpdate};
+use crate::zslide::command::{ZCommandConfig, ZGen, ZState, ZUpdate};
 use crate::zslide::output::{DacScale, StepScale};
 use crate::zslide::table::MAX_WIDTH;
 
@@ -72,6 +72,61 @@ pub(super) struct ZRun {
     pub(super) update_phase: u8,
     /// Largest |command - output| while following, inches Q32.
     pub(super) max_following_in_q32: i64,
+    /// The table's coefficients at the X the next update is expected at, interpolated on the
+    /// tick before it: half of an update's work.
+    pub(super) ahead: Ahead,
+}
+
+/// Coefficients interpolated a tick ahead of the update that uses them.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Ahead {
+    /// Set by [`ZRun::interpolate_ahead`], cleared by the update that comes next.
+    pub(super) valid: bool,
+    /// The X they were interpolated at: used only if the update's X is the same.
+    pub(super) x_in_q24: i32,
+    /// The first `form.width()` are the row (a power-form row uses 4).
+    pub(super) coeffs_in_q32: [i32; MAX_WIDTH],
+}
+
+impl ZRun {
+    pub(super) fn state(&self) -> ZState {
+        match &self.gen {
+            Gen::Power(g) => g.state(),
+            Gen::Harmonic(g) => g.state(),
+        }
+    }
+
+    /// X after one more tick: it feeds while the command follows the table, not in a hold.
+    #[inline]
+    pub(super) fn fed_x_in_q24(&self, hold: bool) -> i32 {
+        let end = self.spec.x_end_in_q24;
+        if !hold && self.state() == ZState::Running && self.x_in_q24 < end {
+            self.x_in_q24.saturating_add(self.spec.x_feed_in_q24_per_tick).min(end)
+        } else {
+            self.x_in_q24
+        }
+    }
+
+    /// The coefficients at `x_in_q24` into [`ZRun::ahead`], for the next update.
+    #[inline]
+    pub(super) fn interpolate_ahead(&mut self, table: &LinkTable, x_in_q24: i32) {
+        let a = &mut self.ahead;
+        match (&self.gen, table) {
+            (Gen::Power(g), LinkTable::Power(t)) => {
+                let row = t.coefficients(x_in_q24, g.interp());
+                for (to, c) in a.coeffs_in_q32.iter_mut().zip(row) {
+                    *to = c;
+                }
+            }
+            (Gen::Harmonic(g), LinkTable::Harmonic(t)) => {
+                a.coeffs_in_q32 = t.coefficients(x_in_q24, g.interp());
+            }
+            // Not reachable: a run exists only with the table it was made for.
+            _ => return,
+        }
+        a.x_in_q24 = x_in_q24;
+        a.valid = true;
+    }
 }
 
 /// A run prepared by [`ZJob::prepare`], for [`ZJob::begin`].
@@ -103,7 +158,7 @@ pub(super) fn prepare_run(
         }
     };
     let dac_code = dac.and_then(|d| d.code(0).ok()).unwrap_or(crate::machine::Z_DAC_MID_SCALE);
-    Ok(ZRun {
+    let mut run = ZRun {
         spec: *spec,
         gen,
         x_in_q24: x,
@@ -121,5 +176,10 @@ pub(super) fn prepare_run(
         update_shift,
         update_phase: 0,
         max_following_in_q32: 0,
-    })
+        ahead: Ahead { valid: false, x_in_q24: 0, coeffs_in_q32: [0; MAX_WIDTH] },
+    };
+    // The first update, on the first tick, finds its coefficients ready.
+    let x = run.fed_x_in_q24(false);
+    run.interpolate_ahead(table, x);
+    Ok(run)
 }

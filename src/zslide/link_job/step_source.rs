@@ -7,6 +7,7 @@ use super::upload::LinkTable;
 use crate::dda::{Dda, StepOutput};
 use crate::machine::StepSource;
 use crate::zslide::command::ZState;
+use crate::zslide::table::MAX_WIDTH;
 
 impl StepSource for ZJob {
     /// X feed, Z update, pins. Division-free: multiplies, shifts and compares.
@@ -19,27 +20,28 @@ impl StepSource for ZJob {
         let Some(run) = &mut self.run else {
             return StepOutput::new(0, 0, 0, 0);
         };
-        let state = match &run.gen {
-            Gen::Power(g) => g.state(),
-            Gen::Harmonic(g) => g.state(),
-        };
+        let state = run.state();
         // X feeds while the command follows the table (as the scenario), not in a hold.
-        if !hold && state == ZState::Running && run.x_in_q24 < run.spec.x_end_in_q24 {
-            run.x_in_q24 = run
-                .x_in_q24
-                .saturating_add(run.spec.x_feed_in_q24_per_tick)
-                .min(run.spec.x_end_in_q24);
-        }
+        run.x_in_q24 = run.fed_x_in_q24(hold);
         // The generator every 2^shift ticks (at once on a sensor fault); between, its command
         // taken forward by its derivatives: a few multiplies instead of a table evaluation.
         let u = if run.update_phase == 0 || source_fault.is_some() {
             let speed = per_update(speed, run.update_shift);
+            let x = run.x_in_q24;
+            // Interpolated on the tick before, at the X this update turned out to have.
+            let ahead = run.ahead.valid && run.ahead.x_in_q24 == x;
+            run.ahead.valid = false;
+            let row = &run.ahead.coeffs_in_q32;
             let u = match (&mut run.gen, &self.table) {
                 (Gen::Power(g), LinkTable::Power(t)) => {
-                    g.update(t, run.x_in_q24, angle, speed, source_fault)
+                    let interp = g.interp();
+                    let c = || if ahead { narrow(row) } else { t.coefficients(x, interp) };
+                    g.update_from(t.form(), c, x, angle, speed, source_fault)
                 }
                 (Gen::Harmonic(g), LinkTable::Harmonic(t)) => {
-                    g.update(t, run.x_in_q24, angle, speed, source_fault)
+                    let interp = g.interp();
+                    let c = || if ahead { *row } else { t.coefficients(x, interp) };
+                    g.update_from(t.form(), c, x, angle, speed, source_fault)
                 }
                 // Not reachable: the table cannot change while a run exists.
                 _ => run.last,
@@ -51,6 +53,12 @@ impl StepSource for ZJob {
             run.last.shifted(((run.update_phase as i32) << 16) >> run.update_shift)
         };
         run.update_phase = (run.update_phase + 1) & ((1u8 << run.update_shift) - 1);
+        if run.update_phase == 0 && run.update_shift > 0 {
+            // The next tick updates: half its work now, the coefficients at the X it will have
+            // if it feeds as this one did (a hold beginning then leaves them unused).
+            let x = run.fed_x_in_q24(hold);
+            run.interpolate_ahead(&self.table, x);
+        }
         run.command = u;
         // X axis: toward the commanded X in steps.
         let x_rel = run.x_in_q24 as i64 - run.spec.x_start_in_q24 as i64;
@@ -83,6 +91,13 @@ impl StepSource for ZJob {
         StepOutput::new(fall, xw | zw, run.pins.dir, rise)
     }
 
+    /// Step outputs only: a DAC job writes its code on every tick, which step-only ticks do
+    /// not. The generator freezes its command on a spindle fault at once; the machine latches
+    /// the fault on its next full tick.
+    fn step_only_ticks(&self) -> bool {
+        self.run.as_ref().is_some_and(|r| r.dac.is_none())
+    }
+
     /// Done: the command finished (past the blend), X at its end, the axes at their targets.
     fn idle(&self, _dda: &Dda) -> bool {
         let Some(run) = &self.run else { return true };
@@ -96,4 +111,10 @@ impl StepSource for ZJob {
         let x_target = (x_rel * run.spec.x_steps_per_in as i64 + (1 << 23)) >> 24;
         finished && z_home && x_target == run.x_steps
     }
+}
+
+/// A power-form row out of the ahead buffer.
+#[inline]
+fn narrow(c: &[i32; MAX_WIDTH]) -> [i32; 4] {
+    core::array::from_fn(|k| c.get(k).copied().unwrap_or(0))
 }

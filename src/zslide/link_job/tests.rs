@@ -1,6 +1,7 @@
 use super::run::Gen;
 use super::*;
-use crate::dda::Dda;
+use crate::dda::{Dda, StepOutput};
+use crate::machine::machine::SUPERVISE_TICKS;
 use crate::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use crate::protocol::errors::FaultCode;
 use crate::protocol::HomingConfig;
@@ -131,17 +132,41 @@ impl Rig {
         Rig { m, dda, job, sim, enc }
     }
 
-    /// One firmware tick: spindle, sense, inputs (the job's faults), machine.
-    fn tick(&mut self, t: u32, index_lost: bool) {
+    /// One firmware tick with full ticks only: spindle, sense, inputs (the job's faults),
+    /// machine.
+    fn tick(&mut self, t: u32, index_lost: bool) -> StepOutput {
+        self.sense(t, index_lost);
+        self.full_tick()
+    }
+
+    /// One firmware tick as the link firmware runs it: a step-only tick when the machine
+    /// grants one (and true), else a full one.
+    fn tick_step_only(&mut self, t: u32, index_lost: bool) -> (StepOutput, bool) {
+        self.sense(t, index_lost);
+        let step = if self.m.z_job() {
+            self.m.fast_tick_with(&mut self.dda, &mut self.job)
+        } else {
+            self.m.fast_tick(&mut self.dda)
+        };
+        match step {
+            Some(s) => (s, true),
+            None => (self.full_tick(), false),
+        }
+    }
+
+    fn sense(&mut self, t: u32, index_lost: bool) {
         self.sim.advance(sc::spindle_speed_at(t));
         let (c, i) = self.sim.encoder(sc::CPR);
         self.enc.update(c, if index_lost { None } else { i });
         self.job.sense_from(&self.enc);
+    }
+
+    fn full_tick(&mut self) -> StepOutput {
         let inp = Inputs { sensor_faults: self.job.take_sensor_faults(), ..Inputs::QUIET };
         if self.m.z_job() {
-            self.m.tick_with(&mut self.dda, &inp, &mut self.job);
+            self.m.tick_with(&mut self.dda, &inp, &mut self.job).step
         } else {
-            self.m.tick(&mut self.dda, &inp);
+            self.m.tick(&mut self.dda, &inp).step
         }
     }
 
@@ -276,4 +301,127 @@ fn start_refusals_change_nothing() {
     assert!(!rig.job.is_running());
     let bad = ZJobSpec { x_axis: Z_AXIS, ..spec() };
     assert_eq!(rig.job.start(&bad, sc::TICK_HZ), Err(ZStartError::Spec));
+}
+
+#[test]
+fn coefficients_interpolated_a_tick_ahead_change_no_command() {
+    // Two boards in lockstep; one forgets the coefficients taken ahead before every tick, so
+    // each of its updates interpolates afresh. Holds begin and end on both ticks of the
+    // update cycle (a hold beginning on an update tick leaves X where the ahead tick did not
+    // expect it).
+    let (mut a, mut b) = (Rig::new(), Rig::new());
+    let (mut used, mut refused) = (0u32, 0u32);
+    const HOLD_EVERY_TICKS: u32 = 997;
+    const HOLD_TICKS: u32 = 13;
+    for t in 0..sc::RUN_TICKS {
+        if t == sc::ENGAGE_TICK {
+            a.start();
+            b.start();
+        }
+        if t > sc::ENGAGE_TICK && a.m.z_job() {
+            let cmd = match t % HOLD_EVERY_TICKS {
+                0 => Some(MachineCommand::Hold),
+                HOLD_TICKS => Some(MachineCommand::Resume),
+                _ => None,
+            };
+            if let Some(c) = cmd {
+                for r in [&mut a, &mut b] {
+                    r.m.command(c, &mut r.dda).unwrap();
+                }
+            }
+        }
+        if let Some(run) = b.job.run.as_mut() {
+            run.ahead.valid = false;
+        }
+        let ahead_x = a.job.run.as_ref().filter(|r| r.ahead.valid).map(|r| r.ahead.x_in_q24);
+        a.tick(t, false);
+        b.tick(t, false);
+        if let (Some(x), Some(run)) = (ahead_x, a.job.run.as_ref()) {
+            if run.update_phase == 1 {
+                if Some(x) == a.job.x_in_q24() {
+                    used += 1;
+                } else {
+                    refused += 1;
+                }
+            }
+        }
+        assert_eq!(a.job.last(), b.job.last(), "tick {t}");
+        assert_eq!(a.m.positions(), b.m.positions(), "tick {t}");
+        assert_eq!(a.m.state(), b.m.state(), "tick {t}");
+    }
+    eprintln!("ahead coefficients used on {used} updates, not on {refused}");
+    assert_eq!(a.m.faults().mask(), 0);
+    assert_eq!(a.m.state(), MachineState::Ready);
+    assert!(used > sc::FEED_TICKS / 4, "{used}");
+    assert!(refused > 0, "no hold began on an update tick");
+}
+
+#[test]
+fn step_only_ticks_step_a_z_job_as_full_ticks_do() {
+    let (mut full, mut fast) = (Rig::new(), Rig::new());
+    let (mut job_ticks, mut step_only) = (0u32, 0u32);
+    let mut ended = None;
+    for t in 0..sc::RUN_TICKS {
+        if t == sc::ENGAGE_TICK {
+            full.start();
+            fast.start();
+        }
+        let running = full.m.z_job();
+        let a = full.tick(t, false);
+        let (b, was_step_only) = fast.tick_step_only(t, false);
+        if running {
+            assert_eq!(a, b, "tick {t}");
+            job_ticks += 1;
+            step_only += u32::from(was_step_only);
+        } else if t > sc::ENGAGE_TICK && ended.is_none() {
+            ended = Some(t);
+        }
+    }
+    eprintln!("{step_only} of the job's {job_ticks} ticks were step-only");
+    // Every full tick grants the next 7 (the job's end waits for a full one).
+    assert!(u64::from(step_only) * 8 >= u64::from(job_ticks) * 7 - 8, "{step_only}/{job_ticks}");
+    assert!(ended.is_some());
+    for r in [&full, &fast] {
+        assert_eq!(r.m.state(), MachineState::Ready);
+        assert_eq!(r.m.faults().mask(), 0);
+        assert_eq!(r.job.steps(), Some((7500, 0)));
+    }
+    assert_eq!(full.m.positions(), fast.m.positions());
+}
+
+#[test]
+fn a_z_job_fault_on_a_step_only_tick_freezes_the_command_at_once_and_latches_within_a_period() {
+    let lose_after_turns = 5;
+    let run = |step_only: bool| {
+        let mut r = Rig::new();
+        let mut latched = None;
+        let mut frozen_from = None;
+        for t in 0..sc::RUN_TICKS / 2 {
+            if t == sc::ENGAGE_TICK {
+                r.start();
+            }
+            let lost = r.sim.turns() > lose_after_turns;
+            if step_only {
+                r.tick_step_only(t, lost);
+            } else {
+                r.tick(t, lost);
+            }
+            if frozen_from.is_none()
+                && r.job.state() == Some(ZState::Faulted(FaultCode::EncoderIndex))
+            {
+                frozen_from = Some(t);
+            }
+            if latched.is_none() && r.m.faults().has(FaultCode::EncoderIndex) {
+                latched = Some(t);
+            }
+        }
+        (frozen_from.expect("the command froze"), latched.expect("the fault latched"), r)
+    };
+    let (frozen_full, latched_full, _) = run(false);
+    let (frozen_fast, latched_fast, r) = run(true);
+    assert_eq!(frozen_fast, frozen_full, "the generator froze on the same tick");
+    assert!(
+        latched_fast >= latched_full && latched_fast < latched_full + u32::from(SUPERVISE_TICKS)
+    );
+    assert_eq!(r.m.state(), MachineState::Fault);
 }

@@ -36,6 +36,10 @@ const CORE_HZ: f64 = 168_000_000.0;
 const STEPS_PER_TICK_PER_AXIS: f64 = 0.5;
 /// Axes stepping together in the 4-axis job, the largest case profiled.
 const PROFILED_AXES: f64 = 4.0;
+/// How much longer than for a real board motionctl waits on the traced QEMU: single-stepping
+/// with a trace of every instruction makes it hundreds of times slower than real time, more on a
+/// loaded machine. The whole job still has [`JOB_TIMEOUT`].
+const TRACED_PATIENCE: u32 = 100;
 /// A traced job that takes longer than this has hung.
 const JOB_TIMEOUT: Duration = Duration::from_secs(20 * 60);
 
@@ -223,6 +227,7 @@ fn profile_job(
             .args(&job.args)
             .current_dir(root)
             .env("PATH", &path)
+            .env(motionctl::link::PATIENCE_ENV, TRACED_PATIENCE.to_string())
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
