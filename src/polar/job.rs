@@ -174,12 +174,61 @@ mod tests {
             }
         }
 
-        /// One tick as the link firmware does it: feeder refill, then the machine's tick.
+        /// One tick with full ticks only: feeder refill, then the machine's tick.
         fn tick(&mut self, inp: &Inputs) -> crate::machine::TickOut {
             self.feed.fill(&mut self.play);
             self.ticks += 1;
             self.m.tick_with(&mut self.dda, inp, &mut self.play)
         }
+
+        /// One tick as the link firmware runs it: a step-only tick when the machine grants one
+        /// (and true), else a full one.
+        fn tick_step_only(&mut self) -> (crate::dda::StepOutput, bool) {
+            self.feed.fill(&mut self.play);
+            self.ticks += 1;
+            match self.m.fast_tick_with(&mut self.dda, &mut self.play) {
+                Some(step) => (step, true),
+                None => {
+                    (self.m.tick_with(&mut self.dda, &Inputs::QUIET, &mut self.play).step, false)
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn step_only_ticks_play_an_event_job_as_full_ticks_do() {
+        let (scale, rate) = (SizeScale::new(3, 2).unwrap(), Rate::lit("2"));
+        let (mut full, mut fast) = (Run::new(scale, rate), Run::new(scale, rate));
+        for r in [&mut full, &mut fast] {
+            r.queue(usize::MAX);
+            r.feed.fill(&mut r.play);
+            r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        }
+        let (mut job_ticks, mut step_only) = (0u64, 0u64);
+        while fast.m.state() == MachineState::Running && fast.ticks < 100_000_000 {
+            let running = full.m.state() == MachineState::Running;
+            full.queue(usize::MAX);
+            fast.queue(usize::MAX);
+            let a = full.tick(&Inputs::QUIET).step;
+            let (b, was_step_only) = fast.tick_step_only();
+            if running {
+                assert_eq!(a, b, "tick {}", full.ticks);
+                job_ticks += 1;
+                step_only += u64::from(was_step_only);
+            }
+        }
+        eprintln!("{step_only} of the job's {job_ticks} ticks were step-only");
+        // Every full tick grants the next 7, but for the ones a queued block makes full.
+        let commands = fast.blocks.len() as u64;
+        assert!(step_only * 8 >= job_ticks * 7 - 8 * (commands + 1), "{step_only}/{job_ticks}");
+        for r in [&full, &fast] {
+            assert_eq!(r.m.state(), MachineState::Ready, "faults {:#x}", r.m.faults().mask());
+        }
+        assert_eq!(full.m.positions(), fast.m.positions());
+        assert_eq!(full.play.fired(), fast.play.fired());
+        // The end is seen on the next full tick.
+        let late = fast.ticks - full.ticks;
+        assert!(late < u64::from(crate::machine::machine::SUPERVISE_TICKS), "{late}");
     }
 
     #[test]

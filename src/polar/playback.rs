@@ -266,6 +266,12 @@ impl StepSource for Playback {
     fn starved(&self) -> bool {
         Playback::starved(self)
     }
+
+    /// Pins only. A late host's underrun, and the job's end, are seen on the next full tick;
+    /// the playback stops its own clock when it runs dry either way.
+    fn step_only_ticks(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]

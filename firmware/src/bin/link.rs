@@ -211,17 +211,26 @@ mod app {
         let port = cx.shared.step_port;
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
-        // still, or a Z job with step outputs; no status run due and no e-stop edge. A turning
-        // spindle's decoder still sees every tick.
-        if *l.step_only != StepOnly::No && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
-            let step = if *l.step_only == StepOnly::Z {
-                let spindle = &mut *l.spindle;
-                cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
-            } else {
+        // still, an event job, or a Z job with step outputs; no status run due and no e-stop
+        // edge. A turning spindle's decoder still sees every tick.
+        if *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+            // The plain job's test first: its step-only tick is the one the budget is for.
+            let kind = *l.step_only;
+            let step = if kind == StepOnly::Plain {
                 if !*l.spindle_at_rest {
                     l.spindle.update();
                 }
                 cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda))
+            } else if kind == StepOnly::Z {
+                let spindle = &mut *l.spindle;
+                cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
+            } else if kind == StepOnly::Events {
+                if !*l.spindle_at_rest {
+                    l.spindle.update();
+                }
+                cx.shared.motion.lock(|m| m.machine.fast_tick_with(&mut m.dda, &mut m.playback))
+            } else {
+                None
             };
             if let Some(step) = step {
                 port.write(&step);
@@ -262,6 +271,7 @@ mod app {
                 *l.step_only = StepOnly::Z;
                 out
             } else if m.machine.event_job() {
+                *l.step_only = StepOnly::Events;
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
                 if still {

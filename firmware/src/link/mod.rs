@@ -74,6 +74,8 @@ pub enum StepOnly {
     Plain,
     /// A Z job's: the spindle is read first.
     Z,
+    /// An event job's (the playback).
+    Events,
 }
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
