@@ -13,7 +13,7 @@
 //! paths are integer-only, division-free and bounded (one plant sample, one ADC conversion, one
 //! chain sample of three channels, and every `DECIMATION`th sample one control update).
 
-use crate::dda::{Command, Dda};
+use crate::dda::{Command, Dda, StepOutput};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
 use crate::protocol::{
     FaultCode, ForceJobParams, ForcePhase, ForceStrategy, SimForceFault, SimMillingParams,
@@ -635,6 +635,28 @@ pub fn link_tick_deferred(
         }
     }
     (out, due)
+}
+
+/// A step-only tick of a force job ([`Machine::fast_tick`]), if the machine grants one: the
+/// DDA, the counters, the soft limits and the sample countdown (true: a sample is due, as from
+/// [`link_tick_deferred`]). `None`: run [`link_tick_deferred`]. The machine grants none while
+/// the job has a force fault latched (its bits are sensor inputs of the full tick), so a fault
+/// found by a sample reaches the machine on the next full tick, at most
+/// `SUPERVISE_TICKS - 1` ticks later; the job's end is seen there too.
+#[inline(always)]
+pub fn link_step_only_deferred(
+    machine: &mut Machine,
+    dda: &mut Dda,
+    job: &mut ForceJob,
+) -> Option<(StepOutput, bool)> {
+    if !job.is_running() {
+        return None;
+    }
+    let step = machine.fast_tick(dda)?;
+    // A soft limit crossed on this tick faulted the machine: the next full tick ends the job.
+    let due = matches!(machine.state(), MachineState::Running | MachineState::Holding)
+        && job.sample_due();
+    Some((step, due))
 }
 
 /// The plant sample [`link_tick_deferred`] said is due: the chain, the control law at its rate,

@@ -44,9 +44,38 @@ const FORCE_BITS: u32 = FaultCode::ForceSaturated.bit()
     | FaultCode::ForceTrip.bit()
     | FaultCode::SpindleStopped.bit();
 
-/// Queue the Case A move, arm `job` with the sim plant `sim`, start, and tick like the link
-/// firmware until the job ends (or 5 s).
+/// Queue the Case A move, arm `job` with the sim plant `sim`, start, and tick with full ticks
+/// only until the job ends (or 5 s).
 fn run(job: ForceJobParams, sim: SimMillingParams) -> Outcome {
+    run_with(job, sim, false).0
+}
+
+/// One tick like the link firmware: a step-only tick when `step_only` and the machine grants
+/// one, else a full one; the sample after it when due. The pins, and whether it was step-only.
+fn firmware_tick(
+    m: &mut Machine,
+    dda: &mut Dda,
+    fj: &mut ForceJob,
+    step_only: bool,
+) -> (crate::dda::StepOutput, bool) {
+    if step_only {
+        if let Some((step, due)) = link_step_only_deferred(m, dda, fj) {
+            if due {
+                link_sample(m, dda, fj);
+            }
+            return (step, true);
+        }
+    }
+    (link_tick(m, dda, &Inputs::QUIET, fj).step, false)
+}
+
+/// [`run`], with step-only ticks where granted (`step_only`); also the pins of every tick
+/// and how many ticks were step-only.
+fn run_with(
+    job: ForceJobParams,
+    sim: SimMillingParams,
+    step_only: bool,
+) -> (Outcome, std::vec::Vec<crate::dda::StepOutput>, u64) {
     let (mut m, mut dda, mut prep) = ready();
     let seg = sc::segment();
     m.command(MachineCommand::Queue(&seg), &mut dda).unwrap();
@@ -61,8 +90,12 @@ fn run(job: ForceJobParams, sim: SimMillingParams) -> Outcome {
     let mut o = Outcome::default();
     let (mut t, mut seen, mut step_tick, mut last_out) = (0u64, 0u32, None::<u64>, 0u64);
     let (mut x300, mut x400) = (0i64, 0i64);
+    let (mut pins, mut step_only_ticks) = (std::vec::Vec::new(), 0u64);
     while t < sc::TICK_HZ as u64 * 5 {
-        let out = link_tick(&mut m, &mut dda, &Inputs::QUIET, &mut fj);
+        let (step, was_step_only) = firmware_tick(&mut m, &mut dda, &mut fj, step_only);
+        pins.push(step);
+        step_only_ticks += u64::from(was_step_only);
+        let out = TickOut { step, outputs: m.outputs() };
         t += 1;
         if out.step.rise() & 1 != 0 {
             o.steps += if out.step.dir() & 1 != 0 { -1 } else { 1 };
@@ -94,9 +127,9 @@ fn run(job: ForceJobParams, sim: SimMillingParams) -> Outcome {
     }
     // A few more ticks: a held DDA must stay put.
     for _ in 0..500 {
-        let out = link_tick(&mut m, &mut dda, &Inputs::QUIET, &mut fj);
-        if out.step.rise() & 1 != 0 {
-            o.steps += if out.step.dir() & 1 != 0 { -1 } else { 1 };
+        let (step, _) = firmware_tick(&mut m, &mut dda, &mut fj, step_only);
+        if step.rise() & 1 != 0 {
+            o.steps += if step.dir() & 1 != 0 { -1 } else { 1 };
         }
     }
     o.state = Some(m.state());
@@ -107,7 +140,44 @@ fn run(job: ForceJobParams, sim: SimMillingParams) -> Outcome {
     o.feed_after_um_s = (x400 - x300) * 10;
     o.phase = fj.telemetry().phase;
     o.active_force_causes = m.active_causes() & FORCE_BITS;
-    o
+    (o, pins, step_only_ticks)
+}
+
+#[test]
+fn step_only_ticks_run_case_a_as_full_ticks_do() {
+    let (full, full_pins, none) = run_with(case_a_job(), case_a_sim(SimForceFault::None), false);
+    let (fast, fast_pins, step_only) =
+        run_with(case_a_job(), case_a_sim(SimForceFault::None), true);
+    assert_eq!(none, 0);
+    // The same pins on every tick of the job (the step-only run sees its end up to 7 ticks
+    // later, with nothing left to step).
+    let n = full_pins.len().min(fast_pins.len());
+    assert_eq!(full_pins[..n], fast_pins[..n]);
+    assert_eq!(
+        (fast.state, fast.faults, fast.position, fast.steps, fast.phase, fast.updates),
+        (full.state, full.faults, full.position, full.steps, full.phase, full.updates)
+    );
+    eprintln!("{step_only} of {} ticks step-only", fast_pins.len());
+    assert!(step_only * 8 >= fast_pins.len() as u64 * 7 - 64, "{step_only}/{}", fast_pins.len());
+}
+
+#[test]
+fn a_force_trip_on_step_only_ticks_holds_within_a_supervision_period() {
+    let job = ForceJobParams { trip_mn: 12_000_000, ..case_a_job() };
+    let sim = case_a_sim(SimForceFault::None);
+    let (full, full_pins, _) = run_with(job, sim, false);
+    let (fast, fast_pins, _) = run_with(job, sim, true);
+    for o in [&full, &fast] {
+        assert_eq!(o.state, Some(MachineState::Fault));
+        assert_eq!(o.faults & FORCE_BITS, FaultCode::ForceTrip.bit());
+        assert_eq!(o.steps, o.position, "position intact");
+    }
+    // The trip is latched at most 7 ticks later: the pins agree until the full-tick run's
+    // freeze, and the step-only run's position is at most those ticks further on.
+    let frozen = full_pins.iter().rposition(|s| s.rise() != 0).unwrap_or(0);
+    assert_eq!(full_pins[..frozen], fast_pins[..frozen]);
+    let extra = fast.position - full.position;
+    assert!((0..u64::from(crate::machine::machine::SUPERVISE_TICKS) as i64).contains(&extra));
 }
 
 #[test]

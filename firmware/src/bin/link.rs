@@ -5,8 +5,9 @@
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
 //! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
 //! job (after reading the spindle) during a Z job -- and drives the step port and outputs; while
-//! the machine grants it (a quiet plain job or none, or a Z job with step outputs), 7 ticks in 8
-//! are `Machine::fast_tick` (DDA or Z job, counters, soft limits) and read no inputs; `estop` (EXTI, 3) cuts the drivers on
+//! the machine grants it (a quiet plain or force job or none, an event job, or a Z job with step
+//! outputs), 7 ticks in 8 are `Machine::fast_tick` (the job's stepping, counters, soft limits)
+//! and read no inputs; `estop` (EXTI, 3) cuts the drivers on
 //! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
 //! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
@@ -211,7 +212,7 @@ mod app {
         let port = cx.shared.step_port;
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
-        // still, an event job, or a Z job with step outputs; no status run due and no e-stop
+        // still, a force or event job, or a Z job with step outputs; no status run due and no e-stop
         // edge. A turning spindle's decoder still sees every tick.
         if *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
             // The plain job's test first: its step-only tick is the one the budget is for.
@@ -224,6 +225,9 @@ mod app {
             } else if kind == StepOnly::Z {
                 let spindle = &mut *l.spindle;
                 cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
+            } else if kind == StepOnly::Force {
+                let spindle = &mut *l.spindle;
+                cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
             } else if kind == StepOnly::Events {
                 if !*l.spindle_at_rest {
                     l.spindle.update();
@@ -264,6 +268,7 @@ mod app {
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
                 out
             } else if let Some(out) = link::force::tick(m, &inputs) {
+                *l.step_only = StepOnly::Force;
                 out
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
                 out

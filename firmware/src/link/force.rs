@@ -15,7 +15,7 @@
 //! to [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
-use motion::dda::Command;
+use motion::dda::{Command, StepOutput};
 use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
@@ -53,12 +53,35 @@ pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
     let job = job.force_mut().filter(|j| j.is_running())?;
     let (out, due) = link_job::link_tick_deferred(machine, dda, inputs, job);
     if due {
-        // The sample runs in the force interrupt, after this tick and before the next (the
-        // real board's ADC DMA interrupt, at the tick's priority): the tick stays short.
-        SAMPLE_DUE.store(true, Relaxed);
-        rtic::pend(crate::board::FORCE_IRQ);
+        pend_sample();
     }
     Some(out)
+}
+
+/// A step-only tick of a running force job (`link_job::link_step_only_deferred`: the DDA,
+/// counters, soft limits and the sample countdown), if the machine grants one; `None`: run
+/// [`tick`] (the spindle not read yet). The spindle is read as on every tick: the job's
+/// spindle-stop check uses its speed. Interrupt rate.
+#[inline(always)]
+pub fn step_only_tick(m: &mut Motion, spindle: &mut crate::board::Spindle) -> Option<StepOutput> {
+    if !m.machine.step_only_due() || !m.job.force().is_some_and(|j| j.is_running()) {
+        return None;
+    }
+    super::zslide::sense(spindle, &mut m.z);
+    let Motion { dda, machine, job, .. } = m;
+    let (step, due) = link_job::link_step_only_deferred(machine, dda, job.force_mut()?)?;
+    if due {
+        pend_sample();
+    }
+    Some(step)
+}
+
+/// The sample runs in the force interrupt, after this tick and before the next (the real
+/// board's ADC DMA interrupt, at the tick's priority): the tick stays short.
+#[inline(always)]
+fn pend_sample() {
+    SAMPLE_DUE.store(true, Relaxed);
+    rtic::pend(crate::board::FORCE_IRQ);
 }
 
 /// A simulator board's plant sample is due ([`tick`] pended the force interrupt).

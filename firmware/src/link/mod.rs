@@ -76,6 +76,8 @@ pub enum StepOnly {
     Z,
     /// An event job's (the playback).
     Events,
+    /// A force job's (the sample countdown pends the force interrupt).
+    Force,
 }
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
