@@ -1,0 +1,49 @@
+//! Where a tick's steps come from: the [`StepSource`] trait and the DDA's own ([`DdaSource`]).
+
+use crate::dda::{Dda, StepOutput};
+
+/// Where a tick's steps come from: the DDA ([`DdaSource`], segment jobs) or a recorded
+/// step-event playback (`motion::polar::playback::Playback`, event jobs). The machine runs
+/// either through the same tick ([`Machine::tick_with`](super::Machine::tick_with)): fault
+/// inputs, e-stop freeze, step counters, soft limits and job end are the same code for both.
+pub trait StepSource {
+    /// One tick's pins. The source ticks `dda` itself (an event source ticks the idle DDA too,
+    /// for its clock and feed commands). `hold`: a feed hold or a hold reaction is in force (the
+    /// DDA decelerates on its own; an event source stops its clock). Interrupt rate: integer
+    /// work only, bounded, no division.
+    fn tick(&mut self, dda: &mut Dda, hold: bool) -> StepOutput;
+    /// Nothing left to step: the job is done once the machine sees this while `Running`.
+    fn idle(&self, dda: &Dda) -> bool;
+    /// Ran dry before its end (a late host): raises `QueueUnderrun`. The DDA reports its own
+    /// underruns through `Dda::underruns`, hence the default.
+    fn starved(&self) -> bool {
+        false
+    }
+    /// The machine may run this source's ticks as step-only ones between full ticks
+    /// ([`Machine::fast_tick_with`](super::Machine::fast_tick_with)): the source drives nothing
+    /// but its pins on each tick, and its end, and faults it passes to the machine, may be seen
+    /// up to [`SUPERVISE_TICKS`](super::SUPERVISE_TICKS)` - 1` ticks later.
+    fn step_only_ticks(&self) -> bool {
+        false
+    }
+}
+
+/// The DDA as a [`StepSource`]: what [`Machine::tick`](super::Machine::tick) runs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DdaSource;
+
+impl StepSource for DdaSource {
+    #[inline(always)]
+    fn tick(&mut self, dda: &mut Dda, _hold: bool) -> StepOutput {
+        dda.tick()
+    }
+
+    #[inline(always)]
+    fn idle(&self, dda: &Dda) -> bool {
+        dda.is_idle()
+    }
+
+    fn step_only_ticks(&self) -> bool {
+        true
+    }
+}
