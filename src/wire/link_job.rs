@@ -249,6 +249,28 @@ impl StepSource for Source<'_> {
     fn starved(&self) -> bool {
         self.job.starved
     }
+
+    /// Pins only (the stall switch is read on every tick). The machine latches a stall fault
+    /// the controller reports, and the wire power follows it, on the next full tick.
+    fn step_only_ticks(&self) -> bool {
+        true
+    }
+}
+
+/// A step-only tick of a running wire job ([`Machine::fast_tick_with`]: the controller with the
+/// stall switch `stall_raw`, the counters, the soft limits), if the machine grants one; `None`:
+/// run [`tick`]. Interrupt rate.
+#[inline(always)]
+pub fn step_only_tick(
+    machine: &mut Machine,
+    dda: &mut Dda,
+    job: &mut WireJob,
+    stall_raw: bool,
+) -> Option<StepOutput> {
+    if !(job.live && job.started && machine.event_job()) {
+        return None;
+    }
+    machine.fast_tick_with(dda, &mut Source { job, stall_raw })
 }
 
 /// One link-firmware tick with a wire job (interrupt rate: integer work, bounded, no
@@ -338,6 +360,17 @@ mod tests {
     /// (`lead` segments ahead at most), the feeder runs whenever the tick says so, the tick
     /// is [`tick`]. `stall(t)` is the switch level at tick `t` of the job.
     fn run(lead: usize, stall: impl Fn(u64) -> bool, estop: impl Fn(u64) -> bool) -> Outcome {
+        run_with(lead, stall, estop, false).0
+    }
+
+    /// [`run`], with step-only ticks where the machine grants them (`step_only`); also how
+    /// many ticks were step-only.
+    fn run_with(
+        lead: usize,
+        stall: impl Fn(u64) -> bool,
+        estop: impl Fn(u64) -> bool,
+        step_only: bool,
+    ) -> (Outcome, u64) {
         let (mut m, mut dda, mut prep) = ready();
         let js = job();
         let mut w = WireJob::new(&machine::config(), STALL_PARAMS, js.len() as u32).unwrap();
@@ -356,6 +389,7 @@ mod tests {
         w.start(&mut dda).unwrap();
         let mut rec = StepRecorder::new();
         let (mut t, mut power_while_stalled, mut power_on_ticks) = (0u64, false, 0u64);
+        let mut step_only_ticks = 0u64;
         while m.state() == MachineState::Running && t < 20_000_000 {
             let (done, _) = w.progress();
             send(&mut m, &mut dda, &mut w, done + lead);
@@ -363,7 +397,16 @@ mod tests {
                 w.feed(&mut dda).unwrap();
             }
             let inp = Inputs { estop: estop(t), ..Inputs::QUIET };
-            let out = tick(&mut m, &mut dda, &inp, &mut w, stall(t));
+            let fast = if step_only && !inp.estop {
+                step_only_tick(&mut m, &mut dda, &mut w, stall(t))
+            } else {
+                None
+            };
+            step_only_ticks += u64::from(fast.is_some());
+            let out = match fast {
+                Some(step) => TickOut { step, outputs: m.outputs() },
+                None => tick(&mut m, &mut dda, &inp, &mut w, stall(t)),
+            };
             if m.wants_background() {
                 m.background(&mut dda, &mut prep);
             }
@@ -375,7 +418,7 @@ mod tests {
             }
         }
         let p = m.positions();
-        Outcome {
+        let outcome = Outcome {
             state: m.state(),
             faults: m.faults().mask(),
             positions: [p[0], p[1], p[2], p[3]],
@@ -386,7 +429,8 @@ mod tests {
             power_on_ticks,
             hash: rec.hash(),
             t0,
-        }
+        };
+        (outcome, step_only_ticks)
     }
 
     /// The same stall through the scenario's own controller (own DDA, whole table): the oracle.
@@ -441,6 +485,29 @@ mod tests {
         let (ticks, hash, _, _) = reference(|_| false);
         assert_eq!((o.ticks, o.hash), (ticks, hash));
         assert_eq!(o.stats.stalls, 0);
+    }
+
+    #[test]
+    fn step_only_ticks_cut_the_stalled_job_as_full_ticks_do() {
+        let stall = |t: u64| STALL.contains(&t);
+        let (full, _) = run_with(8, stall, |_| false, false);
+        let (fast, step_only) = run_with(8, stall, |_| false, true);
+        assert_eq!((fast.state, fast.faults), (MachineState::Ready, 0));
+        // The same steps at the same ticks, the same stall and retrace; the end is seen on the
+        // next full tick.
+        assert_eq!(
+            (fast.positions, fast.net, fast.hash, fast.stats),
+            (full.positions, full.net, full.hash, full.stats)
+        );
+        let late = fast.ticks - full.ticks;
+        assert!(late < u64::from(crate::machine::machine::SUPERVISE_TICKS), "{late}");
+        // Every full tick grants the next 7, but for those the host's segments make full.
+        let segments = job().len() as u64;
+        assert!(step_only * 8 >= fast.ticks * 7 - 8 * (segments + 1), "{step_only}/{}", fast.ticks);
+        // A persistent stall still ends in the fault, with the pins intact.
+        let (o, _) = run_with(8, |t| t >= STALL.start, |_| false, true);
+        assert_eq!((o.state, o.faults), (MachineState::Fault, FaultCode::WireStall.bit()));
+        assert_eq!(o.net, o.positions);
     }
 
     #[test]

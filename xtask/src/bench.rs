@@ -398,7 +398,7 @@ How these are measured:
   pipeline refill) plus 12 cycles of exception entry and 10 of return; code runs from flash
   behind the ART accelerator, assumed to hit (the `ART misses` columns below charge the F405's 5
   wait states at 168 MHz on every taken branch into flash). While a job is quiet, 7 ticks in 8
-  are step-only (`Machine::fast_tick`: the DDA, a force or event job or a Z job with step
+  are step-only (`Machine::fast_tick`: the DDA, a force, event or wire job or a Z job with step
   outputs, the step counters and soft limits) and the 8th is
   a full tick (inputs, debounce, faults, holds, job bookkeeping, outputs, wakes): medians are
   step-only ticks, p99 and max full ones, and the CPU figure is the mean over both. The traced

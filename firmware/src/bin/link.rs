@@ -5,11 +5,11 @@
 //! Priorities: `tick` (TIM2, 3) runs `Machine::tick` (inputs, DDA, counters, soft limits,
 //! homing, job end) -- `Machine::tick_with` the event playback during an event job, the Z-slide
 //! job (after reading the spindle) during a Z job -- and drives the step port and outputs; while
-//! the machine grants it (a quiet plain or force job or none, an event job, or a Z job with step
-//! outputs), 7 ticks in 8 are `Machine::fast_tick` (the job's stepping, counters, soft limits)
-//! and read no inputs; `estop` (EXTI, 3) cuts the drivers on
-//! the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into machine commands;
-//! `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
+//! the machine grants it (a quiet plain or force job or none, an event or wire job, or a Z job
+//! with step outputs), 7 ticks in 8 are `Machine::fast_tick` (the job's stepping, counters,
+//! soft limits) and read no inputs but a wire job's stall switch; `estop` (EXTI, 3) cuts the
+//! drivers on the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into
+//! machine commands; `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
 //! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
 //! sends the periodic Status, feeds the watchdog and persists an accepted config once the machine
 //! is at rest, woken by the tick every millisecond.
@@ -212,8 +212,8 @@ mod app {
         let port = cx.shared.step_port;
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
-        // still, a force or event job, or a Z job with step outputs; no status run due and no e-stop
-        // edge. A turning spindle's decoder still sees every tick.
+        // still, a force, event or wire job, or a Z job with step outputs; no status run due and
+        // no e-stop edge. A turning spindle's decoder still sees every tick.
         if *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
             // The plain job's test first: its step-only tick is the one the budget is for.
             let kind = *l.step_only;
@@ -228,6 +228,9 @@ mod app {
             } else if kind == StepOnly::Force {
                 let spindle = &mut *l.spindle;
                 cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
+            } else if kind == StepOnly::Wire {
+                let stall = l.io.read().wire_stall;
+                cx.shared.motion.lock(|m| link::wire::step_only_tick(m, stall))
             } else if kind == StepOnly::Events {
                 if !*l.spindle_at_rest {
                     l.spindle.update();
@@ -271,6 +274,7 @@ mod app {
                 *l.step_only = StepOnly::Force;
                 out
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
+                *l.step_only = StepOnly::Wire;
                 out
             } else if let Some(out) = link::zslide::tick(m, &inputs) {
                 *l.step_only = StepOnly::Z;

@@ -78,6 +78,8 @@ pub enum StepOnly {
     Events,
     /// A force job's (the sample countdown pends the force interrupt).
     Force,
+    /// A wire job's (the stall switch is read).
+    Wire,
 }
 
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).

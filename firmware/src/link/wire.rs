@@ -10,6 +10,7 @@
 //! `Motion` lock because the controller pushes straight into the DDA (a few microseconds per
 //! segment: one `Preparer::prepare`, or one `Dda::abort` after a stop).
 
+use motion::dda::StepOutput;
 use motion::machine::{Inputs, MachineCommand, MachineState, TickOut};
 use motion::protocol::{ErrorCode, Status, WireJobParams};
 use motion::segment::{Rate, Segment};
@@ -30,6 +31,14 @@ pub fn tick(m: &mut Motion, inputs: &Inputs, wire_stall: bool) -> Option<TickOut
     let Motion { dda, machine, job, .. } = m;
     let w = job.wire_mut().filter(|w| w.is_live())?;
     Some(link_job::tick(machine, dda, inputs, w, wire_stall))
+}
+
+/// A step-only tick of a live wire job (`link_job::step_only_tick`), if the machine grants one;
+/// `None`: run [`tick`]. Interrupt rate.
+#[inline(always)]
+pub fn step_only_tick(m: &mut Motion, wire_stall: bool) -> Option<StepOutput> {
+    let Motion { dda, machine, job, .. } = m;
+    link_job::step_only_tick(machine, dda, job.wire_mut()?, wire_stall)
 }
 
 /// The feeder has wire work (division-free; asked by the tick).

@@ -4,8 +4,8 @@
 //! holds, keeps the job's books and leaves the outputs. While all of that is quiet -- inputs
 //! released and steady, no fault cause, no pending hold or resume, no homing, jog or starve, no
 //! probe move, no event or Z job unless its step source allows step-only ticks
-//! ([`StepSource::step_only_ticks`]: an event job and a Z job with step outputs do; a force job
-//! is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
+//! ([`StepSource::step_only_ticks`]: event and wire jobs and a Z job with step outputs do; a
+//! force job is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
 //! [`Machine::fast_tick`]s: the job's step source, the step counters and the soft-limit check on
 //! the axes that stepped, nothing else. The board skips reading its inputs on those ticks too. A
 //! full tick then comes round at least every [`SUPERVISE_TICKS`] ticks, and at once after any
