@@ -9,10 +9,10 @@
 //! with step outputs), 7 ticks in 8 are `Machine::fast_tick` (the job's stepping, counters,
 //! soft limits) and read no inputs but a wire job's stall switch; `estop` (EXTI, 3) cuts the
 //! drivers on the e-stop edge; `usart1` (USART1, 2) turns bytes into frames and frames into
-//! machine commands; `feeder` (2) runs the machine's background work and prepares queued segments into the DDA (the
-//! divisions live here, never in the tick); `link_status` (1) judges the link, announces faults,
-//! sends the periodic Status, feeds the watchdog and persists an accepted config once the machine
-//! is at rest, woken by the tick every millisecond.
+//! machine commands; `feeder` (2) runs the machine's background work and prepares queued
+//! segments into the DDA (the divisions live here, never in the tick); `link_status` (1) judges
+//! the link, announces faults, sends the periodic Status, feeds the watchdog and persists an
+//! accepted config once the machine is at rest, woken by the tick every millisecond.
 
 #![no_std]
 #![no_main]
