@@ -202,7 +202,7 @@ mod app {
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
-            step_only: StepOnly = StepOnly::No, spindle_at_rest: bool = false,
+            plain: bool = false, step_only: StepOnly = StepOnly::No, spindle_at_rest: bool = false,
             copy_counts: [i32; 2] = [0; 2]])]
     fn tick(mut cx: tick::Context) {
         let l = cx.local;
@@ -214,30 +214,42 @@ mod app {
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
         // still, a force, event or wire job, or a Z job with step outputs; no status run due and
         // no e-stop edge. A turning spindle's decoder still sees every tick.
-        if *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
-            // The plain job's test first: its step-only tick is the one the budget is for.
-            let kind = *l.step_only;
-            let step = if kind == StepOnly::Plain {
-                if !*l.spindle_at_rest {
-                    l.spindle.update();
+        // The plain job's own flag and path first, as short as it can be: its step-only tick is
+        // the one the budget is for (sharing the capabilities' path below costs it a jump table
+        // and a flag).
+        if *l.plain && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+            if !*l.spindle_at_rest {
+                l.spindle.update();
+            }
+            if let Some(step) = cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda)) {
+                port.write(&step);
+                *l.wake -= 1;
+                #[cfg(feature = "isr-cycles")]
+                motion_firmware::isr_cycles::BINS
+                    .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
+                return;
+            }
+        } else if *l.step_only != StepOnly::No && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+            let step = match *l.step_only {
+                StepOnly::No => None,
+                StepOnly::Z => {
+                    let spindle = &mut *l.spindle;
+                    cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
                 }
-                cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda))
-            } else if kind == StepOnly::Z {
-                let spindle = &mut *l.spindle;
-                cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
-            } else if kind == StepOnly::Force {
-                let spindle = &mut *l.spindle;
-                cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
-            } else if kind == StepOnly::Wire {
-                let stall = l.io.read().wire_stall;
-                cx.shared.motion.lock(|m| link::wire::step_only_tick(m, stall))
-            } else if kind == StepOnly::Events {
-                if !*l.spindle_at_rest {
-                    l.spindle.update();
+                StepOnly::Force => {
+                    let spindle = &mut *l.spindle;
+                    cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
                 }
-                cx.shared.motion.lock(|m| m.machine.fast_tick_with(&mut m.dda, &mut m.playback))
-            } else {
-                None
+                StepOnly::Wire => {
+                    let stall = l.io.read().wire_stall;
+                    cx.shared.motion.lock(|m| link::wire::step_only_tick(m, stall))
+                }
+                StepOnly::Events => {
+                    if !*l.spindle_at_rest {
+                        l.spindle.update();
+                    }
+                    cx.shared.motion.lock(|m| m.machine.fast_tick_with(&mut m.dda, &mut m.playback))
+                }
             };
             if let Some(step) = step {
                 port.write(&step);
@@ -266,6 +278,7 @@ mod app {
             let inputs = link::sim::with_probe(m, &inputs);
             link::zslide::sense(l.spindle, &mut m.z);
             *l.spindle_at_rest = l.spindle.at_rest();
+            *l.plain = false;
             *l.step_only = StepOnly::No;
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
@@ -283,9 +296,7 @@ mod app {
                 *l.step_only = StepOnly::Events;
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
-                if still {
-                    *l.step_only = StepOnly::Plain;
-                }
+                *l.plain = still;
                 m.machine.tick(&mut m.dda, &inputs)
             };
             port.write(&out.step);

@@ -64,14 +64,13 @@ pub use last_job::LastJob;
 pub use session::Link;
 pub use target::Target;
 
-/// Which step-only tick the tick task tries before a full one (set by the last full tick;
-/// the machine decides whether it is granted).
+/// Which capability's step-only tick the tick task tries before a full one (set by the last
+/// full tick; the machine decides whether it is granted). A plain job's (the DDA's) has a flag
+/// of its own, tested first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StepOnly {
-    /// A full tick: a capability job that takes none, or a copy encoder moving.
+    /// None: a plain job, a capability job that takes none, or a copy encoder moving.
     No,
-    /// The DDA's (a plain segment job, or none).
-    Plain,
     /// A Z job's: the spindle is read first.
     Z,
     /// An event job's (the playback).
