@@ -79,6 +79,8 @@ pub struct Writer {
     path: PathBuf,
     entry: Entry,
     last: Option<Instant>,
+    /// Shortest time between two writes.
+    every: Duration,
     /// The first write failed: say so once, then stop trying.
     broken: bool,
 }
@@ -96,8 +98,16 @@ impl Writer {
                 segments,
             },
             last: None,
+            every: WRITE_EVERY,
             broken: false,
         })
+    }
+
+    /// Writes at most once per `period` instead of [`WRITE_EVERY`] (zero: at every move, for a
+    /// simulated board running many times faster than real time).
+    pub fn every(mut self, period: Duration) -> Self {
+        self.every = period;
+        self
     }
 
     pub fn path(&self) -> &Path {
@@ -111,7 +121,7 @@ impl Writer {
         if self.broken || (line, done) == (self.entry.line, self.entry.segments_done) {
             return None;
         }
-        if self.last.is_some_and(|t| t.elapsed() < WRITE_EVERY) && self.entry.line != 0 {
+        if self.last.is_some_and(|t| t.elapsed() < self.every) && self.entry.line != 0 {
             return None;
         }
         self.entry.line = line;
