@@ -1,5 +1,5 @@
-//! The run journal: while `run` streams a G-code job it keeps `FILE.journal` beside the file
-//! with the line the machine is executing, so that a job stopped by a board reset, a power loss,
+//! The run journal: while `run` streams a job it keeps `FILE.journal` beside the file with the
+//! line the machine is executing (a G-code line; for a TOML job its move entry counted from 1), so that a job stopped by a board reset, a power loss,
 //! a fault or Ctrl-C can go on from there (`run FILE --resume`). The journal names the file by a
 //! CRC of its bytes, so a file edited since is not resumed by mistake. A job that completes
 //! removes its journal.
@@ -25,7 +25,7 @@ pub struct Entry {
     pub job: String,
     /// CRC-32 of the job file's bytes when the run started.
     pub job_crc: u32,
-    /// The G-code line executing (the first not finished).
+    /// The G-code line executing (the first not finished); a TOML job's move from 1.
     pub line: usize,
     /// Segments the board reported done, of `segments`.
     pub segments_done: u32,
