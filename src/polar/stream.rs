@@ -461,16 +461,22 @@ impl<'a> Iterator for Blocks<'a> {
             self.events = self.events.wrapping_add(block.events as u32);
             Ok(Some((block, raw)))
         })();
-        match r {
-            Ok(Some(b)) => Some(Ok(b)),
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
+        fuse(&mut self.done, r)
+    }
+}
+
+/// An iterator's next item from a step that gives `Ok(None)` at the end: `done` is set at the
+/// end and after an error, which is returned once.
+fn fuse<T>(done: &mut bool, r: Result<Option<T>, StreamError>) -> Option<Result<T, StreamError>> {
+    match r {
+        Ok(Some(item)) => Some(Ok(item)),
+        Ok(None) => {
+            *done = true;
+            None
+        }
+        Err(e) => {
+            *done = true;
+            Some(Err(e))
         }
     }
 }
@@ -582,17 +588,8 @@ impl Cursor {
         if self.done {
             return None;
         }
-        match self.step(payload) {
-            Ok(Some(ev)) => Some(Ok(ev)),
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
-        }
+        let r = self.step(payload);
+        fuse(&mut self.done, r)
     }
 
     fn step(&mut self, payload: &[u8]) -> Result<Option<StepEvent>, StreamError> {
