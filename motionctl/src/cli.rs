@@ -38,11 +38,11 @@ pub enum Cmd {
         /// Board status report period, ms (0 = off; else >= 10).
         #[arg(long, value_name = "MS", default_value_t = runner::DEFAULT_STATUS_PERIOD_MS)]
         status_ms: u16,
-        /// G-code: go on from where the last run of this file stopped (its `FILE.journal`):
-        /// Z up to the safe height, across, Z down, then the program from that line.
+        /// Go on from where the last run of this file stopped (its `FILE.journal`): Z up to the
+        /// safe height, across, Z down, then the program from that G-code line (TOML: move).
         #[arg(long, conflicts_with = "resume_line")]
         resume: bool,
-        /// G-code: run from this line (as --resume, the line given).
+        /// Run from this G-code line, or a TOML job's move N counted from 1 (as --resume).
         #[arg(long, value_name = "LINE")]
         resume_line: Option<usize>,
         /// Print the summary as one JSON object instead of text.
@@ -455,18 +455,32 @@ fn run_job(
     if is_gcode(job)? {
         return run_gcode(job, link, how, resume_line);
     }
-    if resume_line.is_some() {
-        bail!("--resume and --resume-line take G-code jobs (a TOML job runs from its start)");
-    }
     // Check the whole job, and learn where it must end, before touching the link.
-    let (parsed, program, summary) = plan_job(job)?;
-    let outputs: Vec<plan::Output> = plan::Stream::new(&program)
-        .collect::<Result<_, _>>()
-        .with_context(|| job.job.display().to_string())?;
-    let mut expected = [0i64; motion::MAX_AXES];
-    expected.copy_from_slice(&summary.report.positions[..motion::MAX_AXES]);
+    let (parsed, program, _) = plan_job(job)?;
     let label = job.job.display().to_string();
-    board_link::stream(&label, &parsed, &program, &outputs, &expected, link, how)
+    if let Some(entry) = resume_line {
+        let say = format!(
+            "resume     from move {entry} (moves[{}]): Z up to the safe height, across, down to \
+             its start, then the job (the machine must stand at the job's origin: home it first)",
+            entry.saturating_sub(1)
+        );
+        if how.json {
+            eprintln!("motionctl: {}", say.split_whitespace().collect::<Vec<_>>().join(" "));
+        } else {
+            crate::outln!("{say}");
+        }
+    }
+    let run = crate::toml_run::TomlRun::new(&label, &parsed.machine, &program, resume_line)?;
+    let journal = crate::journal::Writer::new(&job.job, run.segments())?;
+    board_link::stream_outputs(
+        &label,
+        &parsed,
+        &run.program,
+        run.stream(),
+        &run.expected,
+        link,
+        board_link::Reporting { journal: Some(journal), ..how },
+    )
 }
 
 /// `run` for G-code, in two streamed passes: the first checks the whole file, plans it and runs

@@ -137,6 +137,17 @@ pub enum Source {
     Gcode { line: usize },
 }
 
+impl Source {
+    /// The run journal's cursor for a move from here: the G-code line, or for a TOML job the
+    /// entry's number counted from 1 (`moves[0]` is 1), so 0 never names a move.
+    pub fn cursor(self) -> usize {
+        match self {
+            Source::Toml { index } => index.saturating_add(1),
+            Source::Gcode { line } => line,
+        }
+    }
+}
+
 impl fmt::Display for Source {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -1,5 +1,5 @@
-//! The run journal: while `run` streams a G-code job it keeps `FILE.journal` beside the file
-//! with the line the machine is executing, so that a job stopped by a board reset, a power loss,
+//! The run journal: while `run` streams a job it keeps `FILE.journal` beside the file with the
+//! line the machine is executing (a G-code line; for a TOML job its move entry counted from 1), so that a job stopped by a board reset, a power loss,
 //! a fault or Ctrl-C can go on from there (`run FILE --resume`). The journal names the file by a
 //! CRC of its bytes, so a file edited since is not resumed by mistake. A job that completes
 //! removes its journal.
@@ -25,7 +25,7 @@ pub struct Entry {
     pub job: String,
     /// CRC-32 of the job file's bytes when the run started.
     pub job_crc: u32,
-    /// The G-code line executing (the first not finished).
+    /// The G-code line executing (the first not finished); a TOML job's move from 1.
     pub line: usize,
     /// Segments the board reported done, of `segments`.
     pub segments_done: u32,
@@ -79,6 +79,8 @@ pub struct Writer {
     path: PathBuf,
     entry: Entry,
     last: Option<Instant>,
+    /// Shortest time between two writes.
+    every: Duration,
     /// The first write failed: say so once, then stop trying.
     broken: bool,
 }
@@ -96,8 +98,16 @@ impl Writer {
                 segments,
             },
             last: None,
+            every: WRITE_EVERY,
             broken: false,
         })
+    }
+
+    /// Writes at most once per `period` instead of [`WRITE_EVERY`] (zero: at every move, for a
+    /// simulated board running many times faster than real time).
+    pub fn every(mut self, period: Duration) -> Self {
+        self.every = period;
+        self
     }
 
     pub fn path(&self) -> &Path {
@@ -111,7 +121,7 @@ impl Writer {
         if self.broken || (line, done) == (self.entry.line, self.entry.segments_done) {
             return None;
         }
-        if self.last.is_some_and(|t| t.elapsed() < WRITE_EVERY) && self.entry.line != 0 {
+        if self.last.is_some_and(|t| t.elapsed() < self.every) && self.entry.line != 0 {
             return None;
         }
         self.entry.line = line;

@@ -10,7 +10,7 @@ use motion::protocol::{
     encode_frame, BoardLink, FrameDecoder, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME,
     CAP_OVERRIDE, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME, MAX_FRAME_WIRE,
 };
-use motion::Rate;
+use motion::{Rate, MAX_AXES};
 use std::io;
 use std::time::{Duration, Instant};
 
@@ -45,6 +45,9 @@ pub struct SimBoard {
     pub reconnects: u64,
     /// Times the queue ran dry under a segment at speed (the firmware holds then).
     pub starve_holds: u64,
+    /// When `Some`, the machine positions after every segment executed, in order: the path the
+    /// machine took. Kept through a reset (a reset does not undo motion).
+    pub path: Option<Vec<[i64; MAX_AXES]>>,
 }
 
 impl SimBoard {
@@ -65,6 +68,7 @@ impl SimBoard {
             frames_in: 0,
             reconnects: 0,
             starve_holds: 0,
+            path: None,
         }
     }
 
@@ -110,6 +114,9 @@ impl SimBoard {
             match self.target.complete_one() {
                 Some(seg) => {
                     self.budget_ticks -= seg.duration_ticks as f64;
+                    if let Some(path) = self.path.as_mut() {
+                        path.push(self.target.positions);
+                    }
                     // As the firmware: a segment that ends at speed with nothing behind it
                     // holds the job until the host sends more (a pause, counted, not a fault).
                     if seg.exit_rate != Rate::ZERO && self.target.queue_len() == 0 {
@@ -127,9 +134,10 @@ impl SimBoard {
         if self.trouble.reset_at_segment.is_some_and(|n| done >= n) {
             self.trouble.reset_at_segment = None;
             let speed = self.speed;
-            let reconnects = self.reconnects;
+            let (reconnects, path) = (self.reconnects, self.path.take());
             *self = SimBoard::new(self.target.queue_capacity(), speed);
             self.reconnects = reconnects;
+            self.path = path;
         }
         if let Some((n, len)) = self.trouble.silence_at_segment {
             if done >= n {

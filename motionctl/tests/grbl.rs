@@ -747,8 +747,8 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     let dir = tmp_dir("caps");
     // An open arc of the built-in limacon stream (its first 40 blocks): about 4.6 s of board
     // time at speed 1, so a hold lands inside it.
-    let blocks = motionctl::polar::run::blocks(motion::polar::limacon_stream::BYTES).unwrap();
-    let arc: Vec<u8> = blocks[..40].concat();
+    let arc =
+        motionctl::polar::run::first_blocks(motion::polar::limacon_stream::BYTES, 40).unwrap();
     std::fs::write(dir.0.join("arc.bin"), &arc).unwrap();
     let scale = SizeScale::new(3, 2).unwrap();
     let model = motionctl::polar::run::model(&arc, motion::Rate::ONE, scale).unwrap();

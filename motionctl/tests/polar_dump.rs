@@ -94,3 +94,46 @@ fn a_dropped_or_duplicated_block_is_named() {
         assert!(text.lines().last().unwrap().contains(&want), "{text}");
     }
 }
+
+/// A stream file cut exactly at a block boundary (every one of them) is refused with the block
+/// after which it was cut; the whole file dumps to its end mark; a version-1 file (no end mark)
+/// is refused with how to write it again.
+#[test]
+fn a_stream_cut_at_a_block_boundary_or_of_version_1_is_refused() {
+    use motion::polar::stream::{blocks, StreamError, END_BLOCK_LEN, VERSION_WITHOUT_END_MARK};
+    let evs: Vec<StepEvent> =
+        (0..900u32).map(|i| ev(i * 7919 % 3000, (i % 2) as u8, i % 5 == 0)).collect();
+    let bytes = encode(&evs);
+    let mut text = String::new();
+    let sum = dump(&bytes, 100_000, &mut text).unwrap();
+    assert!(text.lines().last().unwrap().starts_with("end mark: "), "{text}");
+    let mut it = blocks(&bytes);
+    let mut ends = Vec::new();
+    while it.next().is_some() {
+        ends.push(it.offset());
+    }
+    assert_eq!(ends.len() as u32, sum.blocks);
+    assert!(sum.blocks >= 3, "{sum:?}");
+    for (k, &cut) in ends.iter().enumerate() {
+        let mut text = String::new();
+        let e = dump(&bytes[..cut], 100_000, &mut text).unwrap_err();
+        assert_eq!(e, StreamError::NoEndMark { blocks: k as u32 + 1 });
+        let last = text.lines().last().unwrap();
+        assert!(
+            last.contains(&format!("no end mark: the stream is cut after block {k}")),
+            "{last}"
+        );
+    }
+    // Version 1: the data blocks with the old version byte and their CRC, no end block.
+    let mut v1 = bytes[..bytes.len() - END_BLOCK_LEN].to_vec();
+    let mut at = 0;
+    for &end in &ends {
+        v1[at + 1] = VERSION_WITHOUT_END_MARK;
+        let crc = motion::protocol::CRC32.checksum(&v1[at..end - 4]);
+        v1[end - 4..end].copy_from_slice(&crc.to_le_bytes());
+        at = end;
+    }
+    let mut text = String::new();
+    assert_eq!(dump(&v1, 100_000, &mut text), Err(StreamError::Version(1)));
+    assert!(text.contains("has no end mark") && text.contains("polar digitize"), "{text}");
+}

@@ -43,8 +43,7 @@ fn limacon_stream_plays_exactly_through_a_noisy_link() {
 fn size_scale_changes_the_radial_steps_by_m_over_k() {
     // An open stretch of the stream (its first 20 blocks, the last one marked last): the
     // radial travel scales by m/k (to within the Bresenham remainder), theta not at all.
-    let blocks = run::blocks(BYTES).unwrap();
-    let part: Vec<u8> = blocks[..20].concat();
+    let part = run::first_blocks(BYTES, 20).unwrap();
     let one = run::model(&part, motion::Rate::ONE, SizeScale::ONE).unwrap();
     for (m, k) in [(1u8, 4u8), (3, 2), (4, 1)] {
         let mut t = EventSim::new(24.0);

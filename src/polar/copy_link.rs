@@ -134,7 +134,7 @@ pub struct TeachRead<'a> {
     pub ended: bool,
 }
 
-/// Taught events encoded into v1 stream blocks (block seq from 0), held until the host has
+/// Taught events encoded into stream blocks (block seq from 0), held until the host has
 /// read them: block `n` is dropped when the host asks for block `n + 1`, so a lost answer is
 /// simply asked for again.
 #[derive(Clone, Debug)]
@@ -180,9 +180,9 @@ impl<const N: usize> TeachRecorder<N> {
     }
 
     /// Room for the blocks the next [`TEACH_BATCH`] events (or the final flush) can finish:
-    /// two (a batch finishes at most one block; the flush at most two).
+    /// three (a batch finishes at most one block; the flush at most two and the end block).
     pub fn has_room(&self) -> bool {
-        N - self.blocks.len() >= 2
+        N - self.blocks.len() >= 3
     }
 
     pub fn is_ended(&self) -> bool {

@@ -25,17 +25,20 @@ pub enum BlockError {
     Sequence { expected: u16 },
     /// The host already sent the stream's last block.
     AfterLast,
+    /// A stream file's end block: files end with one, the link's `last` flag ends a stream.
+    EndMark,
 }
 
 impl BlockError {
     /// A stable small number for the link's NAK detail: 1..=8 are [`StreamError::code`],
-    /// 9 trailing bytes, 10 sequence, 11 after the last block.
+    /// 9 trailing bytes, 10 sequence, 11 after the last block, 12 an end block.
     pub const fn code(self) -> u8 {
         match self {
             BlockError::Stream(e) => e.code(),
             BlockError::Trailing => 9,
             BlockError::Sequence { .. } => 10,
             BlockError::AfterLast => 11,
+            BlockError::EndMark => 12,
         }
     }
 }
@@ -47,6 +50,9 @@ pub fn check_block(bytes: &[u8], expected: Option<u16>) -> Result<u16, BlockErro
     let (block, rest) = parse_block(bytes).map_err(BlockError::Stream)?;
     if !rest.is_empty() {
         return Err(BlockError::Trailing);
+    }
+    if block.end_totals().is_some() {
+        return Err(BlockError::EndMark);
     }
     let expected = expected.ok_or(BlockError::AfterLast)?;
     if block.seq != expected {
@@ -220,19 +226,12 @@ pub enum PushError {
 mod tests {
     use super::super::limacon_stream::BYTES;
     use super::super::playback::SizeScale;
-    use super::super::stream::decode_all;
+    use super::super::stream::{decode_all, end_block};
     use super::*;
 
-    /// The built-in stream split into its blocks.
+    /// The built-in stream split into its data blocks.
     fn blocks() -> std::vec::Vec<&'static [u8]> {
-        let mut out = std::vec::Vec::new();
-        let mut rest = BYTES;
-        while !rest.is_empty() {
-            let (_, r) = parse_block(rest).unwrap();
-            out.push(&rest[..rest.len() - r.len()]);
-            rest = r;
-        }
-        out
+        super::super::stream::data_blocks(BYTES)
     }
 
     #[test]
@@ -279,6 +278,11 @@ mod tests {
         let mut two = bl[0].to_vec();
         two.extend_from_slice(bl[1]);
         assert_eq!(feed.push(&two, false), Err(PushError::Block(BlockError::Trailing)));
+        // The end block of a file is not sent over the link.
+        assert_eq!(
+            feed.push(&end_block(0, 0, 0), true),
+            Err(PushError::Block(BlockError::EndMark))
+        );
         assert!(feed.is_unused() && feed.credits() == 2 && feed.events_admitted == 0);
         feed.push(bl[0], false).unwrap();
         feed.push(bl[1], true).unwrap();

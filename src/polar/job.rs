@@ -88,7 +88,7 @@ mod tests {
     use super::super::feed::EventFeed;
     use super::super::limacon_stream::BYTES;
     use super::super::playback::{Playback, SizeScale};
-    use super::super::stream::{decode_all, parse_block};
+    use super::super::stream::decode_all;
     use super::*;
     use crate::dda::Dda;
     use crate::machine::{Inputs, Machine, MachineCommand, MachineState, Refusal, StepSource};
@@ -96,14 +96,7 @@ mod tests {
     use crate::segment::Rate;
 
     fn blocks() -> std::vec::Vec<&'static [u8]> {
-        let mut out = std::vec::Vec::new();
-        let mut rest = BYTES;
-        while !rest.is_empty() {
-            let (_, r) = parse_block(rest).unwrap();
-            out.push(&rest[..rest.len() - r.len()]);
-            rest = r;
-        }
-        out
+        super::super::stream::data_blocks(BYTES)
     }
 
     /// A homed polar machine in `Ready` and its DDA. The rig has no switches, so it homes where

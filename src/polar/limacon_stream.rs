@@ -1,5 +1,5 @@
 //! The built-in limacon step-event stream: limacon 3 + 2 cos (in), pole 6.5 in at 70 deg, tool
-//! 0.125 in, Vt 1.746 cm/s, 100 kHz ticks: 19 036 events in 156 blocks. The bytes are generated
+//! 0.125 in, Vt 1.746 cm/s, 100 kHz ticks: 19 036 events in 156 blocks and the end block. The bytes are generated
 //! by motionctl's digitizer into `limacon_stream.bin` beside this file
 //! (motionctl/tests/polar_stream_golden.rs checks it is current; REGENERATE=1 rewrites it).
 
@@ -9,24 +9,19 @@ pub const BYTES: &[u8] = include_bytes!("limacon_stream.bin");
 #[cfg(test)]
 mod tests {
     use super::BYTES;
-    use crate::polar::stream::{decode_all, parse_block};
+    use crate::polar::stream::{blocks, decode_all};
     use crate::protocol::CRC32;
 
-    /// The data file holds the same stream the generated `.rs` table held before it moved out:
-    /// same length and CRC-32 (taken from that table), and it decodes to the same 19 036 events
-    /// in 156 verified blocks.
+    /// The data file holds the version-2 stream (the blocks of the version-1 table it replaced,
+    /// 38 945 bytes, plus the end block): its length and CRC-32, and it decodes to the same
+    /// 19 036 events in 156 verified blocks.
     #[test]
     fn data_file_is_the_generated_stream() {
-        assert_eq!(BYTES.len(), 38_945);
-        assert_eq!(CRC32.checksum(BYTES), 0x50c4_a2f8);
+        assert_eq!(BYTES.len(), 38_945 + crate::polar::stream::END_BLOCK_LEN);
+        assert_eq!(CRC32.checksum(BYTES), 0x6058_cf7a);
         let mut events = 0;
         decode_all(BYTES, |_| events += 1).unwrap();
         assert_eq!(events, 19_036);
-        let (mut blocks, mut rest) = (0, BYTES);
-        while !rest.is_empty() {
-            rest = parse_block(rest).unwrap().1;
-            blocks += 1;
-        }
-        assert_eq!(blocks, 156);
+        assert_eq!(blocks(BYTES).map(Result::unwrap).count(), 156);
     }
 }

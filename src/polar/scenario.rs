@@ -4,7 +4,7 @@
 
 use super::limacon_stream;
 use super::playback::{Playback, SizeScale};
-use super::stream::{parse_block, BlockEvents};
+use super::stream::{blocks, BlockEvents, Blocks};
 use crate::protocol::errors::FaultCode;
 use crate::scenario::{Scenario, ScenarioReport};
 use crate::segment::Rate;
@@ -20,9 +20,9 @@ const REFILL_WHEN_FREE: usize = super::playback::QUEUE_DEPTH / 2;
 #[derive(Clone, Debug)]
 pub struct PolarPlayback {
     play: Playback,
-    rest: &'static [u8],
+    /// The stream's blocks not yet decoded (sequence and end block checked as they come).
+    rest: Blocks<'static>,
     block: Option<BlockEvents<'static>>,
-    next_seq: u16,
     rec: StepRecorder,
     ticks: u64,
     fault: u8,
@@ -38,9 +38,8 @@ impl PolarPlayback {
         play.set_rate(rate);
         PolarPlayback {
             play,
-            rest: limacon_stream::BYTES,
+            rest: blocks(limacon_stream::BYTES),
             block: None,
-            next_seq: 0,
             rec: StepRecorder::new(),
             ticks: 0,
             fault: 0,
@@ -65,18 +64,14 @@ impl PolarPlayback {
                     None => self.block = None,
                 }
             }
-            if self.rest.is_empty() {
-                self.play.finish();
-                self.fed = true;
-                return;
-            }
-            match parse_block(self.rest) {
-                Ok((b, rest)) if b.seq == self.next_seq => {
-                    self.block = Some(b.iter());
-                    self.rest = rest;
-                    self.next_seq = self.next_seq.wrapping_add(1);
+            match self.rest.next() {
+                Some(Ok((b, _))) => self.block = Some(b.iter()),
+                Some(Err(_)) => return self.fail(),
+                None => {
+                    self.play.finish();
+                    self.fed = true;
+                    return;
                 }
-                _ => return self.fail(),
             }
         }
     }
@@ -84,7 +79,7 @@ impl PolarPlayback {
     fn fail(&mut self) {
         // A corrupt built-in stream: stop feeding and report a sensor-class data fault.
         self.fault = FaultCode::SensorFault.code();
-        self.rest = &[];
+        self.rest = blocks(&[]);
         self.block = None;
         self.play.finish();
         self.fed = true;

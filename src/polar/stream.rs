@@ -1,11 +1,21 @@
-//! Step-event stream, version 1: blocks of delta-coded events with interval runs and a CRC.
+//! Step-event stream, version 2: blocks of delta-coded events with interval runs and a CRC, closed
+//! by an end block.
 //!
 //! Why not the thesis's word (14-bit time at 33 us + 2 axis bits): 0.54 s is the longest gap, there
 //! is no integrity check, and every event costs 2 bytes even on long straight runs. Here:
 //!
-//! Block = `MAGIC (0xB5) | VERSION (1) | seq u16 LE | events u16 LE | len u8 | payload[len] | crc32 LE`
+//! Block = `MAGIC (0xB5) | VERSION (2) | seq u16 LE | events u16 LE | len u8 | payload[len] | crc32 LE`
 //! (CRC-32/ISO-HDLC over everything before it). A block decodes on its own: no state crosses a
 //! block boundary, so a long contour streams block by block and a lost block shows as a `seq` gap.
+//!
+//! The end block closes a whole stream: `events == 0` (a data block holds at least one event) and
+//! an 8-byte payload `data blocks u32 LE | events u32 LE`, the totals of the blocks before it; its
+//! seq is the next one. Without it a file cut exactly at a block boundary would read as a whole,
+//! shorter stream. Readers of a whole stream ([`blocks`], [`decode_all`]) require it, check its
+//! counts and refuse anything after it. On the link the host sends data blocks only (its
+//! `EventBlock::last` flag marks the end) and the board refuses an end block there; the board's
+//! taught-stream blocks (copy jobs) end with one. Version 1 had no end block: a v1 file is
+//! refused ([`StreamError::Version`]) and has to be written again from its source.
 //!
 //! Payload items, each a LEB128 varint `v` (u32, at most 5 bytes):
 //! - `v & 4 == 0`: one event, `code = v & 3` (bit 0 axis, bit 1 negative), `dt = v >> 3`.
@@ -18,7 +28,9 @@
 use super::StepEvent;
 
 pub const MAGIC: u8 = 0xB5;
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
+/// The version before the end block existed: refused, its cuts cannot be told from its end.
+pub const VERSION_WITHOUT_END_MARK: u8 = 1;
 /// Bytes before the payload.
 pub const HEADER_LEN: usize = 7;
 pub const CRC_LEN: usize = 4;
@@ -28,6 +40,11 @@ pub const MAX_PAYLOAD: usize = 240;
 pub const MAX_BLOCK: usize = HEADER_LEN + MAX_PAYLOAD + CRC_LEN;
 /// Largest dt one event can carry (29 bits after the 3 tag bits of a u32 varint).
 pub const MAX_DT_TICKS: u32 = (1 << 29) - 1;
+
+/// Payload of the end block: data blocks u32 LE, events u32 LE.
+pub const END_PAYLOAD_LEN: usize = 8;
+/// Bytes of the end block.
+pub const END_BLOCK_LEN: usize = HEADER_LEN + END_PAYLOAD_LEN + CRC_LEN;
 
 const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
@@ -54,6 +71,67 @@ pub enum StreamError {
         expected: u16,
         found: u16,
     },
+    /// The stream ends without its end block after `blocks` whole data blocks: the file was cut
+    /// at a block boundary.
+    NoEndMark {
+        blocks: u32,
+    },
+    /// The end block's totals differ from the data blocks before it.
+    EndMismatch {
+        end_blocks: u32,
+        end_events: u32,
+        blocks: u32,
+        events: u32,
+    },
+    /// Bytes after the end block.
+    AfterEnd,
+}
+
+impl core::fmt::Display for StreamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            StreamError::Truncated => {
+                f.write_str("Truncated: a block is shorter than its header, length or CRC say")
+            }
+            StreamError::BadMagic => f.write_str("BadMagic: not a step-event stream block"),
+            StreamError::Version(VERSION_WITHOUT_END_MARK) => write!(
+                f,
+                "Version(1): a version-1 stream has no end mark, so a file cut at a block \
+                 boundary cannot be told from a whole one; refused: write it again with this \
+                 motionctl (`polar digitize ... --out FILE`, or `polar copy --teach FILE`)"
+            ),
+            StreamError::Version(v) => {
+                write!(f, "Version({v}): a stream version this reader does not speak ({VERSION})")
+            }
+            StreamError::Crc => f.write_str("Crc: the block's CRC does not match its bytes"),
+            StreamError::Varint => f.write_str("Varint: an item longer than 5 bytes or above u32"),
+            StreamError::BadRun => f.write_str("BadRun: a run with count < 2 or a dt out of range"),
+            StreamError::Count => {
+                f.write_str("Count: the payload holds another event count than the header says")
+            }
+            StreamError::DtRange => write!(f, "DtRange: a dt above {MAX_DT_TICKS} ticks"),
+            StreamError::Sequence { expected, found } => write!(
+                f,
+                "block has seq {found}, expected {expected}: a block was dropped, duplicated or \
+                 reordered"
+            ),
+            StreamError::NoEndMark { blocks: 0 } => {
+                f.write_str("no end mark: the stream is cut before its first block")
+            }
+            StreamError::NoEndMark { blocks } => write!(
+                f,
+                "no end mark: the stream is cut after block {} (the file ends at a block \
+                 boundary without its end block)",
+                blocks - 1
+            ),
+            StreamError::EndMismatch { end_blocks, end_events, blocks, events } => write!(
+                f,
+                "the end mark counts {end_blocks} blocks and {end_events} events, the stream \
+                 holds {blocks} blocks and {events} events"
+            ),
+            StreamError::AfterEnd => f.write_str("bytes after the end mark"),
+        }
+    }
 }
 
 impl StreamError {
@@ -69,6 +147,10 @@ impl StreamError {
             StreamError::Count => 7,
             StreamError::DtRange => 8,
             StreamError::Sequence { .. } => 9,
+            // Whole-stream errors (never in a NAK), numbered past the link's block codes.
+            StreamError::NoEndMark { .. } => 13,
+            StreamError::EndMismatch { .. } => 14,
+            StreamError::AfterEnd => 15,
         }
     }
 }
@@ -131,6 +213,9 @@ pub struct BlockEncoder {
     run: Option<(u8, u32, i32, u32)>,
     /// dt of the last event in the open run.
     run_last: u32,
+    /// Data blocks and events finished so far, for the end block.
+    total_blocks: u32,
+    total_events: u32,
 }
 
 impl Default for BlockEncoder {
@@ -148,12 +233,14 @@ impl BlockEncoder {
             events: 0,
             run: None,
             run_last: 0,
+            total_blocks: 0,
+            total_events: 0,
         }
     }
 
-    /// Blocks finished so far (the next block's sequence number).
-    pub fn blocks(&self) -> u16 {
-        self.seq
+    /// Data blocks finished so far (before [`Self::finish`]: the next block's sequence number).
+    pub fn blocks(&self) -> u32 {
+        self.total_blocks
     }
 
     /// Adds one event; may finish a block through `emit`.
@@ -219,15 +306,35 @@ impl BlockEncoder {
         block[end..end + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
         emit(&block[..end + CRC_LEN]);
         self.seq = self.seq.wrapping_add(1);
+        self.total_blocks = self.total_blocks.wrapping_add(1);
+        self.total_events = self.total_events.wrapping_add(self.events as u32);
         self.len = 0;
         self.events = 0;
     }
 
-    /// Flushes everything: the open run and the last (partial) block.
+    /// Ends the stream: the open run, the last (partial) block, then the end block.
     pub fn finish(&mut self, emit: &mut impl FnMut(&[u8])) {
         self.flush_run(emit);
         self.finish_block(emit);
+        emit(&end_block(self.seq, self.total_blocks, self.total_events));
+        self.seq = self.seq.wrapping_add(1);
     }
+}
+
+/// The end block with sequence number `seq`, closing `blocks` data blocks of `events` events.
+pub fn end_block(seq: u16, blocks: u32, events: u32) -> [u8; END_BLOCK_LEN] {
+    let mut block = [0u8; END_BLOCK_LEN];
+    block[0] = MAGIC;
+    block[1] = VERSION;
+    block[2..4].copy_from_slice(&seq.to_le_bytes());
+    // events (bytes 4..6) stay 0: that marks the end block.
+    block[6] = END_PAYLOAD_LEN as u8;
+    block[HEADER_LEN..HEADER_LEN + 4].copy_from_slice(&blocks.to_le_bytes());
+    block[HEADER_LEN + 4..HEADER_LEN + END_PAYLOAD_LEN].copy_from_slice(&events.to_le_bytes());
+    let end = HEADER_LEN + END_PAYLOAD_LEN;
+    let crc = CRC32.checksum(&block[..end]);
+    block[end..].copy_from_slice(&crc.to_le_bytes());
+    block
 }
 
 /// A checked block: header fields and the payload, ready to iterate.
@@ -258,6 +365,9 @@ pub fn parse_block(bytes: &[u8]) -> Result<(Block<'_>, &[u8]), StreamError> {
     if CRC32.checksum(body) != crc {
         return Err(StreamError::Crc);
     }
+    if events == 0 && len != END_PAYLOAD_LEN {
+        return Err(StreamError::Count);
+    }
     let payload = bytes.get(HEADER_LEN..end).ok_or(StreamError::Truncated)?;
     let rest = bytes.get(end + CRC_LEN..).ok_or(StreamError::Truncated)?;
     Ok((Block { seq, events, payload }, rest))
@@ -273,6 +383,101 @@ impl<'a> Block<'a> {
     /// The payload bytes, for [`Cursor::next`].
     pub fn payload(&self) -> &'a [u8] {
         self.payload
+    }
+
+    /// For the end block, its totals: (data blocks, events); `None` for a data block.
+    pub fn end_totals(&self) -> Option<(u32, u32)> {
+        if self.events != 0 {
+            return None;
+        }
+        let word = |at: usize| {
+            let b = self.payload.get(at..at + 4)?;
+            Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        };
+        Some((word(0)?, word(4)?))
+    }
+}
+
+/// The data blocks of a whole stream in order, each parsed and in sequence, ending at the end
+/// block (whose totals are checked; nothing may follow it). Yields each block and its bytes; an
+/// error ends the iteration. Header-level only: [`decode_all`] also decodes every event.
+#[derive(Clone, Debug)]
+pub struct Blocks<'a> {
+    rest: &'a [u8],
+    offset: usize,
+    blocks: u32,
+    events: u32,
+    done: bool,
+}
+
+/// The data blocks of the whole stream `bytes` (see [`Blocks`]).
+pub fn blocks(bytes: &[u8]) -> Blocks<'_> {
+    Blocks { rest: bytes, offset: 0, blocks: 0, events: 0, done: false }
+}
+
+impl Blocks<'_> {
+    /// Byte offset of the next block in the stream (of the failing one after an error).
+    pub fn offset(&self) -> usize {
+        self.offset
+    }
+}
+
+impl<'a> Iterator for Blocks<'a> {
+    type Item = Result<(Block<'a>, &'a [u8]), StreamError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let r = (|| {
+            if self.rest.is_empty() {
+                return Err(StreamError::NoEndMark { blocks: self.blocks });
+            }
+            let (block, rest) = parse_block(self.rest)?;
+            let expected = self.blocks as u16;
+            if block.seq != expected {
+                return Err(StreamError::Sequence { expected, found: block.seq });
+            }
+            if let Some((end_blocks, end_events)) = block.end_totals() {
+                if (end_blocks, end_events) != (self.blocks, self.events) {
+                    let (blocks, events) = (self.blocks, self.events);
+                    return Err(StreamError::EndMismatch {
+                        end_blocks,
+                        end_events,
+                        blocks,
+                        events,
+                    });
+                }
+                if !rest.is_empty() {
+                    self.offset += self.rest.len() - rest.len();
+                    return Err(StreamError::AfterEnd);
+                }
+                return Ok(None);
+            }
+            let raw = &self.rest[..self.rest.len() - rest.len()];
+            self.offset += raw.len();
+            self.rest = rest;
+            self.blocks = self.blocks.wrapping_add(1);
+            self.events = self.events.wrapping_add(block.events as u32);
+            Ok(Some((block, raw)))
+        })();
+        fuse(&mut self.done, r)
+    }
+}
+
+/// An iterator's next item from a step that gives `Ok(None)` at the end: `done` is set at the
+/// end and after an error, which is returned once.
+fn fuse<T>(done: &mut bool, r: Result<Option<T>, StreamError>) -> Option<Result<T, StreamError>> {
+    match r {
+        Ok(Some(item)) => Some(Ok(item)),
+        Ok(None) => {
+            *done = true;
+            None
+        }
+        Err(e) => {
+            *done = true;
+            Some(Err(e))
+        }
     }
 }
 
@@ -383,17 +588,8 @@ impl Cursor {
         if self.done {
             return None;
         }
-        match self.step(payload) {
-            Ok(Some(ev)) => Some(Ok(ev)),
-            Ok(None) => {
-                self.done = true;
-                None
-            }
-            Err(e) => {
-                self.done = true;
-                Some(Err(e))
-            }
-        }
+        let r = self.step(payload);
+        fuse(&mut self.done, r)
     }
 
     fn step(&mut self, payload: &[u8]) -> Result<Option<StepEvent>, StreamError> {
@@ -440,7 +636,12 @@ pub fn plain_event_len(ev: &StepEvent) -> usize {
     varint_len(ev.dt_ticks << 3 | ev.code() as u32)
 }
 
-/// Decodes a whole multi-block stream into `out` via a callback; checks block sequence order.
+/// Test helper: the data blocks of a whole, valid stream, each as its bytes.
+#[cfg(test)]
+pub(crate) fn data_blocks(bytes: &[u8]) -> std::vec::Vec<&[u8]> {
+    blocks(bytes).map(|b| b.expect("a valid stream").1).collect()
+}
+
 /// Test helper: the net steps per axis (theta, r) of a whole stream, and its event count.
 #[cfg(test)]
 pub(crate) fn net_steps(bytes: &[u8]) -> ([i64; 2], u32) {
@@ -450,20 +651,15 @@ pub(crate) fn net_steps(bytes: &[u8]) -> ([i64; 2], u32) {
     (net, n)
 }
 
-pub fn decode_all(mut bytes: &[u8], mut out: impl FnMut(StepEvent)) -> Result<u32, StreamError> {
-    let mut expect_seq: u16 = 0;
+/// Decodes a whole stream into `out` via a callback: every block checked, in sequence, up to the
+/// end block (see [`Blocks`]). Returns the event count.
+pub fn decode_all(bytes: &[u8], mut out: impl FnMut(StepEvent)) -> Result<u32, StreamError> {
     let mut n = 0u32;
-    while !bytes.is_empty() {
-        let (block, rest) = parse_block(bytes)?;
-        if block.seq != expect_seq {
-            return Err(StreamError::Sequence { expected: expect_seq, found: block.seq });
-        }
-        for ev in block.iter() {
+    for block in blocks(bytes) {
+        for ev in block?.0.iter() {
             out(ev?);
             n = n.saturating_add(1);
         }
-        expect_seq = expect_seq.wrapping_add(1);
-        bytes = rest;
     }
     Ok(n)
 }
@@ -499,9 +695,11 @@ mod tests {
         let evs: std::vec::Vec<_> = (0..1000).map(|i| ev(145 + i, 1, false)).collect();
         let bytes = encode(&evs);
         assert_eq!(decode(&bytes).unwrap(), evs);
-        assert!(bytes.len() < 20, "{} bytes", bytes.len());
+        // The data block (the end block is a fixed 19 bytes per stream).
+        let data = bytes.len() - END_BLOCK_LEN;
+        assert!(data < 20, "{data} bytes");
         // The thesis word: 2 bytes per event, and 145 ticks of 10 us still fit its 14 bits.
-        assert!(bytes.len() * 100 < evs.len() * 2);
+        assert!(data * 100 < evs.len() * 2);
     }
 
     #[test]
@@ -529,9 +727,60 @@ mod tests {
             "block 0 twice"
         );
         assert_eq!(decode(&bytes[..first_len - 1]), Err(StreamError::Truncated));
-        let mut v2 = bytes.clone();
-        v2[1] = 2;
-        assert_eq!(decode(&v2), Err(StreamError::Version(2)));
+        let mut v3 = bytes.clone();
+        v3[1] = 3;
+        assert_eq!(decode(&v3), Err(StreamError::Version(3)));
+    }
+
+    /// The data blocks' byte ranges and the end block's start.
+    fn block_ends(bytes: &[u8]) -> std::vec::Vec<usize> {
+        let mut it = blocks(bytes);
+        let mut ends = std::vec::Vec::new();
+        while let Some(b) = it.next() {
+            b.unwrap();
+            ends.push(it.offset());
+        }
+        ends
+    }
+
+    #[test]
+    fn a_stream_cut_at_any_block_boundary_is_refused_naming_the_block() {
+        let evs: std::vec::Vec<_> =
+            (0..900).map(|i| ev(i * 7919 % 5000, (i % 2) as u8, i % 3 == 0)).collect();
+        let bytes = encode(&evs);
+        assert_eq!(decode(&bytes).unwrap(), evs, "the whole stream reads");
+        let ends = block_ends(&bytes);
+        assert!(ends.len() >= 3, "{} data blocks", ends.len());
+        assert_eq!(bytes.len() - ends[ends.len() - 1], END_BLOCK_LEN);
+        assert_eq!(decode(&[]), Err(StreamError::NoEndMark { blocks: 0 }));
+        for (k, &cut) in ends.iter().enumerate() {
+            let e = decode(&bytes[..cut]).unwrap_err();
+            assert_eq!(e, StreamError::NoEndMark { blocks: k as u32 + 1 });
+            let text = std::format!("{e}");
+            assert!(text.contains(&std::format!("cut after block {k}")), "{text}");
+        }
+        // An end block moved up (it still follows its own seq) or anything after it.
+        let early = [&bytes[..ends[0]], &end_block(1, 1, 0)[..]].concat();
+        assert!(matches!(decode(&early), Err(StreamError::EndMismatch { blocks: 1, .. })));
+        let after = [&bytes[..], &bytes[..ends[0]]].concat();
+        assert_eq!(decode(&after), Err(StreamError::AfterEnd));
+    }
+
+    #[test]
+    fn an_empty_stream_is_its_end_block_and_a_v1_stream_is_refused() {
+        let bytes = encode(&[]);
+        assert_eq!(bytes, end_block(0, 0, 0));
+        assert_eq!(decode(&bytes), Ok(std::vec::Vec::new()));
+        // A v1 file: the same data blocks with version 1 and no end block.
+        let mut v1 = encode(&[ev(5, 0, false), ev(7, 1, true)]);
+        v1.truncate(v1.len() - END_BLOCK_LEN);
+        v1[1] = VERSION_WITHOUT_END_MARK;
+        let body = v1.len() - CRC_LEN;
+        let crc = CRC32.checksum(&v1[..body]);
+        v1[body..].copy_from_slice(&crc.to_le_bytes());
+        let e = decode(&v1).unwrap_err();
+        assert_eq!(e, StreamError::Version(1));
+        assert!(std::format!("{e}").contains("write it again"), "{e}");
     }
 
     #[test]

@@ -552,14 +552,7 @@ fn status_stream_follows_its_period() {
 
 /// The blocks of the built-in limacon stream.
 fn stream_blocks() -> Vec<&'static [u8]> {
-    let mut out = Vec::new();
-    let mut rest = crate::polar::limacon_stream::BYTES;
-    while !rest.is_empty() {
-        let (_, r) = crate::polar::stream::parse_block(rest).unwrap();
-        out.push(&rest[..rest.len() - r.len()]);
-        rest = r;
-    }
-    out
+    crate::polar::stream::data_blocks(crate::polar::limacon_stream::BYTES)
 }
 
 fn events(seq: u32, block: &[u8], last: bool) -> Request {

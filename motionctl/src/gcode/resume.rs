@@ -13,7 +13,7 @@
 //! move that was already cut (it is cut again: the same path).
 
 use crate::convert::{rapid_feed_hz, ProgramItem};
-use crate::job::{Machine, Source};
+use crate::job::Machine;
 use anyhow::{bail, Result};
 use motion::planner::Move;
 use motion::protocol::{ProgramOutputs, SpindleDir};
@@ -31,6 +31,7 @@ pub const PLUNGE_CLEARANCE_MM: f64 = 5.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResumeAt {
     /// The G-code line to resume from (1-based): its first move, or the first move after it.
+    /// For a TOML job, the move entry's number from 1 ([`crate::job::Source::cursor`]).
     pub line: usize,
     z_axis: usize,
     /// Safe height and plunge speed, Z steps from the job's origin and steps per second.
@@ -109,11 +110,7 @@ impl Resume {
             ProgramItem::Pause | ProgramItem::Dwell(_) => return,
             ProgramItem::Move { mv, source } => (mv, source),
         };
-        let Source::Gcode { line } = source else {
-            out.push_back(item);
-            return;
-        };
-        if line < self.at.line {
+        if source.cursor() < self.at.line {
             return;
         }
         let outputs = *outputs;

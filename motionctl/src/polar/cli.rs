@@ -254,6 +254,9 @@ fn run_stream(
 ) -> anyhow::Result<()> {
     use crate::transport::Transport;
     let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
+    // The whole file checked before a board is touched: a cut, corrupt or v1 file names itself.
+    motion::polar::stream::decode_all(&bytes, |_| {})
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let target = link.target()?;
     let host = link.host_config(&target);
     let (mut t, qemu_guard): (Box<dyn Transport>, _) = if link.sim {

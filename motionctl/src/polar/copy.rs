@@ -91,7 +91,7 @@ pub struct CopyModel {
 /// Replays the counts a taught stream records through the firmware's `CopyMode`.
 pub fn model(bytes: &[u8], scale: SizeScale) -> anyhow::Result<CopyModel> {
     let mut events = Vec::new();
-    decode_all(bytes, |e| events.push(e)).map_err(|e| anyhow::anyhow!("taught stream: {e:?}"))?;
+    decode_all(bytes, |e| events.push(e)).map_err(|e| anyhow::anyhow!("taught stream: {e}"))?;
     let mut c = CopyMode::new([0, 0], scale, false);
     let mut counts = [0i32; 2];
     let mut i = 0;
@@ -143,7 +143,7 @@ pub struct CopyReport {
     pub board_ticks: u64,
     pub seconds: f64,
     pub retransmissions: u64,
-    /// The taught stream (v1 blocks), empty without teach.
+    /// The taught stream (its blocks and the end block), empty without teach.
     pub stream: Vec<u8>,
     pub problems: Vec<String>,
 }

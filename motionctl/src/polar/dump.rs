@@ -1,6 +1,6 @@
 //! Readable text dump of a step-event stream: a header per block (sequence, event count, payload
 //! bytes), then one line per payload item, a single event or a run, with the cumulative time of
-//! its (first) event in ticks and seconds.
+//! its (first) event in ticks and seconds; the end block closes it (a file without one was cut).
 //!
 //! ```text
 //! block 0: seq 0, 108 events, 238 payload bytes, crc ok
@@ -8,7 +8,7 @@
 //!   t 7 ticks (0.000070 s): run 3 x -r dt 7 add +2, last at t 25
 //! ```
 
-use motion::polar::stream::{parse_block, StreamError};
+use motion::polar::stream::{blocks, StreamError};
 use std::fmt::Write;
 
 /// Totals of a dump.
@@ -36,29 +36,19 @@ pub fn code_name(code: u8) -> &'static str {
 pub fn dump(bytes: &[u8], tick_hz: u32, out: &mut String) -> Result<DumpSummary, StreamError> {
     let mut sum = DumpSummary { bytes: bytes.len(), ..Default::default() };
     let secs = |t: u64| t as f64 / tick_hz.max(1) as f64;
-    let mut rest = bytes;
     let mut t: u64 = 0;
-    let mut expect_seq: u16 = 0;
     let fail = |out: &mut String, e: StreamError, at: usize| {
-        let _ = writeln!(out, "error: {e:?} at byte {at}");
+        let _ = writeln!(out, "error: {e} (at byte {at})");
         Err(e)
     };
-    while !rest.is_empty() {
-        let at = bytes.len() - rest.len();
-        let (block, tail) = match parse_block(rest) {
-            Ok(b) => b,
-            Err(e) => return fail(out, e, at),
+    let mut it = blocks(bytes);
+    loop {
+        let at = it.offset();
+        let block = match it.next() {
+            None => break,
+            Some(Ok((block, _))) => block,
+            Some(Err(e)) => return fail(out, e, at),
         };
-        if block.seq != expect_seq {
-            let _ = writeln!(
-                out,
-                "error: block {} has seq {}, expected {expect_seq}: a block was dropped, \
-                 duplicated or reordered (at byte {at})",
-                sum.blocks, block.seq
-            );
-            return Err(StreamError::Sequence { expected: expect_seq, found: block.seq });
-        }
-        expect_seq = expect_seq.wrapping_add(1);
         let _ = writeln!(
             out,
             "block {}: seq {}, {} events, {} payload bytes, crc ok",
@@ -106,12 +96,11 @@ pub fn dump(bytes: &[u8], tick_hz: u32, out: &mut String) -> Result<DumpSummary,
         }
         sum.events += in_block;
         sum.blocks += 1;
-        rest = tail;
     }
     sum.end_ticks = t;
     let _ = writeln!(
         out,
-        "end: {} blocks, {} events in {} items, {} bytes, last event at t {} ticks ({:.6} s)",
+        "end mark: {} blocks, {} events in {} items, {} bytes, last event at t {} ticks ({:.6} s)",
         sum.blocks,
         sum.events,
         sum.items,

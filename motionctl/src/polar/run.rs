@@ -16,7 +16,7 @@ use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use motion::machine::MachineState;
 use motion::polar::playback::{Playback, SizeScale};
-use motion::polar::stream::{decode_all, parse_block};
+use motion::polar::stream::decode_all;
 use motion::protocol::{BlockBytes, EventBlock, HostConfig, HostEvent, Reply, RequestBody};
 use motion::segment::Rate;
 use std::collections::HashMap;
@@ -65,23 +65,35 @@ pub struct Model {
     pub ticks: u64,
 }
 
-/// Splits a stream file into its blocks (each checked whole, in sequence).
+/// Splits a stream file into its data blocks (each checked whole, in sequence, up to the end
+/// block, which stays here: the link's `last` flag ends the stream on the board).
 pub fn blocks(bytes: &[u8]) -> anyhow::Result<Vec<&[u8]>> {
-    decode_all(bytes, |_| {}).map_err(|e| anyhow::anyhow!("not a valid event stream: {e:?}"))?;
-    let mut out = Vec::new();
-    let mut rest = bytes;
-    while !rest.is_empty() {
-        let (_, r) = parse_block(rest).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        out.push(&rest[..rest.len() - r.len()]);
-        rest = r;
-    }
+    decode_all(bytes, |_| {}).map_err(|e| anyhow::anyhow!("not a valid event stream: {e}"))?;
+    motion::polar::stream::blocks(bytes)
+        .map(|b| b.map(|(_, raw)| raw).map_err(|e| anyhow::anyhow!("{e}")))
+        .collect()
+}
+
+/// The first `n` data blocks of the whole stream `bytes` as a whole stream of their own (an open
+/// stretch of a contour): those blocks and an end block with their totals.
+pub fn first_blocks(bytes: &[u8], n: usize) -> anyhow::Result<Vec<u8>> {
+    let all = blocks(bytes)?;
+    let part = all.get(..n).ok_or_else(|| {
+        anyhow::anyhow!("the stream has {} data blocks, {n} were asked for", all.len())
+    })?;
+    let mut out = part.concat();
+    // Checked whole by `blocks` above.
+    let events: u32 =
+        motion::polar::stream::blocks(bytes).take(n).flatten().map(|(b, _)| b.events as u32).sum();
+    // Sequence numbers wrap at 16 bits, as the encoder's do.
+    out.extend_from_slice(&motion::polar::stream::end_block(n as u16, n as u32, events));
     Ok(out)
 }
 
 /// Runs the firmware's playback over the whole stream (no link, no feeder latency).
 pub fn model(bytes: &[u8], speed: Rate, scale: SizeScale) -> anyhow::Result<Model> {
     let mut events = Vec::new();
-    decode_all(bytes, |e| events.push(e)).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    decode_all(bytes, |e| events.push(e)).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut p = Playback::new(scale);
     p.set_rate(speed);
     let mut it = events.into_iter();

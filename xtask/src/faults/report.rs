@@ -43,13 +43,6 @@ fn section(c: &Counts) -> String {
         }
         t += "\n";
     }
-    if !c.gaps.is_empty() {
-        t += "Known gaps (injected, not survived, not yet fixed):\n\n";
-        for g in &c.gaps {
-            t += &format!("- {g}\n");
-        }
-        t += "\n";
-    }
     t + HOW
 }
 

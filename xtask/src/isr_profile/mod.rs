@@ -465,8 +465,10 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
     let job4 = work.join("job4.toml");
     std::fs::write(&job4, FOUR_AXIS_JOB)?;
     let stream = work.join("limacon-arc.bin");
-    let blocks = motionctl::polar::run::blocks(motion::polar::limacon_stream::BYTES)?;
-    std::fs::write(&stream, blocks.get(..6).context("the limacon stream is short")?.concat())?;
+    std::fs::write(
+        &stream,
+        motionctl::polar::run::first_blocks(motion::polar::limacon_stream::BYTES, 6)?,
+    )?;
     let with_fw = |mut a: Vec<String>, extra: &[&str]| {
         a.extend(fw.iter().cloned());
         a.extend(extra.iter().map(|x| x.to_string()));
