@@ -3,8 +3,28 @@
 
 use crate::link::LinkFailure;
 use crate::noise::NoiseStats;
+use motion::machine::ProbeKind;
 use motion::protocol::{BoardCounters, ProgramOutputs};
+use motion::MAX_AXES;
 use std::fmt::Write as _;
+
+/// Where a probe move ended: whether the probe tripped, the position the board latched at the
+/// trip and where the axes came to rest, steps from the job's start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProbeOutcome {
+    pub tripped: bool,
+    pub trip_steps: [i64; MAX_AXES],
+    pub rest_steps: [i64; MAX_AXES],
+}
+
+/// A probe move as run, for the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Probed {
+    /// The G-code line.
+    pub line: Option<usize>,
+    pub kind: ProbeKind,
+    pub outcome: ProbeOutcome,
+}
 
 /// What a run did; `problems` is empty when every check passed.
 #[derive(Clone, Debug, Default)]
@@ -42,6 +62,8 @@ pub struct RunReport {
     pub output_switches: Vec<crate::outputs::Switched>,
     /// The board's `Status::outputs` at the end.
     pub final_outputs: u8,
+    /// Every probe move (G38.x), in program order, as the board ended it.
+    pub probes: Vec<Probed>,
     pub problems: Vec<String>,
 }
 
