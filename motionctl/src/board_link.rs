@@ -279,3 +279,20 @@ pub fn stream_outputs(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::SimProbeSpec;
+
+    #[test]
+    fn sim_probe_specs_read_an_axis_a_side_and_millimetres() {
+        let spec = |axis: &str, at_mm, below| SimProbeSpec { axis: axis.into(), at_mm, below };
+        assert_eq!("z=-3.2".parse(), Ok(spec("z", -3.2, true)));
+        assert_eq!(" Z <= -3.2 ".parse(), Ok(spec("Z", -3.2, true)));
+        assert_eq!("x>=40".parse(), Ok(spec("x", 40.0, false)));
+        for bad in ["z", "=1", "z=", "z=abc", "z=inf", "z>1"] {
+            let e = bad.parse::<SimProbeSpec>().unwrap_err();
+            assert!(e.contains("expected AXIS=MM"), "{bad}: {e}");
+        }
+    }
+}
