@@ -133,6 +133,55 @@ pub struct Reporting<'a> {
     pub status_ms: u16,
     pub json: bool,
     pub journal: Option<crate::journal::Writer>,
+    /// The simulated board's probe surface (`run --sim-probe`).
+    pub sim_probe: Option<SimProbeSpec>,
+}
+
+/// `run --sim-probe AXIS=MM`: where a simulated board's probe touches, mm from the job's origin
+/// on a machine axis: `AXIS=MM` or `AXIS<=MM` at or below it (a surface under the tool),
+/// `AXIS>=MM` at or above it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimProbeSpec {
+    pub axis: String,
+    pub at_mm: f64,
+    pub below: bool,
+}
+
+impl std::str::FromStr for SimProbeSpec {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("expected AXIS=MM, AXIS<=MM or AXIS>=MM (e.g. z=-3.2), found {s:?}");
+        let (axis, below, value) = if let Some((a, v)) = s.split_once(">=") {
+            (a, false, v)
+        } else if let Some((a, v)) = s.split_once("<=") {
+            (a, true, v)
+        } else if let Some((a, v)) = s.split_once('=') {
+            (a, true, v)
+        } else {
+            return Err(bad());
+        };
+        let axis = axis.trim();
+        let at_mm: f64 = value.trim().parse().map_err(|_| bad())?;
+        if axis.is_empty() || !at_mm.is_finite() {
+            return Err(bad());
+        }
+        Ok(SimProbeSpec { axis: axis.to_string(), at_mm, below })
+    }
+}
+
+impl SimProbeSpec {
+    /// On `machine`: its axis by name.
+    pub fn resolve(&self, machine: &crate::job::Machine) -> Result<runner::SimProbe> {
+        let Some(axis) = machine.axis_index(&self.axis) else {
+            bail!(
+                "--sim-probe: the machine has no axis {} (it has {})",
+                self.axis,
+                machine.axis_names()
+            );
+        };
+        Ok(runner::SimProbe { axis, at_mm: self.at_mm, below: self.below })
+    }
 }
 
 /// Streams planned `outputs` to the board and checks the result against `expected` (the host
@@ -160,13 +209,14 @@ pub fn stream_outputs(
     link: &LinkArgs,
     how: Reporting<'_>,
 ) -> Result<()> {
-    let Reporting { log_csv, yes, status_ms, json, journal } = how;
+    let Reporting { log_csv, yes, status_ms, json, journal, sim_probe } = how;
     if status_ms != 0 && status_ms < motion::protocol::MIN_STATUS_PERIOD_MS {
         bail!("--status-ms must be 0 or at least {}", motion::protocol::MIN_STATUS_PERIOD_MS);
     }
     let target = link.target()?;
     let host = link.host_config(&target);
     let axes = runner::axes_of(parsed);
+    let sim_probe = sim_probe.map(|p| p.resolve(&parsed.machine)).transpose()?;
     let csv = match log_csv {
         Some(p) => Some(crate::csv_log::CsvLog::create(p, axes.clone())?),
         None => None,
@@ -189,6 +239,7 @@ pub fn stream_outputs(
         interrupt: Some(interrupt),
         home: link.home || link.qemu || link.sim,
         journal,
+        sim_probe,
     };
     let journal_path = opts.journal.as_ref().map(|j| j.path().to_path_buf());
     let segments = outputs.segments();
@@ -227,4 +278,21 @@ pub fn stream_outputs(
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SimProbeSpec;
+
+    #[test]
+    fn sim_probe_specs_read_an_axis_a_side_and_millimetres() {
+        let spec = |axis: &str, at_mm, below| SimProbeSpec { axis: axis.into(), at_mm, below };
+        assert_eq!("z=-3.2".parse(), Ok(spec("z", -3.2, true)));
+        assert_eq!(" Z <= -3.2 ".parse(), Ok(spec("Z", -3.2, true)));
+        assert_eq!("x>=40".parse(), Ok(spec("x", 40.0, false)));
+        for bad in ["z", "=1", "z=", "z=abc", "z=inf", "z>1"] {
+            let e = bad.parse::<SimProbeSpec>().unwrap_err();
+            assert!(e.contains("expected AXIS=MM"), "{bad}: {e}");
+        }
+    }
 }

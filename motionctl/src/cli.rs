@@ -48,6 +48,11 @@ pub enum Cmd {
         /// Print the summary as one JSON object instead of text.
         #[arg(long)]
         json: bool,
+        /// A simulated board's probe surface for G38.x probe moves (--sim, --qemu): the probe
+        /// touches while a machine axis is at or below (`z=-3.2` or `z<=-3.2`) or at or above
+        /// (`x>=40`) that many mm from the job's origin.
+        #[arg(long, value_name = "AXIS=MM")]
+        sim_probe: Option<board_link::SimProbeSpec>,
     },
     /// Polar contouring (Fahim): digitize contours into step-event streams, dump streams,
     /// place the machine pole.
@@ -301,6 +306,7 @@ fn plan_without_model(args: &JobArgs, json: bool) -> Result<String> {
             pauses: planned.pauses,
             dwells: planned.dwells,
             dwell_ms: planned.dwell_ms,
+            probes: planned.probes,
             nominal_ticks: planned.nominal_ticks,
         };
         (job.machine, program.commands.len(), totals, program.final_steps)
@@ -410,7 +416,7 @@ pub fn execute(cli: Cli) -> Result<()> {
             }
             plot_toolpath(&job, plot.as_deref())
         }
-        Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line, json } => {
+        Cmd::Run { job, link, log_csv, yes, status_ms, resume, resume_line, json, sim_probe } => {
             let from = match (resume, resume_line) {
                 (true, _) => Some(crate::journal::read(&job.job)?.line),
                 (false, line) => line,
@@ -421,6 +427,7 @@ pub fn execute(cli: Cli) -> Result<()> {
                 status_ms,
                 json,
                 journal: None,
+                sim_probe,
             };
             run_job(&job, &link, how, from)
         }

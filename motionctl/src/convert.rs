@@ -10,6 +10,7 @@
 
 use crate::job::{Axis, Feed, FeedAction, Item, Job, Machine, Source, Target};
 use motion::dda::{Command, MAX_SCHEDULED};
+use motion::machine::ProbeKind;
 use motion::planner::Move;
 use motion::protocol::ProgramOutputs;
 use motion::{AxisLimits, MachineConfig, Rate, MAX_AXES};
@@ -40,12 +41,18 @@ pub enum ProgramItem {
     Pause,
     /// Seconds at rest.
     Dwell(f64),
+    /// A probe move ([`Item::Probe`]): planned alone, from rest to rest.
+    Probe {
+        kind: ProbeKind,
+        mv: Move,
+        source: Source,
+    },
 }
 
 impl Program {
     pub fn moves(&self) -> impl Iterator<Item = &Move> {
         self.items.iter().filter_map(|i| match i {
-            ProgramItem::Move { mv, .. } => Some(mv),
+            ProgramItem::Move { mv, .. } | ProgramItem::Probe { mv, .. } => Some(mv),
             _ => None,
         })
     }
@@ -172,6 +179,15 @@ impl Stepper {
         self.pos_steps
     }
 
+    /// The machine stands at `steps` (steps from the start; a probe move stopped short): the
+    /// next move goes from there.
+    pub fn set_position_steps(&mut self, steps: &[i64; MAX_AXES]) {
+        for (i, spm) in self.steps_per_mm.iter().enumerate() {
+            self.pos_steps[i] = steps[i];
+            self.pos_mm[i] = steps[i] as f64 / spm;
+        }
+    }
+
     /// Moves so far that rounded to no steps (dropped).
     pub fn skipped_moves(&self) -> usize {
         self.skipped_moves
@@ -185,6 +201,17 @@ impl Stepper {
             Item::Pause => return Ok(Some(ProgramItem::Pause)),
             Item::Dwell(s) => return Ok(Some(ProgramItem::Dwell(*s))),
             Item::Move(m) => m,
+            Item::Probe { kind, mv } => {
+                return match self.item(&Item::Move(mv.clone()))? {
+                    Some(ProgramItem::Move { mv, source }) => {
+                        Ok(Some(ProgramItem::Probe { kind: *kind, mv, source }))
+                    }
+                    _ => Err(error(
+                        mv.source.to_string(),
+                        format!("{} probe move rounds to no steps: nothing to probe", kind.gcode()),
+                    )),
+                }
+            }
         };
         let n = self.axes.len();
         let what = || m.source.to_string();

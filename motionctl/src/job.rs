@@ -4,6 +4,7 @@
 //! Lengths are millimetres (or the axis's own unit for rotary axes), feeds mm/min, rates mm/s.
 //! [`crate::convert`] turns a [`Job`] into planner moves in steps.
 
+use motion::machine::ProbeKind;
 use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion::StepTiming;
 use serde::{Deserialize, Deserializer};
@@ -101,6 +102,13 @@ pub enum Item {
     Pause,
     /// Dwell (G4): motion before it completes, then the machine stands still this many seconds.
     Dwell(f64),
+    /// A probe move (G38.2..G38.5): motion before it completes, then the board runs `mv` alone
+    /// as a probe move (`ArmProbe`), stopping where the probe trips; what follows is planned
+    /// from where the axes came to rest.
+    Probe {
+        kind: ProbeKind,
+        mv: MoveCmd,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -6,6 +6,7 @@
 
 use crate::convert::{Program, ProgramItem};
 use crate::job::Source;
+use motion::machine::ProbeKind;
 use motion::planner::{Move, PlanError, Planner, LOOKAHEAD};
 use motion::protocol::ProgramOutputs;
 use motion::report::Report;
@@ -24,6 +25,13 @@ pub enum Output {
     Pause,
     /// Stand still this many seconds once every earlier segment has completed.
     Dwell(f64),
+    /// Once every earlier segment has completed: arm the board for a probe move of this kind.
+    /// The probe move's segments follow, then [`Output::ProbeEnd`].
+    Probe(ProbeKind),
+    /// The probe move's segments are all given: start them, wait for the move to end, and
+    /// tell the source where the axes stopped before anything more is pulled from it (what
+    /// follows is planned from there).
+    ProbeEnd,
 }
 
 /// The planner refused a move.
@@ -60,6 +68,10 @@ pub struct Stream<I, E = PlanFailure> {
     /// A move that did not fit the window; pushed again once the window has drained.
     retry: Option<(Move, Source)>,
     event: Option<Output>,
+    /// A probe move, pushed alone once [`Output::Probe`] has been given.
+    probe: Option<(Move, Source)>,
+    /// The move in `retry` is a probe move: the window is finished after it.
+    probing: bool,
     finished: bool,
     /// An error ended the stream.
     failed: bool,
@@ -93,6 +105,8 @@ where
             items,
             retry: None,
             event: None,
+            probe: None,
+            probing: false,
             finished: false,
             failed: false,
             sources: VecDeque::with_capacity(LOOKAHEAD),
@@ -101,7 +115,8 @@ where
         }
     }
 
-    /// Where the segment [`Iterator::next`] gave last was written.
+    /// Where the segment [`Iterator::next`] gave last was written (for [`Output::Probe`]: the
+    /// probe move).
     pub fn source(&self) -> Option<Source> {
         self.last_source
     }
@@ -145,6 +160,12 @@ where
             }
             // The planner has drained (it was finished before the event was taken).
             if let Some(ev) = self.event.take() {
+                if let Some(p) = self.probe.take() {
+                    // The probe event is where its move was written.
+                    self.last_source = Some(p.1);
+                    self.retry = Some(p);
+                    self.probing = true;
+                }
                 return Some(Ok(ev));
             }
             if self.finished {
@@ -169,6 +190,12 @@ where
                         self.event = Some(Output::Dwell(s));
                         continue;
                     }
+                    Some(Ok(ProgramItem::Probe { kind, mv, source })) => {
+                        self.planner.finish();
+                        self.event = Some(Output::Probe(kind));
+                        self.probe = Some((mv, source));
+                        continue;
+                    }
                     Some(Err(e)) => {
                         self.failed = true;
                         return Some(Err(e));
@@ -186,6 +213,12 @@ where
                     let pieces = self.planner.queued().saturating_sub(before);
                     if pieces > 0 {
                         self.sources.push_back((source, pieces));
+                    }
+                    // A probe move ends at rest, and nothing after it is planned before the
+                    // board has said where it stopped.
+                    if std::mem::take(&mut self.probing) {
+                        self.planner.finish();
+                        self.event = Some(Output::ProbeEnd);
                     }
                 }
                 // A long move split into more pieces than the window has free: end the motion so
@@ -214,6 +247,8 @@ pub struct Plan {
     /// Dwells, and their time at rest in milliseconds.
     pub dwells: usize,
     pub dwell_ms: u64,
+    /// Probe moves (G38.x).
+    pub probes: usize,
     /// Sum of the segments' nominal durations (at full speed, override 1.0).
     pub nominal_ticks: u64,
 }
@@ -237,6 +272,8 @@ pub fn plan(program: &Program) -> Result<Plan, PlanFailure> {
                 p.dwells += 1;
                 p.dwell_ms += dwell_ms(s);
             }
+            Output::Probe(_) => p.probes += 1,
+            Output::ProbeEnd => {}
         }
     }
     Ok(p)
@@ -337,6 +374,8 @@ pub struct Totals {
     pub pauses: usize,
     pub dwells: usize,
     pub dwell_ms: u64,
+    /// Probe moves (G38.x).
+    pub probes: usize,
     /// Sum of the segments' nominal durations (at full speed, override 1.0).
     pub nominal_ticks: u64,
 }
@@ -351,6 +390,7 @@ impl Summary {
             pauses: self.plan.pauses,
             dwells: self.plan.dwells,
             dwell_ms: self.plan.dwell_ms,
+            probes: self.plan.probes,
             nominal_ticks: self.plan.nominal_ticks,
         }
     }
@@ -387,6 +427,7 @@ pub fn summary_json(
         "pauses": t.pauses,
         "dwells": t.dwells,
         "dwell_s": t.dwell_ms as f64 / 1000.0,
+        "probes": t.probes,
         "nominal_s": t.nominal_ticks as f64 / hz,
         "model_s": report.map(|r| r.ticks as f64 / r.tick_hz.max(1) as f64),
         "model_underruns": report.map(|r| r.underruns),
@@ -429,6 +470,14 @@ fn dwell_line(s: &mut String, t: &Totals) {
             "dwells     {} (G4), {:.3} s at rest",
             t.dwells,
             t.dwell_ms as f64 / 1000.0
+        );
+    }
+    if t.probes > 0 {
+        let _ = writeln!(
+            s,
+            "probes     {} (G38.x): planned as if none trips; a run replans from where each \
+             stops",
+            t.probes
         );
     }
 }
@@ -540,6 +589,8 @@ where
                     t.dwells += 1;
                     t.dwell_ms += dwell_ms(s);
                 }
+                Ok(Output::Probe(_)) => t.probes += 1,
+                Ok(Output::ProbeEnd) => {}
                 Err(e) => {
                     stopped = Some(e);
                     return None;

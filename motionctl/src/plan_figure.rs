@@ -24,7 +24,8 @@ pub fn toolpath_figure(machine: &Machine, items: &[Item], title: &str) -> Figure
     let mut last_rapid: Option<bool> = None;
     let mut path: Vec<[f64; 3]> = vec![at(&pos)];
     for item in items {
-        let Item::Move(m) = item else { continue };
+        // A probe move is drawn to its programmed end (where `plan` assumes it ends).
+        let (Item::Move(m) | Item::Probe { mv: m, .. }) = item else { continue };
         let from = at(&pos);
         match &m.target {
             Target::Absolute(t) => {

@@ -8,7 +8,8 @@ use motion::protocol::LinkTarget as _;
 use motion::protocol::Response;
 use motion::protocol::{
     encode_frame, BoardLink, FrameDecoder, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME,
-    CAP_OVERRIDE, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME, MAX_FRAME_WIRE,
+    CAP_OVERRIDE, CAP_PROBE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME,
+    MAX_FRAME_WIRE,
 };
 use motion::{Rate, MAX_AXES};
 use std::io;
@@ -52,7 +53,14 @@ pub struct SimBoard {
 
 impl SimBoard {
     pub fn new(capacity: u16, speed: f64) -> Self {
-        let caps = CAP_DDA | CAP_STATUS_STREAM | CAP_OVERRIDE | CAP_HOLD_RESUME | CAP_SOFT_LIMITS;
+        // Probe moves against the simulated surface `Sim(Probe)` sets (`run --sim-probe`).
+        let caps = CAP_DDA
+            | CAP_STATUS_STREAM
+            | CAP_OVERRIDE
+            | CAP_HOLD_RESUME
+            | CAP_SOFT_LIMITS
+            | CAP_PROBE
+            | CAP_SIM_INPUTS;
         let now = Instant::now();
         SimBoard {
             board: BoardLink::new("motionctl-sim", caps),

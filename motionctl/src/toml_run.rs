@@ -40,7 +40,8 @@ impl TomlRun {
                      commands are stamped from the start"
                 );
             }
-            program.items = resumed_items(&program, ResumeAt::new(machine, entry)?);
+            program.items = resumed_items(&program, ResumeAt::new(machine, entry)?)
+                .map_err(|e| anyhow!("{label}: {e}"))?;
             if !program.items.iter().any(|i| matches!(i, ProgramItem::Move { .. })) {
                 bail!("{label}: nothing to resume: no move at or after move {entry}");
             }
@@ -83,7 +84,7 @@ impl TomlRun {
 }
 
 /// The program's items from the resume point on, the approach in front.
-fn resumed_items(program: &Program, at: ResumeAt) -> Vec<ProgramItem> {
+fn resumed_items(program: &Program, at: ResumeAt) -> Result<Vec<ProgramItem>, String> {
     let mut resume = Resume::new(at);
     let mut pos = [0i64; MAX_AXES];
     let mut out = VecDeque::new();
@@ -93,7 +94,7 @@ fn resumed_items(program: &Program, at: ResumeAt) -> Vec<ProgramItem> {
                 *p += d as i64;
             }
         }
-        resume.filter(item, pos, &program.config, &mut out);
+        resume.filter(item, pos, &program.config, &mut out)?;
     }
-    out.into()
+    Ok(out.into())
 }

@@ -1,6 +1,7 @@
 //! Planning and the offline model run: the examples end where they should; events follow the
 //! motion before them; the binary's `plan` works and errors are one line.
 
+use motion::machine::ProbeKind;
 use motion::protocol::{ProgramOutputs, SpindleDir};
 use motionctl::cli::{self, JobArgs};
 use motionctl::convert::{self, Program};
@@ -59,6 +60,11 @@ fn mv(index: usize, x_mm: f64, feed: Feed) -> Item {
     })
 }
 
+fn probe(index: usize, x_mm: f64) -> Item {
+    let Item::Move(m) = mv(index, x_mm, Feed::MmPerMin(600.0)) else { unreachable!() };
+    Item::Probe { kind: ProbeKind::Toward, mv: m }
+}
+
 fn program(items: Vec<Item>) -> Program {
     let machine = job::parse_machine_toml(include_str!("../examples/machine.toml")).unwrap();
     convert::convert(&Job { machine, items, feed_commands: vec![] }).unwrap()
@@ -76,6 +82,8 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
         Item::Dwell(0.25),
         mv(7, 2.0, Feed::Rapid),
         Item::Outputs(OFF),
+        probe(9, -3.0),
+        mv(10, 2.0, Feed::Rapid),
     ]);
     let out: Vec<Output> = Stream::new(&p).map(Result::unwrap).collect();
     let kinds: Vec<char> = out
@@ -89,9 +97,25 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
                 assert_eq!(*s, 0.25);
                 'D'
             }
+            Output::Probe(k) => {
+                assert_eq!(*k, ProbeKind::Toward);
+                'G'
+            }
+            Output::ProbeEnd => 'E',
         })
         .collect();
-    assert_eq!(kinds.iter().collect::<String>(), "ssMsPsDsm");
+    let kinds: String = kinds.iter().collect();
+    // The probe move alone between its two events, however many segments it takes.
+    let probe_segments = kinds.matches('s').count() - 6;
+    assert!(probe_segments >= 1, "{kinds}");
+    assert_eq!(kinds, format!("ssMsPsDsmG{}Es", "s".repeat(probe_segments)));
+    // The probe move starts and ends at rest.
+    let g = kinds.find('G').unwrap();
+    let (Output::Segment(first), Output::Segment(last)) = (out[g + 1], out[g + probe_segments])
+    else {
+        panic!("{kinds}")
+    };
+    assert_eq!((first.entry_rate, last.exit_rate), (motion::Rate::ZERO, motion::Rate::ZERO));
     // The segment before each event ends at rest; the first ones meet at speed.
     for w in out.windows(2) {
         if let (Output::Segment(s), Output::Outputs(_) | Output::Pause | Output::Dwell(_)) =
@@ -112,7 +136,8 @@ fn events_come_after_the_motion_before_them_has_come_to_rest() {
     assert_eq!(plan::net_steps(&segs)[0], p.final_steps[0]);
     let s = plan::simulate(&p, |_| {}).unwrap();
     assert!(s.finished);
-    assert_eq!(s.report.positions[0], 32 * 80);
+    // 10 + 10 + 5 + 5 + 2, the probe move back 3 (the model never trips), 2 more.
+    assert_eq!(s.report.positions[0], 31 * 80);
 }
 
 #[test]

@@ -132,6 +132,26 @@ impl Frame {
         q
     }
 
+    /// A machine-coordinate point (mm, degrees) in program coordinates: [`Frame::to_machine`]
+    /// undone (where a probe tripped, for #5061..#5066, as LinuxCNC reports it).
+    pub fn to_program(&self, m: &Pos) -> Pos {
+        let mut q = *m;
+        for i in 0..6 {
+            q[i] -= self.g5x[i] + self.tool[i];
+        }
+        let (mut x, mut y) = (q[0], q[1]);
+        rotate(&mut x, &mut y, -self.rotation_deg);
+        (q[0], q[1]) = (x, y);
+        for i in 0..6 {
+            q[i] -= self.g92[i];
+        }
+        let per_mm = 1.0 / self.units.mm();
+        for v in q.iter_mut().take(3) {
+            *v *= per_mm;
+        }
+        q
+    }
+
     /// The feed rate set last, mm/min.
     pub fn feed_mm_min(&self) -> f64 {
         self.feed_mm_min
@@ -254,5 +274,23 @@ mod tests {
         f.apply(&Canon::UseLengthUnits(Units::Mm));
         let m = f.apply(&Canon::StraightTraverse([0.0; 6])).unwrap();
         assert!((m.end()[0] - 25.4).abs() < 1e-9);
+    }
+
+    #[test]
+    fn to_program_undoes_to_machine() {
+        let mut f = Frame::default();
+        f.apply(&Canon::UseLengthUnits(Units::Inches));
+        f.apply(&Canon::SetG5xOffset { index: 1, offset: [1.0, -2.0, 0.5, 0.0, 0.0, 0.0] });
+        f.apply(&Canon::SetG92Offset([0.25, 0.0, -1.0, 0.0, 0.0, 0.0]));
+        f.apply(&Canon::UseToolLengthOffset([0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+        f.apply(&Canon::SetXyRotation(30.0));
+        let p = [0.3, -0.7, 1.9, 10.0, 0.0, 0.0];
+        let back = f.to_program(&f.to_machine(&p));
+        for i in 0..6 {
+            assert!((back[i] - p[i]).abs() < 1e-9, "{back:?} != {p:?}");
+        }
+        // Machine 0 is -(offsets) in program units.
+        let origin = Frame::default().to_program(&[5.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(origin[0], 5.0);
     }
 }

@@ -65,7 +65,7 @@ pub const WORDS: &[Word] = &[
     yes("G33.1", "rigid tapping (RIGID_TAP)", "M3 S100\nG33.1 Z-1 K0.1\nM2"),
     yes(
         "G38.2..G38.5",
-        "straight probe (STRAIGHT_PROBE); the board runs probe moves, `run` refuses them yet",
+        "straight probe (STRAIGHT_PROBE); `run` drives each alone, the result in #5061..#5066, #5070",
         "G1 F10\nG38.2 Z-1\nM2",
     ),
     yes("G40", "cutter radius compensation off", "G40\nM2"),

@@ -356,6 +356,7 @@ fn run_on_board(
             status_ms: crate::runner::DEFAULT_STATUS_PERIOD_MS,
             json: run_json,
             journal: None,
+            sim_probe: None,
         },
     )
 }

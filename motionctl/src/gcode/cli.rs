@@ -155,7 +155,7 @@ impl<'a> Limits<'a> {
     }
 
     fn check(&mut self, item: &Item) -> Option<String> {
-        let Item::Move(m) = item else { return None };
+        let (Item::Move(m) | Item::Probe { mv: m, .. }) = item else { return None };
         let Target::Absolute(t) = &m.target else { return None };
         let mut problem = None;
         for (i, (a, v)) in self.machine.axes.iter().zip(t).enumerate() {

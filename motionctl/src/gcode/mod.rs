@@ -4,17 +4,20 @@
 //! [`CHORD_TOLERANCE_MM`], grbl's `$12`).
 //!
 //! A program with any error is refused as a whole, before anything moves; every error is listed.
-//! What the board or `run` cannot do yet (probe moves: the board has them, `run` does not
-//! drive them yet; spindle-synchronised motion) is refused with a message saying so; what it cannot switch (M62..M68 outputs) is reported as a warning and not
-//! executed. The spindle (M3, M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`]
+//! What the board cannot do (spindle-synchronised motion) is refused with a message saying so;
+//! what it cannot switch (M62..M68 outputs) is reported as a warning and not executed. A probe
+//! move (G38.2..G38.5) becomes one [`Item::Probe`]: `run` drives it alone and replans the rest
+//! of the program from where the board stopped ([`stream::Items::probed`]). The spindle (M3, M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`]
 //! each time one of them switches, carrying all of them; a dwell (G4) is a stop at rest the
 //! runner times.
 
 pub mod cli;
 pub mod resume;
+mod second_pass;
 pub mod stream;
 
 use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};
+use motion::machine::ProbeKind;
 use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion_gcode::canon::{Canon, Pos};
 use motion_gcode::frame::{Frame, Motion};
@@ -179,6 +182,11 @@ impl<'a> Converter<'a> {
         }
     }
 
+    /// Which G-code axis (0..6) drives each machine axis.
+    pub fn axis_map(&self) -> &[Option<usize>] {
+        &self.map
+    }
+
     fn note(&mut self, line: u32, m: impl Into<String>) {
         if self.notes.len() < self.note_limit {
             self.notes.push((line, m.into()));
@@ -245,6 +253,12 @@ impl<'a> Converter<'a> {
 
     fn motion(&mut self, line: u32, m: &Motion, out: &mut Vec<Item>) -> Result<(), String> {
         let source = Source::Gcode { line: line as usize };
+        if let Motion::Probe { to, kind, feed_mm_min, .. } = m {
+            let target = Target::Absolute(self.target(to)?);
+            let mv = MoveCmd { target, feed: Feed::MmPerMin(*feed_mm_min), source };
+            out.push(Item::Probe { kind: board_probe_kind(*kind), mv });
+            return Ok(());
+        }
         let mut point = |p: &Pos, feed: Feed| -> Result<(), String> {
             let target = self.target(p)?;
             out.push(Item::Move(MoveCmd { target: Target::Absolute(target), feed, source }));
@@ -257,11 +271,8 @@ impl<'a> Converter<'a> {
             Motion::Arc { feed_mm_min, .. } | Motion::Nurbs { feed_mm_min, .. } => {
                 (curves::flatten(m, self.machine.arc_tolerance_mm), Feed::MmPerMin(*feed_mm_min))
             }
-            Motion::Probe { .. } => {
-                return Err("G38.x probe move: the board runs probe moves (ArmProbe), but `run` \
-                    does not drive them yet; `run` refuses probing"
-                    .into())
-            }
+            // Taken above, before the closure borrows `out`.
+            Motion::Probe { .. } => return Ok(()),
             Motion::RigidTap { .. } => {
                 return Err("G33.1 rigid tapping needs spindle synchronisation".into())
             }
@@ -285,6 +296,17 @@ impl<'a> Converter<'a> {
             }
         }
         Ok(self.map.iter().map(|g| g.map(|i| p[i])).collect())
+    }
+}
+
+/// The board's probe move for a G38.x word.
+fn board_probe_kind(k: motion_gcode::canon::ProbeKind) -> ProbeKind {
+    use motion_gcode::canon::ProbeKind as G;
+    match k {
+        G::TowardError => ProbeKind::TowardError,
+        G::Toward => ProbeKind::Toward,
+        G::AwayError => ProbeKind::AwayError,
+        G::Away => ProbeKind::Away,
     }
 }
 

@@ -13,7 +13,7 @@
 //! move that was already cut (it is cut again: the same path).
 
 use crate::convert::{rapid_feed_hz, ProgramItem};
-use crate::job::Machine;
+use crate::job::{Machine, Source};
 use anyhow::{bail, Result};
 use motion::planner::Move;
 use motion::protocol::{ProgramOutputs, SpindleDir};
@@ -97,21 +97,35 @@ impl Resume {
         pos_after: [i64; MAX_AXES],
         cfg: &MachineConfig,
         out: &mut VecDeque<ProgramItem>,
-    ) {
+    ) -> Result<(), String> {
         let Some(outputs) = self.skipping.as_mut() else {
             out.push_back(item);
-            return;
+            return Ok(());
         };
         let (mv, source) = match item {
             ProgramItem::Outputs(o) => {
                 *outputs = o;
-                return;
+                return Ok(());
             }
-            ProgramItem::Pause | ProgramItem::Dwell(_) => return,
-            ProgramItem::Move { mv, source } => (mv, source),
+            ProgramItem::Pause | ProgramItem::Dwell(_) => return Ok(()),
+            // What follows a probe move depends on where it tripped: one before the resume line
+            // cannot be skipped. One at it is approached as a move is.
+            ProgramItem::Probe { kind, source: Source::Gcode { line }, .. }
+                if line < self.at.line =>
+            {
+                return Err(format!(
+                    "{} probe move before the resume line {}: what follows it depends on where \
+                     it trips; resume from this line or before it",
+                    kind.gcode(),
+                    self.at.line
+                ));
+            }
+            ProgramItem::Move { mv, source } | ProgramItem::Probe { mv, source, .. } => {
+                (mv, source)
+            }
         };
         if source.cursor() < self.at.line {
-            return;
+            return Ok(());
         }
         let outputs = *outputs;
         self.skipping = None;
@@ -153,5 +167,6 @@ impl Resume {
         go(clear, None, out);
         go(start, Some(self.at.plunge_hz), out);
         out.push_back(item);
+        Ok(())
     }
 }

@@ -7,16 +7,19 @@
 //! plan through the host model ([`check_and_plan`]): a file with any error is refused here,
 //! before anything moves, with the same messages as the whole-program path ([`super::load`]);
 //! otherwise the pass yields the totals a run needs (segments, planned time, where the job must
-//! end). The second pass ([`items`]) reads the file again and streams it to the board.
+//! end). The second pass ([`items`]) reads the file again and streams it to the board
+//! ([`outputs`], in `second_pass`).
 
+pub use super::second_pass::outputs;
 use super::{machine_diag, Converter, GcodeError};
 use crate::convert::{ConvertError, Program, ProgramItem, Stepper};
-use crate::job::{Item, Machine};
+use crate::job::{Item, Machine, Source};
 use crate::plan::{self, PlanFailure, SimulateError, Stream, Totals};
 use motion::report::Report;
 use motion::MAX_AXES;
+use motion_gcode::canon::Pos;
 use motion_gcode::source::{LineSource, SeekSource};
-use motion_gcode::{Diagnostic, Event, Interpreter};
+use motion_gcode::{Diagnostic, Event, Interpreter, ProbeResult};
 use std::fmt;
 use std::fs::File;
 use std::io::BufReader;
@@ -184,6 +187,55 @@ impl<'m, S: LineSource> Items<'m, S> {
         (w, total - shown)
     }
 
+    /// The G-code line an item came from (0 when it has none).
+    fn line_of(&self, p: &ProgramItem) -> u32 {
+        match p {
+            ProgramItem::Move { source: Source::Gcode { line }, .. }
+            | ProgramItem::Probe { source: Source::Gcode { line }, .. } => *line as u32,
+            _ => 0,
+        }
+    }
+
+    /// A probe move ended on the board (`trip_steps` and `rest_steps`: steps from the job's
+    /// start): the interpreter is told the result, as LinuxCNC's is (#5061..#5066 where it
+    /// tripped, or the move's end when it did not, #5070 whether it did, in the program's
+    /// coordinates and units), and what follows is planned from where the axes came to rest.
+    /// Call it before the next item is asked for.
+    pub fn probed(
+        &mut self,
+        tripped: bool,
+        trip_steps: &[i64; MAX_AXES],
+        rest_steps: &[i64; MAX_AXES],
+    ) {
+        let Ok(stepper) = self.stepper.as_mut() else { return };
+        stepper.set_position_steps(rest_steps);
+        let spm = stepper.steps_per_mm().to_vec();
+        let machine_mm = |steps: &[i64; MAX_AXES], frame_pos: &Pos| {
+            let mut p = *frame_pos;
+            for (i, g) in self.conv.axis_map().iter().enumerate() {
+                if let (Some(g), Some(spm)) = (g, spm.get(i)) {
+                    p[*g] = steps[i] as f64 / spm;
+                }
+            }
+            p
+        };
+        let rest_mm = machine_mm(rest_steps, &self.conv.frame.position);
+        let probe_mm = if tripped {
+            machine_mm(trip_steps, &self.conv.frame.position)
+        } else {
+            // rs274's rule: no trip leaves the probe position at the programmed end.
+            self.conv.frame.position
+        };
+        let frame = &mut self.conv.frame;
+        let result = ProbeResult {
+            probe_position: frame.to_program(&probe_mm),
+            tripped,
+            end_position: frame.to_program(&rest_mm),
+        };
+        frame.position = rest_mm;
+        self.interp.world_mut().set_probe_result(result);
+    }
+
     fn fail(&mut self) -> Option<Result<ProgramItem, Stop>> {
         self.pending.clear();
         self.next_pending = 0;
@@ -203,7 +255,7 @@ impl<S: LineSource> Iterator for Items<'_, S> {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             if let Some(p) = self.resumed.pop_front() {
-                self.moves += matches!(p, ProgramItem::Move { .. }) as usize;
+                self.moves += is_move(&p) as usize;
                 return Some(Ok(p));
             }
             if self.next_pending < self.pending.len() {
@@ -213,13 +265,20 @@ impl<S: LineSource> Iterator for Items<'_, S> {
                 match stepper.item(&self.pending[i]) {
                     Ok(Some(p)) if self.resume.is_some() => {
                         let (pos, cfg) = (stepper.final_steps(), *stepper.config());
-                        if let Some(r) = self.resume.as_mut() {
-                            r.filter(p, pos, &cfg, &mut self.resumed);
+                        let refused = match self.resume.as_mut() {
+                            Some(r) => r.filter(p, pos, &cfg, &mut self.resumed).err(),
+                            None => None,
+                        };
+                        if let Some(m) = refused {
+                            self.error(machine_diag(self.line_of(&p), m));
+                            if let Some(r) = self.fail() {
+                                return Some(r);
+                            }
                         }
                         continue;
                     }
                     Ok(Some(p)) => {
-                        self.moves += matches!(p, ProgramItem::Move { .. }) as usize;
+                        self.moves += is_move(&p) as usize;
                         return Some(Ok(p));
                     }
                     Ok(None) => continue,
@@ -261,6 +320,10 @@ impl<S: LineSource> Iterator for Items<'_, S> {
             }
         }
     }
+}
+
+fn is_move(p: &ProgramItem) -> bool {
+    matches!(p, ProgramItem::Move { .. } | ProgramItem::Probe { .. })
 }
 
 /// What the checking pass learnt about a file it accepted.
@@ -375,6 +438,8 @@ fn check<S: LineSource>(
                             t.dwells += 1;
                             t.dwell_ms += crate::plan::dwell_ms(s);
                         }
+                        Ok(crate::plan::Output::Probe(_)) => t.probes += 1,
+                        Ok(crate::plan::Output::ProbeEnd) => {}
                         Err(e) => stopped = Some(e),
                     }
                 }
@@ -410,50 +475,4 @@ fn check<S: LineSource>(
         skipped_moves: totals.skipped_moves,
     };
     Ok((Planned { program, totals, warnings, warnings_omitted }, report))
-}
-
-/// The second pass: `items` (the file read again) planned as the board takes the segments, each
-/// with its G-code line, for [`crate::runner::run_outputs`]. The file must give what the first
-/// pass checked: an error, or another number of segments than `segments`, ends the run (the file
-/// changed in between).
-pub fn outputs<'a, S: LineSource + 'a>(
-    items: Items<'a, S>,
-    checked: &Checked,
-    label: &str,
-    segments: u32,
-) -> crate::runner::Outputs<'a> {
-    let label = label.to_string();
-    let mut stream: Stream<_, Stop> = Stream::over(&checked.program.config, items);
-    let mut given = 0u32;
-    let changed = format!("{label} changed since it was checked");
-    let next = move || {
-        let Some(out) = stream.next() else {
-            return (given != segments)
-                .then(|| Err(format!("{changed}: {given} segments instead of {segments}")));
-        };
-        let line = match stream.source() {
-            Some(crate::job::Source::Gcode { line }) => Some(line),
-            _ => None,
-        };
-        Some(match out {
-            Ok(crate::plan::Output::Segment(_)) if given >= segments => {
-                Err(format!("{changed}: more than {segments} segments"))
-            }
-            Ok(o) => {
-                given += matches!(o, crate::plan::Output::Segment(_)) as u32;
-                Ok((o, line))
-            }
-            Err(Stop::Plan(p)) => Err(format!("{label}: {p}")),
-            Err(Stop::Refused) => Err(match stream.items().verdict() {
-                Err(r) => format!("{changed}: {r}"),
-                Ok(()) => changed.clone(),
-            }),
-        })
-    };
-    crate::runner::Outputs::streamed(
-        next,
-        segments,
-        checked.totals.nominal_ticks,
-        checked.report.ticks,
-    )
 }

@@ -243,6 +243,16 @@ impl Program {
                 code: super::protocol::error::UNSUPPORTED_COMMAND,
                 message: m,
             })?;
+            // The bridge's own pipeline has no probe step yet: refused whole, as before
+            // `motionctl run` drove probe moves.
+            if loaded.items.iter().any(|i| matches!(i, Item::Probe { .. })) {
+                return Err(BlockError {
+                    code: super::protocol::error::UNSUPPORTED_COMMAND,
+                    message: "G38.x probing is not supported over the grbl bridge yet \
+                              (`motionctl run FILE` drives probe moves)"
+                        .into(),
+                });
+            }
             if let Canon::Message(m) = &c.canon {
                 block.messages.push(m.clone());
             }
@@ -306,6 +316,9 @@ mod tests {
         // Still usable after errors.
         let b = p.run("X1").unwrap();
         assert_eq!(target(&b.steps[0]), vec![Some(12.0), Some(5.0), Some(0.0)]);
+        let e = p.run("G38.2 Z-5 F100").unwrap_err();
+        assert_eq!(e.code, 20);
+        assert!(e.message.contains("G38.x probing is not supported over the grbl bridge"));
     }
 
     #[test]

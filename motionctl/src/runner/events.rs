@@ -1,5 +1,6 @@
 //! The program's events between segments, each once the motion before it is done: the spindle
-//! and coolant switched on the board, program pauses (M0), dwells (G4).
+//! and coolant switched on the board, program pauses (M0), dwells (G4), probe moves (G38.x,
+//! `probe`).
 
 use super::report::{err, link_err, RunError};
 use super::stream::Stream;
@@ -12,8 +13,15 @@ impl Stream<'_, '_> {
     /// Events (spindle and coolant, pause, dwell) once the motion before them is done; stops at
     /// the next segment or at an event still under way.
     pub(super) fn handle_events(&mut self) -> Result<(), RunError> {
-        while let Some((out, _)) = self.peek()? {
+        while let Some((out, line)) = self.peek()? {
             if matches!(out, Output::Segment(_)) {
+                break;
+            }
+            // The probe move's own segments end it: some are dropped at a trip.
+            if out == Output::ProbeEnd {
+                if self.probe_ended()? {
+                    continue;
+                }
                 break;
             }
             let before_done = self.report.acked == self.sent_segs
@@ -28,7 +36,9 @@ impl Stream<'_, '_> {
                 }
                 Output::Pause => self.pause(),
                 Output::Dwell(seconds) => self.dwell(seconds),
-                Output::Segment(_) => unreachable!("checked above"),
+                Output::Probe(kind) => self.arm_probe(kind, line)?,
+                // Both taken above.
+                Output::Segment(_) | Output::ProbeEnd => false,
             };
             if !went_on {
                 break;

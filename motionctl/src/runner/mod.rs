@@ -14,7 +14,8 @@
 //! (what a run is given and what it gives back), `watch` (limits on a running job), `board`
 //! (asking the board, bringing it to `Ready`), `outputs` (what is sent, and where the run is in
 //! it), then the run itself: `stream` (connecting, the loop and most of its steps), `replies`
-//! (what the board said), `events` (spindle, coolant, pauses and dwells between segments) and
+//! (what the board said), `events` (spindle, coolant, pauses and dwells between segments),
+//! `probe` (G38.x probe moves, each run alone and the rest replanned from where it stopped) and
 //! `verify` (the checks at the end). `hook` lets a capability's runner be driven (held,
 //! resumed, aborted) while it owns the link.
 
@@ -23,6 +24,7 @@ mod events;
 mod hook;
 mod options;
 mod outputs;
+mod probe;
 mod replies;
 mod report;
 mod stream;
@@ -34,8 +36,8 @@ pub use board::{
     HOMING_BOARD_SECONDS, HOMING_STUCK,
 };
 pub use hook::{JobControl, JobHook, Steer, Unattended};
-pub use options::{RunOptions, DEFAULT_STATUS_PERIOD_MS};
-pub use outputs::Outputs;
-pub use report::{counters_text, RunError, RunReport};
+pub use options::{RunOptions, SimProbe, DEFAULT_STATUS_PERIOD_MS};
+pub use outputs::{OutputSource, Outputs, Tagged};
+pub use report::{counters_text, ProbeOutcome, Probed, RunError, RunReport};
 pub use stream::{run, run_outputs, HEARTBEAT_EVERY};
 pub use watch::{JobWatch, Overdue};

@@ -5,6 +5,15 @@ use motion::protocol::{HostConfig, MAX_SEGMENTS_PER_FRAME};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
+/// The simulated probe surface a run sets up (`run --sim-probe`): the probe touches while
+/// machine axis `axis` is at or below (`below`), or at or above, `at_mm` from the job's origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimProbe {
+    pub axis: usize,
+    pub at_mm: f64,
+    pub below: bool,
+}
+
 /// Default status period: 25 Hz, so the stream stays at or above 20 Hz however it is counted.
 pub const DEFAULT_STATUS_PERIOD_MS: u16 = 40;
 
@@ -23,6 +32,8 @@ pub struct RunOptions {
     pub home: bool,
     /// Keep the run journal (the line executing, for `run --resume`).
     pub journal: Option<crate::journal::Writer>,
+    /// A simulated board's probe surface, set before the job (`run --sim-probe`).
+    pub sim_probe: Option<SimProbe>,
 }
 
 impl Default for RunOptions {
@@ -37,6 +48,7 @@ impl Default for RunOptions {
             interrupt: None,
             home: false,
             journal: None,
+            sim_probe: None,
         }
     }
 }

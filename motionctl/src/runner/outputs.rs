@@ -1,22 +1,47 @@
 //! What a run sends ([`Outputs`], pulled as the link takes it) and where the run is in it
 //! ([`Whereabouts`], for the operator).
 
-use super::report::{err, RunError};
+use super::report::{err, ProbeOutcome, RunError};
 use crate::link::Session;
 use crate::plan::Output;
 use motion::protocol::{RequestBody, Status};
 use motion::segment::Segment;
+use motion::MAX_AXES;
 use std::collections::VecDeque;
 
 /// One output and the G-code line it came from, if any.
-pub(super) type Tagged = (Output, Option<usize>);
+pub type Tagged = (Output, Option<usize>);
 
-type Pull<'a> = Box<dyn FnMut() -> Option<Result<Tagged, String>> + 'a>;
+/// What a run sends, pulled one output at a time.
+pub trait OutputSource {
+    /// The next output; `Some(Err)` ends the run with that message.
+    fn next_output(&mut self) -> Option<Result<Tagged, String>>;
+
+    /// A probe move ([`Output::ProbeEnd`]) ended: what follows is to be planned from there.
+    fn probed(&mut self, _outcome: &ProbeOutcome) -> Result<(), String> {
+        Err("this job cannot take a probe move's result".into())
+    }
+
+    /// Once every output was given: where the job as run leaves the axes, steps from its start
+    /// (after a probe move this is the source's to say, not the host model's).
+    fn final_steps(&self) -> Option<[i64; MAX_AXES]> {
+        None
+    }
+}
+
+/// A source from a closure.
+struct FromFn<F>(F);
+
+impl<F: FnMut() -> Option<Result<Tagged, String>>> OutputSource for FromFn<F> {
+    fn next_output(&mut self) -> Option<Result<Tagged, String>> {
+        (self.0)()
+    }
+}
 
 /// What a run sends, in order, pulled only as the link takes it: a planned slice, or a stream
 /// planned while it runs (a G-code file read a second time).
 pub struct Outputs<'a> {
-    pull: Pull<'a>,
+    pull: Box<dyn OutputSource + 'a>,
     peeked: Option<Tagged>,
     ended: bool,
     /// Segments in all, and the sum of their nominal durations (ticks at override 1.0).
@@ -24,6 +49,8 @@ pub struct Outputs<'a> {
     pub(super) planned_ticks: u64,
     /// The host model's length of the job, ticks (ramps make it longer than the nominal sum).
     pub(super) model_ticks: u64,
+    /// The job's file, for messages naming a line of it.
+    pub(super) label: Option<String>,
 }
 
 impl<'a> Outputs<'a> {
@@ -38,14 +65,12 @@ impl<'a> Outputs<'a> {
             }
         }
         let mut it = outputs.iter();
-        Outputs {
-            pull: Box::new(move || it.next().map(|o| Ok((*o, None)))),
-            peeked: None,
-            ended: false,
+        Outputs::from_source(
+            FromFn(move || it.next().map(|o| Ok((*o, None)))),
             segments,
             planned_ticks,
-            model_ticks: planned_ticks,
-        }
+            planned_ticks,
+        )
     }
 
     /// A stream planned as it is pulled; `segments`, `planned_ticks` and `model_ticks` from a
@@ -56,14 +81,49 @@ impl<'a> Outputs<'a> {
         planned_ticks: u64,
         model_ticks: u64,
     ) -> Self {
+        Outputs::from_source(FromFn(next), segments, planned_ticks, model_ticks)
+    }
+
+    /// [`Outputs::streamed`] from a source that can also take probe results.
+    pub fn from_source(
+        source: impl OutputSource + 'a,
+        segments: u32,
+        planned_ticks: u64,
+        model_ticks: u64,
+    ) -> Self {
         Outputs {
-            pull: Box::new(next),
+            pull: Box::new(source),
             peeked: None,
             ended: false,
             segments,
             planned_ticks,
             model_ticks,
+            label: None,
         }
+    }
+
+    /// Messages about a line name it `label:LINE`.
+    pub fn named(mut self, label: &str) -> Self {
+        self.label = Some(label.to_string());
+        self
+    }
+
+    /// `label:LINE` (or `line LINE`) for a message, empty without a line.
+    pub(super) fn at(&self, line: Option<usize>) -> String {
+        match (line, &self.label) {
+            (Some(l), Some(f)) => format!("{f}:{l}: "),
+            (Some(l), None) => format!("line {l}: "),
+            (None, Some(f)) => format!("{f}: "),
+            (None, None) => String::new(),
+        }
+    }
+
+    pub(super) fn probed(&mut self, outcome: &ProbeOutcome) -> Result<(), String> {
+        self.pull.probed(outcome)
+    }
+
+    pub(super) fn final_steps(&self) -> Option<[i64; MAX_AXES]> {
+        self.pull.final_steps()
     }
 
     pub fn segments(&self) -> u32 {
@@ -73,7 +133,7 @@ impl<'a> Outputs<'a> {
     /// The next output, not taken.
     pub(super) fn peek(&mut self) -> Result<Option<Tagged>, String> {
         if self.peeked.is_none() && !self.ended {
-            match (self.pull)() {
+            match self.pull.next_output() {
                 Some(Ok(t)) => self.peeked = Some(t),
                 Some(Err(e)) => {
                     self.ended = true;

@@ -80,7 +80,8 @@ impl Stream<'_, '_> {
                 }
                 HostEvent::Fault { code, tick } => {
                     return Err(err(format!(
-                        "board fault {} ({}) at tick {tick}, after {} of {total} segments",
+                        "{}board fault {} ({}) at tick {tick}, after {} of {total} segments",
+                        self.probe_context(),
                         code.name(),
                         code.description(),
                         self.job_done(&self.latest)
@@ -122,7 +123,8 @@ impl Stream<'_, '_> {
         }
         if st.faults != 0 {
             return Err(err(format!(
-                "the board faulted ({}) after {done} of {} segments",
+                "{}the board faulted ({}) after {done} of {} segments",
+                self.probe_context(),
                 fault_names(st.faults),
                 self.total
             )));

@@ -3,8 +3,28 @@
 
 use crate::link::LinkFailure;
 use crate::noise::NoiseStats;
+use motion::machine::ProbeKind;
 use motion::protocol::{BoardCounters, ProgramOutputs};
+use motion::MAX_AXES;
 use std::fmt::Write as _;
+
+/// Where a probe move ended: whether the probe tripped, the position the board latched at the
+/// trip and where the axes came to rest, steps from the job's start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProbeOutcome {
+    pub tripped: bool,
+    pub trip_steps: [i64; MAX_AXES],
+    pub rest_steps: [i64; MAX_AXES],
+}
+
+/// A probe move as run, for the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Probed {
+    /// The G-code line.
+    pub line: Option<usize>,
+    pub kind: ProbeKind,
+    pub outcome: ProbeOutcome,
+}
 
 /// What a run did; `problems` is empty when every check passed.
 #[derive(Clone, Debug, Default)]
@@ -42,6 +62,8 @@ pub struct RunReport {
     pub output_switches: Vec<crate::outputs::Switched>,
     /// The board's `Status::outputs` at the end.
     pub final_outputs: u8,
+    /// Every probe move (G38.x), in program order, as the board ended it.
+    pub probes: Vec<Probed>,
     pub problems: Vec<String>,
 }
 
@@ -130,7 +152,7 @@ impl RunReport {
              seconds={:.3} stream_seconds={:.3} acked_per_s={:.1} frames_out={} \
              retransmissions={} link_naks={} bad_frames_in={} reconnects={} statuses={} \
              status_hz_board={:.2} status_hz_wall={:.2} capacity={} max_queue_depth={} \
-             min_credits={} max_credits={} queue_full_naks={}",
+             min_credits={} max_credits={} queue_full_naks={} probes={} probes_tripped={}",
             self.ok() as u8,
             self.segments,
             self.acked,
@@ -153,6 +175,8 @@ impl RunReport {
             self.min_credits,
             self.max_credits,
             self.queue_full_naks,
+            self.probes.len(),
+            self.probes.iter().filter(|p| p.outcome.tripped).count(),
         )
     }
 
@@ -212,6 +236,17 @@ impl RunReport {
                 self.output_switches.len(),
                 crate::outputs::describe(ProgramOutputs::from_bits(self.final_outputs))
             );
+        }
+        for p in &self.probes {
+            let line = p.line.map_or(String::new(), |l| format!(" (line {l})"));
+            let mut at = String::new();
+            for (i, (name, spm)) in axes.iter().enumerate() {
+                let _ = write!(at, "{name} {:.4} ", p.outcome.trip_steps[i] as f64 / spm);
+            }
+            let _ = match p.outcome.tripped {
+                true => writeln!(t, "probe      {}{line}: tripped at {}mm", p.kind.gcode(), at),
+                false => writeln!(t, "probe      {}{line}: no trip", p.kind.gcode()),
+            };
         }
         if let Some((to, from)) = self.noise {
             let _ = writeln!(

@@ -13,7 +13,7 @@ use crate::plan::Output;
 use crate::progress::Progress;
 use crate::transport::Transport;
 use motion::dda::Command;
-use motion::machine::MachineState;
+use motion::machine::{MachineState, ProbeKind};
 use motion::protocol::{
     ProgramOutputs, Reply, RequestBody, SegmentBatch, Status, MAX_SEGMENTS_PER_FRAME,
 };
@@ -70,6 +70,19 @@ pub fn run_outputs(
     stream.verify(expected_steps)
 }
 
+/// A probe move under way.
+pub(super) struct Probing {
+    pub(super) kind: ProbeKind,
+    pub(super) line: Option<usize>,
+    /// Segments of the job done, and the order hash expected, when it was armed.
+    pub(super) done_at_arm: u32,
+    pub(super) hash_at_arm: u32,
+    /// The probe move's segment ids, as sent.
+    pub(super) ids: Vec<u32>,
+    /// The seq of its `Start`, once sent.
+    pub(super) start_seq: Option<u32>,
+}
+
 /// A run under way: the link, what is left to send, and what the loop has learnt so far.
 pub(super) struct Stream<'t, 'o> {
     // In the order a run has always dropped them in: the link, the progress bar, the options
@@ -115,6 +128,11 @@ pub(super) struct Stream<'t, 'o> {
     last_poll: Instant,
     /// The spindle and coolant as the board has them (switched in program order from here).
     pub(super) switched: ProgramOutputs,
+    /// (name, steps per mm) of the job's axes.
+    pub(super) axes: Vec<(String, f64)>,
+    /// A probe move under way, and the segments probe moves dropped at their trips.
+    pub(super) probing: Option<Probing>,
+    pub(super) dropped: u32,
 }
 
 impl<'t, 'o> Stream<'t, 'o> {
@@ -172,6 +190,7 @@ impl<'t, 'o> Stream<'t, 'o> {
             );
         }
         let tick_hz = program.config.tick_hz.max(1) as f64;
+        let sim_probe = opts.sim_probe;
 
         let report = RunReport {
             segments: total,
@@ -226,6 +245,15 @@ impl<'t, 'o> Stream<'t, 'o> {
             poll_in_flight: false,
             last_tx,
             last_poll: Instant::now(),
+            axes,
+            probing: None,
+            dropped: 0,
+        })
+        .and_then(|mut stream| {
+            if let Some(sim) = sim_probe {
+                stream.set_sim_probe(sim, &program.steps_per_mm)?;
+            }
+            Ok(stream)
         })
     }
 
@@ -233,9 +261,20 @@ impl<'t, 'o> Stream<'t, 'o> {
         self.progress.println(&format!("motionctl: {m}"));
     }
 
-    /// Segments of this job that `st` shows done.
+    /// Segments of this job that `st` shows done, counting those probe moves dropped as done
+    /// (they never will be).
     pub(super) fn job_done(&self, st: &Status) -> u32 {
-        st.segments_done.wrapping_sub(self.base.segments_done)
+        st.segments_done.wrapping_sub(self.base.segments_done).wrapping_add(self.dropped)
+    }
+
+    /// Segments the job has: the checked count, or, once a probe move has replanned the rest,
+    /// those sent.
+    pub(super) fn segments_expected(&self) -> u32 {
+        if self.report.probes.is_empty() {
+            self.total
+        } else {
+            self.sent_segs
+        }
     }
 
     /// The next output, not taken.
@@ -320,6 +359,9 @@ impl<'t, 'o> Stream<'t, 'o> {
             }
             let n = batch.len() as u32;
             let ids: Vec<u32> = batch.iter().map(|g| g.id).collect();
+            if let Some(p) = self.probing.as_mut() {
+                p.ids.extend_from_slice(&ids);
+            }
             let seq = self.s.send(RequestBody::QueueSegments(batch)).map_err(link_err)?;
             for id in ids {
                 self.report.expected_hash = order_hash(self.report.expected_hash, id);
@@ -381,10 +423,12 @@ impl<'t, 'o> Stream<'t, 'o> {
             && fresh
             && self.latest.machine == MachineState::Ready
             && ready
+            && self.probe_allows_start()?
         {
             let seq = self.s.send(RequestBody::Start).map_err(link_err)?;
             self.pending.insert(seq, Pending::Start);
             self.start_seq = Some(seq);
+            self.probe_started(seq);
         }
         Ok(())
     }
@@ -435,7 +479,7 @@ impl<'t, 'o> Stream<'t, 'o> {
             self.last_batch_seq.is_none_or(|b| seq_at_or_after(self.latest.next_seq, b + 1));
         if all_sent
             && after_batches
-            && self.job_done(&self.latest) == self.total
+            && self.job_done(&self.latest) == self.segments_expected()
             && self.latest.machine == MachineState::Ready
             && self.latest.queue_depth == 0
         {

@@ -20,6 +20,12 @@ impl Stream<'_, '_> {
         let _ = s.request(RequestBody::SetStatusPeriod { ms: 0 });
         self.progress.finish();
         let done = fin.segments_done.wrapping_sub(self.base.segments_done);
+        // After a probe move the rest of the job was planned from where the axes stopped: it
+        // ends where the source says, and has the segments sent less those dropped at trips.
+        let probed = !self.report.probes.is_empty();
+        let source_end = self.outputs.final_steps().filter(|_| probed);
+        let expected_steps = source_end.as_ref().unwrap_or(expected_steps);
+        let total = if probed { self.sent_segs - self.dropped } else { self.total };
         if let Some(csv) = self.opts.csv.as_mut() {
             // The log ends with the board's final state even when noise took the last periodic
             // status: this one was asked for, and answered reliably.
@@ -59,7 +65,10 @@ impl Stream<'_, '_> {
             report.status_hz_wall = if wall > 0.0 { n / wall } else { 0.0 };
             report.status_hz_board = if board > 0.0 { n / board } else { 0.0 };
         }
-        report.check(self.total);
+        if probed {
+            report.segments = total;
+        }
+        report.check(total);
         self.opts.csv = None;
         if self.report.ok() {
             if let Some(j) = &self.opts.journal {
