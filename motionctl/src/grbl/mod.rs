@@ -12,6 +12,7 @@
 //! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`).
 
 pub mod endpoint;
+pub mod job_summary;
 pub mod jobs;
 pub mod pipeline;
 pub mod program;
@@ -199,6 +200,7 @@ fn serve(
         host: args.link.host_config(target),
         home: home_ok,
         wire,
+        caps: info.capabilities,
     };
     let mut bridge =
         session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm, persist).with_jobs(jobs);
