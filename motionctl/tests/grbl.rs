@@ -519,6 +519,45 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     let gc = r.line();
     assert!(gc.contains(" M5 M9 "), "{gc}");
     r.expect("ok");
+    // The spindle stop (0x9E): nothing outside a feed hold; in one, the board's spindle goes
+    // off (`A:` without S) while the parser keeps M3, a second 0x9E switches it on again, and
+    // cycle start switches a stopped spindle on and resumes the motion after its spin-up.
+    r.send(b"M3 S1000\nG1 X70 F60\n");
+    r.expect("ok");
+    r.expect("ok");
+    r.until_status(|st| st.starts_with("<Run|") && st.ends_with("|A:S>"));
+    r.send(b"\x9E");
+    std::thread::sleep(Duration::from_millis(200));
+    let st = r.status();
+    assert!(st.starts_with("<Run|") && st.ends_with("|A:S>"), "not outside a hold: {st}");
+    r.send(b"!");
+    r.until_status(|st| st.starts_with("<Hold:0|"));
+    r.send(b"\x9E");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    assert!(st.starts_with("<Hold:0|"), "{st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M3 M9 ") && gc.ends_with(" S1000]"), "{gc}");
+    r.expect("ok");
+    r.send(b"\x9E");
+    let st = r.until_status(|st| st.ends_with("|A:S>"));
+    assert!(st.starts_with("<Hold:0|"), "{st}");
+    r.send(b"\x9E");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    let held_at = st.split('|').nth(1).unwrap().to_string();
+    r.send(b"~");
+    let resumed = Instant::now();
+    let st = r.until_status(|st| st.ends_with("|A:S>"));
+    assert!(st.starts_with("<Hold:0|") && st.contains(&held_at), "spinning up: {st}");
+    let st = r.until_status(|st| !st.contains(&held_at));
+    assert!(st.starts_with("<Run|") || st.starts_with("<Idle|"), "{st}");
+    let spin_up = resumed.elapsed().as_secs_f64();
+    assert!(spin_up >= motionctl::gcode::resume::SPIN_UP_S, "resumed after {spin_up} s");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:70.000,") && st.ends_with("|A:S>"), "{st}");
+    r.send(b"M5\n");
+    r.expect("ok");
+    r.until_status(|st| !st.contains("|A:"));
     // Not in alarm or check mode, as grbl.
     r.send(b"$C\n");
     r.expect("[MSG:Enabled]");

@@ -81,6 +81,7 @@ impl Bridge<'_> {
     pub(super) fn soft_reset(&mut self) -> Result<()> {
         self.stop_motion()?;
         // As grbl's reset: the spindle and coolant stop with the motion.
+        self.spindle_stop_clear();
         self.switch_outputs(ProgramOutputs::OFF)?;
         self.rx.clear();
         self.check = false;
