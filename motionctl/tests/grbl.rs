@@ -780,6 +780,25 @@ fn until_answer(r: &mut Raw) -> (Vec<String>, String) {
     }
 }
 
+/// A bridge reading capability jobs from `dir`, and a raw session on it.
+fn bridge_with_jobs(dir: &Path) -> (Bridge, Raw) {
+    let jobs = dir.to_str().unwrap().to_string();
+    let mut b = bridge(dir, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
+    let r = Raw::connect(&mut b);
+    (b, r)
+}
+
+/// `!` holds a running job where it is (the report's position unchanged for `wait`), `~`
+/// resumes it.
+fn hold_in_place(r: &mut Raw, wait: Duration) {
+    r.send(b"!");
+    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
+    std::thread::sleep(wait);
+    let still = r.status();
+    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
+    r.send(b"~");
+}
+
 #[test]
 fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     use motion::polar::playback::SizeScale;
@@ -791,9 +810,7 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     std::fs::write(dir.0.join("arc.bin"), &arc).unwrap();
     let scale = SizeScale::new(3, 2).unwrap();
     let model = motionctl::polar::run::model(&arc, motion::Rate::ONE, scale).unwrap();
-    let jobs = dir.0.to_str().unwrap().to_string();
-    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
-    let mut r = Raw::connect(&mut b);
+    let (_b, mut r) = bridge_with_jobs(&dir.0);
 
     r.send(b"$\n");
     let help = r.line();
@@ -816,12 +833,7 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     r.send(b"$POLAR=arc.bin 1 3:2\n");
     let st = r.until_status(|st| st.starts_with("<Run|") && !st.contains("MPos:0.000,0.000,"));
     assert!(st.contains("|Bf:15,"), "{st}");
-    r.send(b"!");
-    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
-    std::thread::sleep(Duration::from_millis(300));
-    let still = r.status();
-    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
-    r.send(b"~");
+    hold_in_place(&mut r, Duration::from_millis(300));
     let (msgs, answer) = until_answer(&mut r);
     assert_eq!(answer, "ok", "{msgs:?}");
     let events =
@@ -893,9 +905,7 @@ fn until_answer_polling(r: &mut Raw) -> (Vec<String>, String) {
 fn turning_and_wire_jobs_run_from_dollar_commands() {
     let dir = tmp_dir("turn-wire");
     std::fs::write(dir.0.join("wire.toml"), "version = 1\nfr_mm2_per_min = 800\n").unwrap();
-    let jobs = dir.0.to_str().unwrap().to_string();
-    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
-    let mut r = Raw::connect(&mut b);
+    let (_b, mut r) = bridge_with_jobs(&dir.0);
 
     // Bad arguments, a missing file, a board without Z-slide jobs: refused, nothing moves.
     r.send(b"$TURN=builtin 360 5\n");
@@ -922,12 +932,7 @@ fn turning_and_wire_jobs_run_from_dollar_commands() {
     r.send(b"$WIRE=wire.toml 1..3\n");
     let st = r.until_status(|st| st.starts_with("<Run|"));
     assert_eq!(st.split('|').nth(1).unwrap().split(',').count(), 5, "{st}");
-    r.send(b"!");
-    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
-    std::thread::sleep(Duration::from_millis(600));
-    let still = r.status();
-    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
-    r.send(b"~");
+    hold_in_place(&mut r, Duration::from_millis(600));
     let (msgs, answer) = until_answer_polling(&mut r);
     assert_eq!(answer, "ok", "{msgs:?}");
     let head = format!(
