@@ -112,8 +112,7 @@ fn sender_python(root: &Path) -> Result<PathBuf> {
     Ok(python)
 }
 
-/// `cargo xtask grbl-e2e` (not a `cargo xtask test` step while the bridge's streaming to QEMU
-/// is flaky: see the README).
+/// The `cargo xtask test` step (also `cargo xtask grbl-e2e`).
 pub fn test(root: &Path) -> Result<()> {
     let python = sender_python(root)?;
     let elf = firmware::build(root, Board::Netduinoplus2, &["link"])?;
