@@ -9,7 +9,7 @@
 //! - [`pipeline`]: the moves into an incremental planner, segments and events out;
 //! - [`session`]: the loop between the sender and the board's link;
 //! - [`endpoint`]: the pseudo-terminal and the TCP socket;
-//! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`).
+//! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`).
 
 pub mod endpoint;
 pub mod job_summary;
@@ -59,7 +59,7 @@ pub struct GrblArgs {
     /// Serve raw TCP (grblHAL's socket stream) on HOST:PORT, one sender at a time.
     #[arg(long, value_name = "HOST:PORT")]
     pub listen: Option<String>,
-    /// Directory the capability commands' job files (`$MILL=FILE`, `$POLAR=FILE`) are read
+    /// Directory the capability commands' job files (`$MILL=FILE`, `$POLAR=FILE`, `$TURN=TABLE`, `$WIRE=FILE`) are read
     /// from when relative [default: the working directory].
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub jobs: PathBuf,

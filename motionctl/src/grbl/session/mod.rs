@@ -118,7 +118,7 @@ pub struct Bridge<'a> {
     /// The board refused queued motion: stop the rest.
     stop_wanted: bool,
     build_info: String,
-    /// Capability jobs (`$MILL=`, `$POLAR=`), when set up.
+    /// Capability jobs (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`), when set up.
     jobs: Option<JobSetup>,
     pub interrupt: Arc<AtomicBool>,
 }
@@ -194,7 +194,7 @@ impl<'a> Bridge<'a> {
         }
     }
 
-    /// Lets senders run capability jobs (`$MILL=`, `$POLAR=`).
+    /// Lets senders run capability jobs (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`).
     pub fn with_jobs(mut self, jobs: JobSetup) -> Self {
         self.jobs = Some(jobs);
         self
