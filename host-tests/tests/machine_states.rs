@@ -254,3 +254,24 @@ fn estop_switches_the_spindle_and_coolant_off_and_keeps_them_off() {
     assert!(!r.m.set_outputs(on.applied_to(r.m.outputs())));
     assert_eq!(ProgramOutputs::of(&r.m.outputs()), ProgramOutputs::OFF);
 }
+
+#[test]
+fn an_abort_with_the_dda_queue_full_is_background_work_for_the_feeder() {
+    // A long job: the DDA's ready queue full of prepared segments, the machine running.
+    let mut r = rig_in(MachineState::Ready);
+    let seg = segment(2_000);
+    while r.dda.ready_free() > 0 {
+        r.cmd(MachineCommand::Queue(&seg)).unwrap();
+        r.dda.push(&r.prep.prepare(&seg).unwrap()).unwrap();
+    }
+    r.cmd(MachineCommand::Start).unwrap();
+    assert!(r.m.feeder_blocked(&r.dda), "a full queue and nothing due: the feeder waits");
+    // The jog cancel's or the reset's abort: the queue is still full, and the feeder must run
+    // the background (which empties it), not wait for room that never comes.
+    r.cmd(MachineCommand::Abort).unwrap();
+    assert_eq!(r.dda.ready_free(), 0);
+    assert!(!r.m.feeder_blocked(&r.dda));
+    r.m.background(&mut r.dda, &mut r.prep);
+    assert!(r.dda.ready_free() > 0 && r.m.in_flight(&r.dda) == 0);
+    assert!(!r.m.feeder_blocked(&r.dda));
+}

@@ -519,6 +519,45 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     let gc = r.line();
     assert!(gc.contains(" M5 M9 "), "{gc}");
     r.expect("ok");
+    // The spindle stop (0x9E): nothing outside a feed hold; in one, the board's spindle goes
+    // off (`A:` without S) while the parser keeps M3, a second 0x9E switches it on again, and
+    // cycle start switches a stopped spindle on and resumes the motion after its spin-up.
+    r.send(b"M3 S1000\nG1 X70 F60\n");
+    r.expect("ok");
+    r.expect("ok");
+    r.until_status(|st| st.starts_with("<Run|") && st.ends_with("|A:S>"));
+    r.send(b"\x9E");
+    std::thread::sleep(Duration::from_millis(200));
+    let st = r.status();
+    assert!(st.starts_with("<Run|") && st.ends_with("|A:S>"), "not outside a hold: {st}");
+    r.send(b"!");
+    r.until_status(|st| st.starts_with("<Hold:0|"));
+    r.send(b"\x9E");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    assert!(st.starts_with("<Hold:0|"), "{st}");
+    r.send(b"$G\n");
+    let gc = r.line();
+    assert!(gc.contains(" M3 M9 ") && gc.ends_with(" S1000]"), "{gc}");
+    r.expect("ok");
+    r.send(b"\x9E");
+    let st = r.until_status(|st| st.ends_with("|A:S>"));
+    assert!(st.starts_with("<Hold:0|"), "{st}");
+    r.send(b"\x9E");
+    let st = r.until_status(|st| !st.contains("|A:"));
+    let held_at = st.split('|').nth(1).unwrap().to_string();
+    r.send(b"~");
+    let resumed = Instant::now();
+    let st = r.until_status(|st| st.ends_with("|A:S>"));
+    assert!(st.starts_with("<Hold:0|") && st.contains(&held_at), "spinning up: {st}");
+    let st = r.until_status(|st| !st.contains(&held_at));
+    assert!(st.starts_with("<Run|") || st.starts_with("<Idle|"), "{st}");
+    let spin_up = resumed.elapsed().as_secs_f64();
+    assert!(spin_up >= motionctl::gcode::resume::SPIN_UP_S, "resumed after {spin_up} s");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:70.000,") && st.ends_with("|A:S>"), "{st}");
+    r.send(b"M5\n");
+    r.expect("ok");
+    r.until_status(|st| !st.contains("|A:"));
     // Not in alarm or check mode, as grbl.
     r.send(b"$C\n");
     r.expect("[MSG:Enabled]");
@@ -741,6 +780,25 @@ fn until_answer(r: &mut Raw) -> (Vec<String>, String) {
     }
 }
 
+/// A bridge reading capability jobs from `dir`, and a raw session on it.
+fn bridge_with_jobs(dir: &Path) -> (Bridge, Raw) {
+    let jobs = dir.to_str().unwrap().to_string();
+    let mut b = bridge(dir, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
+    let r = Raw::connect(&mut b);
+    (b, r)
+}
+
+/// `!` holds a running job where it is (the report's position unchanged for `wait`), `~`
+/// resumes it.
+fn hold_in_place(r: &mut Raw, wait: Duration) {
+    r.send(b"!");
+    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
+    std::thread::sleep(wait);
+    let still = r.status();
+    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
+    r.send(b"~");
+}
+
 #[test]
 fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     use motion::polar::playback::SizeScale;
@@ -752,18 +810,15 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     std::fs::write(dir.0.join("arc.bin"), &arc).unwrap();
     let scale = SizeScale::new(3, 2).unwrap();
     let model = motionctl::polar::run::model(&arc, motion::Rate::ONE, scale).unwrap();
-    let jobs = dir.0.to_str().unwrap().to_string();
-    let mut b = bridge(&dir.0, &["--listen", "127.0.0.1:0", "--jobs", &jobs]);
-    let mut r = Raw::connect(&mut b);
+    let (_b, mut r) = bridge_with_jobs(&dir.0);
 
     r.send(b"$\n");
     let help = r.line();
-    assert!(help.contains(" $MILL=job $POLAR=stream $TURN=job $WIRE=job]"), "{help}");
+    assert!(help.contains(" $MILL=job $POLAR=stream $TURN=table $WIRE=job]"), "{help}");
     r.expect("ok");
-    // Refusals name why: a capability not behind the bridge, a missing file, a bad argument.
-    r.send(b"$TURN=part.toml\n");
-    let m = r.line();
-    assert!(m.starts_with("[MSG:") && m.contains("motionctl fourier run"), "{m}");
+    // Refusals name why: a capability the board lacks, a missing file, a bad argument.
+    r.send(b"$MILL=case_a_milling.toml\n");
+    r.expect("[MSG:the board runs no force jobs (CAP_FORCE_JOB)]");
     r.expect("error:20");
     r.send(b"$POLAR=missing.bin\n");
     let m = r.line();
@@ -778,12 +833,7 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     r.send(b"$POLAR=arc.bin 1 3:2\n");
     let st = r.until_status(|st| st.starts_with("<Run|") && !st.contains("MPos:0.000,0.000,"));
     assert!(st.contains("|Bf:15,"), "{st}");
-    r.send(b"!");
-    let held = r.until_status(|st| st.starts_with("<Hold:0|"));
-    std::thread::sleep(Duration::from_millis(300));
-    let still = r.status();
-    assert_eq!(held.split('|').nth(1), still.split('|').nth(1), "held in place: {still}");
-    r.send(b"~");
+    hold_in_place(&mut r, Duration::from_millis(300));
     let (msgs, answer) = until_answer(&mut r);
     assert_eq!(answer, "ok", "{msgs:?}");
     let events =
@@ -826,4 +876,78 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
         ],
     );
     assert!(r.status().starts_with("<Alarm|"));
+}
+
+/// As [`until_answer`], asking `?` every 200 ms meanwhile (a job may run longer than a line's
+/// wait): the lines that are neither reports nor the answer, and the answer (the report asked
+/// for last read too).
+fn until_answer_polling(r: &mut Raw) -> (Vec<String>, String) {
+    let mut lines = Vec::new();
+    loop {
+        r.send(b"?");
+        loop {
+            let l = r.line();
+            if l == "ok" || l.starts_with("error:") {
+                let report = r.line();
+                assert!(report.starts_with('<'), "{report}");
+                return (lines, l);
+            }
+            if l.starts_with('<') {
+                break;
+            }
+            lines.push(l);
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+#[test]
+fn turning_and_wire_jobs_run_from_dollar_commands() {
+    let dir = tmp_dir("turn-wire");
+    std::fs::write(dir.0.join("wire.toml"), "version = 1\nfr_mm2_per_min = 800\n").unwrap();
+    let (_b, mut r) = bridge_with_jobs(&dir.0);
+
+    // Bad arguments, a missing file, a board without Z-slide jobs: refused, nothing moves.
+    r.send(b"$TURN=builtin 360 5\n");
+    let m = r.line();
+    assert!(m.starts_with("[MSG:$TURN= X range must be X0:X1"), "{m}");
+    r.expect("error:3");
+    r.send(b"$WIRE=wire.toml 3..1\n");
+    let m = r.line();
+    assert!(m.contains("FROM must be below TO"), "{m}");
+    r.expect("error:3");
+    r.send(b"$WIRE=missing.toml\n");
+    let m = r.line();
+    assert!(m.starts_with("[MSG:reading ") && m.contains("missing.toml"), "{m}");
+    r.expect("error:61");
+    r.send(b"$TURN=builtin 360 0:12.7 25.4\n");
+    r.expect("[MSG:the board runs no Z-slide jobs (CAP_ZSLIDE_JOB)]");
+    r.expect("error:20");
+
+    // Two segments of the circle -> complex die as a wire job: `?` reports Run with X, Y, Z,
+    // A (alpha), B (beta); `!` holds it where it is, `~` resumes; the summary against the
+    // host model, then ok.
+    let job =
+        motionctl::cli_capabilities::wire_board_job(&dir.0.join("wire.toml"), Some(1..3)).unwrap();
+    r.send(b"$WIRE=wire.toml 1..3\n");
+    let st = r.until_status(|st| st.starts_with("<Run|"));
+    assert_eq!(st.split('|').nth(1).unwrap().split(',').count(), 5, "{st}");
+    hold_in_place(&mut r, Duration::from_millis(600));
+    let (msgs, answer) = until_answer_polling(&mut r);
+    assert_eq!(answer, "ok", "{msgs:?}");
+    let head = format!(
+        "[MSG:WIRE wire.toml: {} die, 2 of its {} segments at FR 800 mm^2/min (13.33 mm^2/s);",
+        job.label, job.job_segments
+    );
+    assert!(msgs.iter().any(|m| m.starts_with(&head)), "{head} in {msgs:?}");
+    let end = msgs.iter().find(|m| m.starts_with("[MSG:WIRE end: ")).expect("an end line");
+    let (board, host) = end.trim_end_matches(']').split_once("; host model ").unwrap();
+    assert_eq!(board.trim_start_matches("[MSG:WIRE end: "), host, "{end}");
+    assert!(msgs.iter().any(|m| m.starts_with("[MSG:WIRE checks: ok")), "{msgs:?}");
+    // The bridge's machine is back (where the job left its axes' steps).
+    r.until_idle();
+    r.send(b"G0 X1\n");
+    r.expect("ok");
+    let st = r.until_idle();
+    assert!(st.starts_with("<Idle|MPos:1.000,"), "{st}");
 }

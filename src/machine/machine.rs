@@ -587,6 +587,14 @@ impl Machine {
             || self.jog.is_some_and(|j| j.needs_move())
     }
 
+    /// The feeder has nothing to do until the DDA takes a segment: its ready queue is full and
+    /// no background work is due. An abort is due with the queue full (a stop drops a queue
+    /// the frozen DDA no longer runs): the feeder must still run [`Machine::background`], or
+    /// the machine would wait for ever with its queue counted in flight.
+    pub fn feeder_blocked(&self, dda: &Dda) -> bool {
+        dda.ready_free() == 0 && !self.wants_background()
+    }
+
     /// The planning-rate work (control task; divides): aborts a frozen DDA, then plans and
     /// queues the next homing move. A homing move the planner or DDA refuses raises
     /// `HomingFailed` (the config was validated, so it does not happen with a valid one).

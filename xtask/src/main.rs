@@ -9,6 +9,7 @@
 //! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
 //! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
+//! | `grbl-e2e` | `motionctl grbl --qemu --pty` with the link firmware in QEMU behind it: a third-party sender (grbl-streamer) streams a corpus file with a hold, a resume, a feed override, a jog and its cancel, ending at its programmed end; then `$MILL=`, `$TURN=` and `$WIRE=` from the same port, each ending as the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
 //! | `faults` | the fault-injection suite: board faults on the host model, reset, power cut, link drop and USART overrun bursts on the link firmware in QEMU, the config record, every bad-input class of `motionctl`; writes `target/faults.json` |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
@@ -62,7 +63,8 @@ commands:
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   faults [--only scenarios|tests|inputs|qemu]...        the fault-injection suite (host model, simulated board, QEMU,
                                                         motionctl's bad inputs); counts in target/faults.json
-  grbl-e2e                                              a grbl sender streams a corpus file through motionctl grbl to QEMU, then $MILL= runs Case A
+  grbl-e2e                                              a grbl sender streams a corpus file through motionctl grbl to QEMU (hold, jog),
+                                                        then $MILL=, $TURN= and $WIRE= run from the same port
   bench [--quick]                                       run the DDA benchmarks in QEMU, write target/bench.json and BENCHMARKS.md
                                                         (--quick: DDA tick figures only, printed)
   bench-faults                                          only the fault suite's figures of bench: the reliability section
@@ -443,6 +445,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: real G-code files on the simulated board and in QEMU",
             Box::new(|| gcode_e2e::test(root)),
+        ),
+        (
+            "end to end: a grbl sender through motionctl grbl to QEMU, then $MILL= $TURN= $WIRE=",
+            Box::new(|| grbl_e2e::test(root)),
         ),
         (
             "fault injection: power cut, reset, link drop, overrun, config, bad inputs (faults)",

@@ -380,7 +380,7 @@ mod app {
             link.lock(|l| l.feed_wire(&mut motion));
             loop {
                 let full = motion.lock(|m| {
-                    let full = m.dda.ready_free() == 0;
+                    let full = m.machine.feeder_blocked(&m.dda);
                     FEEDER_BLOCKED.store(full, Relaxed);
                     full
                 });

@@ -37,6 +37,106 @@ pub(super) fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) ->
     }
 }
 
+/// The thesis's stall handling for a wire job of `segments` segments.
+fn stall_params(segments: usize) -> motion::protocol::WireJobParams {
+    use motion::wire::scenario::STALL_PARAMS as P;
+    motion::protocol::WireJobParams {
+        debounce_ticks: P.debounce_ticks,
+        retrace_limit_steps: P.retrace_limit_steps,
+        retrace_override_bits: P.retrace_override.to_bits(),
+        resume_override_bits: P.resume_override.to_bits(),
+        resume_segments: P.resume_segments,
+        segments: segments as u32,
+    }
+}
+
+/// The job's machine (its start at the path's first point) and the program the board gets:
+/// `cfg`, the axes' scales, the host model's final steps.
+pub(super) fn board_machine(
+    job: &crate::wire::continuous::ContinuousJob,
+    report: &motion::report::Report,
+    cfg: motion::MachineConfig,
+) -> (crate::job::Job, crate::convert::Program) {
+    let origin = crate::wire::continuous::joints_from_steps(job.point_steps[0]);
+    let parsed = wire_job_machine(
+        &cfg,
+        [origin.x_mm, origin.y_mm, origin.beta_rad.to_degrees(), origin.alpha_rad.to_degrees()],
+    );
+    let mut final_steps = [0i64; motion::MAX_AXES];
+    final_steps.copy_from_slice(&report.positions[..motion::MAX_AXES]);
+    let program = crate::convert::Program {
+        config: cfg,
+        steps_per_mm: parsed.machine.axes.iter().map(|a| a.steps_per_mm).collect(),
+        items: Vec::new(),
+        commands: Vec::new(),
+        final_steps,
+        skipped_moves: 0,
+    };
+    (parsed, program)
+}
+
+/// A wire job as `wire run --job FILE [--segments FROM..TO]` sends it to a board with wire
+/// jobs: for a caller with its own link (the grbl bridge's `$WIRE=`).
+#[derive(Clone, Debug)]
+pub struct WireBoardJob {
+    /// The die, e.g. "circle -> complex".
+    pub label: String,
+    pub fr_mm2_per_min: f64,
+    /// Segments of the whole job (`segments` may be a part of it).
+    pub job_segments: usize,
+    pub segments: Vec<motion::segment::Segment>,
+    pub cfg: motion::protocol::WireConfig,
+    pub params: motion::protocol::WireJobParams,
+    /// The host model's final X, Y, beta, alpha steps from the start, and its duration, ticks.
+    pub expected: [i64; 4],
+    pub model_ticks: u64,
+    /// Steps per unit of X, Y (mm), beta, alpha (deg).
+    pub steps_per_unit: [f64; 4],
+}
+
+/// Plans `job_file` (a wire job TOML, as `wire run --job` reads it), only `range` of its
+/// segments if given, and runs it on the host model.
+pub fn wire_board_job(
+    job_file: &std::path::Path,
+    range: Option<std::ops::Range<usize>>,
+) -> Result<WireBoardJob> {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct JobOnly {
+        #[command(flatten)]
+        plan: super::WirePlanArgs,
+    }
+    let args = [std::ffi::OsStr::new("wire"), "--job".as_ref(), job_file.as_os_str()];
+    let plan = JobOnly::try_parse_from(args).map_err(|e| anyhow::anyhow!("{e}"))?.plan;
+    let (die, _) = plan.die()?;
+    let prm = plan.params(die.fr_mm2_per_min)?;
+    let cfg = motion::wire::machine::config();
+    let mut job = crate::wire::continuous::plan(&die.path()?, &cfg, &prm)?;
+    let job_segments = job.segments.len();
+    if let Some(r) = &range {
+        super::only_segments(&mut job, r, true)?;
+    }
+    let (report, _) = super::host_model(&cfg, &job, false)?;
+    let (parsed, program) = board_machine(&job, &report, cfg);
+    let mut expected = [0i64; 4];
+    expected.copy_from_slice(&report.positions[..4]);
+    let mut steps_per_unit = [0.0; 4];
+    for (s, a) in steps_per_unit.iter_mut().zip(&parsed.machine.axes) {
+        *s = a.steps_per_mm;
+    }
+    Ok(WireBoardJob {
+        label: die.label.clone(),
+        fr_mm2_per_min: prm.fr_mm2_per_min,
+        job_segments,
+        params: stall_params(job.segments.len()),
+        cfg: crate::runner::wire_config(&parsed, &program),
+        segments: job.segments,
+        expected,
+        model_ticks: report.ticks,
+        steps_per_unit,
+    })
+}
+
 /// `wire run` on a board link: the job as a wire job (stall retrace on the board), checked
 /// against the host model.
 pub(super) fn run_wire_job(
@@ -48,17 +148,9 @@ pub(super) fn run_wire_job(
     stall: Option<crate::wire::run::SimStall>,
     json: bool,
 ) -> Result<()> {
-    use motion::wire::scenario::STALL_PARAMS as P;
     let (mut t, qemu_guard) = link.open()?;
     let opts = crate::wire::run::WireRunOptions {
-        params: motion::protocol::WireJobParams {
-            debounce_ticks: P.debounce_ticks,
-            retrace_limit_steps: P.retrace_limit_steps,
-            retrace_override_bits: P.retrace_override.to_bits(),
-            resume_override_bits: P.resume_override.to_bits(),
-            resume_segments: P.resume_segments,
-            segments: segments.len() as u32,
-        },
+        params: stall_params(segments.len()),
         host: motion::protocol::HostConfig { rto_ms: 100, window: 8 },
         // QEMU's machine has no switches: homing there takes it where it stands.
         home: link.home || link.qemu,

@@ -8,6 +8,7 @@ mod report;
 
 pub use crate::fourier::cli::{run_fourier, FourierCmd};
 pub use crate::milling::cli::{run_milling, MillingCmd};
+pub use board_run::{wire_board_job, WireBoardJob};
 pub use plan_args::{DrawingArgs, WirePlanArgs};
 
 use crate::wire::continuous::{self, ContinuousJob, ContinuousParams};
@@ -77,7 +78,7 @@ pub enum WireCmd {
     },
 }
 
-fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
+pub fn parse_range(s: &str) -> Result<std::ops::Range<usize>, String> {
     let (a, b) = s.split_once("..").ok_or("expected FROM..TO")?;
     let a: usize = a.parse().map_err(|e| format!("{e}"))?;
     let b: usize = b.parse().map_err(|e| format!("{e}"))?;
@@ -309,21 +310,8 @@ fn run_on_board(
     let WireCmd::Run { link, log_csv, plain, stall_at, stall_for, run_json, .. } = cmd else {
         return Ok(());
     };
-    let origin = continuous::joints_from_steps(job.point_steps[0]);
-    let parsed = board_run::wire_job_machine(
-        &cfg,
-        [origin.x_mm, origin.y_mm, origin.beta_rad.to_degrees(), origin.alpha_rad.to_degrees()],
-    );
-    let mut final_steps = [0i64; motion::MAX_AXES];
-    final_steps.copy_from_slice(&report.positions[..motion::MAX_AXES]);
-    let program = crate::convert::Program {
-        config: cfg,
-        steps_per_mm: parsed.machine.axes.iter().map(|a| a.steps_per_mm).collect(),
-        items: Vec::new(),
-        commands: Vec::new(),
-        final_steps,
-        skipped_moves: 0,
-    };
+    let (parsed, program) = board_run::board_machine(job, report, cfg);
+    let final_steps = program.final_steps;
     // Every board link gets the wire mode (stall retrace on the board) unless asked for plain
     // segments; the in-process sim board has no wire jobs.
     if !plain && !link.sim {

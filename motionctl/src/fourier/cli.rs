@@ -468,15 +468,36 @@ fn run_options(a: &FourierRunArgs, table: Option<&ZTable>) -> Result<ZRunOptions
     })
 }
 
-/// `fourier run`: the job on the board, the figures and the `zslide-summary` line.
-fn fourier_run(a: &FourierRunArgs) -> Result<()> {
-    let (ztable, table) = match &a.table {
+/// `--table`'s table, else the built-in one.
+fn table_of(a: &FourierRunArgs) -> Result<(Option<ZTable>, zrun::WireTable)> {
+    Ok(match &a.table {
         Some(p) => {
             let (t, w) = zrun::read_table(p)?;
             (Some(t), w)
         }
         None => (None, zrun::WireTable::douglass()?),
-    };
+    })
+}
+
+/// A Z-slide job as `fourier run` would run it with these flags (`--table`, `--rpm`,
+/// `--x-start` ...; `run`'s, without the link's): the table and the options, checked as
+/// `fourier run` checks them, for a caller with its own link (the grbl bridge's `$TURN=`).
+pub fn turn_job(flags: &[String]) -> Result<(zrun::WireTable, ZRunOptions)> {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct RunOnly {
+        #[command(flatten)]
+        run: FourierRunArgs,
+    }
+    let args = std::iter::once("run").chain(flags.iter().map(String::as_str));
+    let a = RunOnly::try_parse_from(args).map_err(|e| anyhow::anyhow!("{e}"))?.run;
+    let (ztable, table) = table_of(&a)?;
+    Ok((table, run_options(&a, ztable.as_ref())?))
+}
+
+/// `fourier run`: the job on the board, the figures and the `zslide-summary` line.
+fn fourier_run(a: &FourierRunArgs) -> Result<()> {
+    let (ztable, table) = table_of(a)?;
     let opts = run_options(a, ztable.as_ref())?;
     let (mut t, qemu_guard) = a.link.open()?;
     let say = |m: &str| eprintln!("motionctl: {m}");

@@ -348,6 +348,18 @@ pub fn run(
     o: &ZRunOptions,
     say: &dyn Fn(&str),
 ) -> anyhow::Result<ZRunReport> {
+    run_with(transport, table, o, say, &mut runner::Unattended)
+}
+
+/// As [`run`], with `hook` asked every pass of the job's loop once the job started (it may
+/// hold the X feed, resume it or abort the job: the grbl bridge's sender does).
+pub fn run_with(
+    transport: &mut dyn Transport,
+    table: &WireTable,
+    o: &ZRunOptions,
+    say: &dyn Fn(&str),
+    hook: &mut dyn runner::JobHook,
+) -> anyhow::Result<ZRunReport> {
     let t0 = Instant::now();
     let cfg = machine_config(o.tick_hz);
     let spec = job_spec(o)?;
@@ -415,6 +427,7 @@ pub fn run(
     let mut poll_seq: Option<u32> = None;
     let mut last_poll = Instant::now();
     let mut last_say = Instant::now();
+    let mut steer = runner::Steer::default();
     loop {
         s.pump(Duration::from_millis(5)).map_err(link)?;
         for n in s.notices.drain(..) {
@@ -486,6 +499,10 @@ pub fn run(
         }
         if latest.machine == MachineState::Ready && latest.z_state != 2 {
             break;
+        }
+        steer.step(&mut s, hook, &latest, &mut watch)?;
+        if steer.held() {
+            continue;
         }
         let marker = (latest.tick as i64 ^ (latest.z_x_in_q24 as i64).rotate_left(20)) as u64;
         if let Err(why) = watch.check(latest.tick, marker) {

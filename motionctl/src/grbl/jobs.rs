@@ -1,16 +1,16 @@
 //! The thesis capabilities as named `$` commands (grblHAL names its own `$` commands too):
 //! `$MILL=JOB.toml` (a force-controlled milling job), `$POLAR=STREAM.bin [SPEED [M:K]]` (polar
-//! playback of a step-event stream), and `$TURN=`, `$WIRE=` (refused for now, naming the
-//! subcommand that runs them). Each runs its runner on the bridge's link while a [`SenderHook`]
-//! keeps answering the sender's real-time bytes: `?` (`Run` or `Hold`, the job's position), `!`,
-//! `~`, Ctrl-X (abort); line bytes wait in the receive buffer until the job ends.
+//! playback of a step-event stream), `$TURN=TABLE [RPM [X0:X1 [FEED]]]` (a Z-slide turning job,
+//! mm and mm/s; `TABLE` a `fourier table` file or `builtin`) and `$WIRE=JOB.toml [FROM..TO]` (a
+//! 4-axis wire job, only segments FROM..TO if given). Each runs its runner on the bridge's link
+//! while a [`SenderHook`] keeps answering the sender's real-time bytes: `?` (`Run` or `Hold`,
+//! the job's position), `!`, `~`, Ctrl-X (abort); line bytes wait in the receive buffer until
+//! the job ends.
 
 use super::endpoint::Endpoint;
 use super::protocol::{realtime, Realtime, RxBuffer, PLANNER_BLOCKS};
 use super::report::{Report, State};
-use crate::milling::run::MillingRunReport;
-use crate::polar::run::PolarReport;
-use crate::runner::{fault_names, JobControl, JobHook};
+use crate::runner::{JobControl, JobHook};
 use motion::machine::MachineState;
 use motion::polar::playback::SizeScale;
 use motion::protocol::{ProgramOutputs, Status, WireState};
@@ -26,7 +26,15 @@ pub enum JobCmd {
     Mill(PathBuf),
     /// `$POLAR=STREAM.bin [SPEED [M:K]]`.
     Polar { file: PathBuf, speed: f64, scale: SizeScale },
+    /// `$TURN=TABLE [RPM [X0:X1 [FEED]]]`, as `fourier run`'s flags (`--table` an absolute
+    /// path; lengths in mm).
+    Turn { name: String, flags: Vec<String> },
+    /// `$WIRE=JOB.toml [FROM..TO]`.
+    Wire { file: PathBuf, segments: Option<std::ops::Range<usize>> },
 }
+
+/// The word `$TURN=` takes for `fourier run`'s built-in table (the thesis's Douglass table).
+pub const BUILTIN_TABLE: &str = "builtin";
 
 /// The `$` names, with what each runs (the `$` help lists them).
 pub const NAMES: [&str; 4] = ["$MILL=", "$POLAR=", "$TURN=", "$WIRE="];
@@ -65,18 +73,64 @@ pub fn parse(line: &str, jobs: &Path) -> Option<Result<JobCmd, String>> {
                 (_, _, Some(w)) => Err(format!("$POLAR= takes FILE [SPEED [M:K]], found {w:?}")),
             }
         }
-        "$TURN" => Err("Z-slide turning is not run behind the bridge yet: `motionctl fourier \
-                        run` runs it"
-            .into()),
-        "$WIRE" => Err("wire jobs are not run behind the bridge yet: `motionctl wire run` runs \
-                        them"
-            .into()),
+        "$TURN" => {
+            let Some(table) = arg.split_whitespace().next() else {
+                return Some(Err(need_file("Z-slide table (`fourier table --out`, or builtin)")));
+            };
+            turn_flags(table, jobs, words).map(|flags| JobCmd::Turn { name: table.into(), flags })
+        }
+        "$WIRE" => {
+            let Some(file) = file else {
+                return Some(Err(need_file("wire job (TOML, version 1)")));
+            };
+            let segments = match words.next().map(crate::cli_capabilities::parse_range) {
+                None => Ok(None),
+                Some(Ok(r)) => Ok(Some(r)),
+                Some(Err(e)) => Err(format!("$WIRE= segments FROM..TO: {e}")),
+            };
+            match (segments, words.next()) {
+                (Ok(segments), None) => Ok(JobCmd::Wire { file, segments }),
+                (Err(e), _) => Err(e),
+                (_, Some(w)) => Err(format!("$WIRE= takes FILE [FROM..TO], found {w:?}")),
+            }
+        }
         _ => return None,
     })
 }
 
+/// `$TURN=`'s words after the table as `fourier run` flags in mm: RPM, X0:X1, FEED (mm/s).
+fn turn_flags<'a>(
+    table: &str,
+    jobs: &Path,
+    mut words: impl Iterator<Item = &'a str>,
+) -> Result<Vec<String>, String> {
+    let mut flags = vec!["--units".to_string(), "mm".to_string()];
+    if !table.eq_ignore_ascii_case(BUILTIN_TABLE) {
+        flags.extend(["--table".to_string(), jobs.join(table).display().to_string()]);
+    }
+    let number = |what: &str, w: &str| match w.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v.to_string()),
+        _ => Err(format!("$TURN= {what} must be a number, found {w:?}")),
+    };
+    if let Some(w) = words.next() {
+        flags.extend(["--rpm".to_string(), number("RPM", w)?]);
+    }
+    if let Some(w) = words.next() {
+        let (a, b) =
+            w.split_once(':').ok_or(format!("$TURN= X range must be X0:X1 mm, found {w:?}"))?;
+        flags.extend(["--x-start".into(), number("X0", a)?, "--x-end".into(), number("X1", b)?]);
+    }
+    if let Some(w) = words.next() {
+        flags.extend(["--feed".to_string(), number("FEED", w)?]);
+    }
+    match words.next() {
+        Some(w) => Err(format!("$TURN= takes TABLE [RPM [X0:X1 [FEED]]], found {w:?}")),
+        None => Ok(flags),
+    }
+}
+
 /// Position of a capability's job as the report's axes, mm (degrees for a rotary axis).
-pub type PositionsMm = fn(&Status) -> Vec<f64>;
+pub type PositionsMm = Box<dyn Fn(&Status) -> Vec<f64>>;
 
 /// The milling machine's X (1 um a step).
 pub fn milling_mm(st: &Status) -> Vec<f64> {
@@ -92,12 +146,30 @@ pub fn polar_mm(st: &Status) -> Vec<f64> {
     ]
 }
 
+/// The Z-slide machine's X (the radial feed) and Z (the slide), mm, as grbl's X, Y, Z.
+pub fn turning_mm(st: &Status) -> Vec<f64> {
+    use crate::fourier::run::{X_AXIS, X_STEPS_PER_IN, Z_AXIS, Z_STEPS_PER_IN};
+    use crate::units::MM_PER_IN;
+    vec![
+        st.positions[X_AXIS as usize] as f64 * MM_PER_IN / X_STEPS_PER_IN as f64,
+        0.0,
+        st.positions[Z_AXIS as usize] as f64 * MM_PER_IN / Z_STEPS_PER_IN as f64,
+    ]
+}
+
+/// The wire manipulator's X, Y (mm) as grbl's X, Y, then Z 0, and alpha, beta (deg) as A, B:
+/// `spu` the steps per unit of X, Y, beta, alpha.
+pub fn wire_mm(st: &Status, spu: [f64; 4]) -> Vec<f64> {
+    let p = |i: usize| st.positions[i] as f64 / spu[i];
+    vec![p(0), p(1), 0.0, p(3), p(2)]
+}
+
 /// The sender's side while a capability job owns the link.
 pub struct SenderHook<'a> {
     pub ep: &'a mut dyn Endpoint,
     pub rx: &'a mut RxBuffer,
     pub interrupt: Arc<AtomicBool>,
-    /// Axes the report shows.
+    /// Axes the report shows at least (the job's own, if more).
     pub axes: usize,
     pub positions: PositionsMm,
     pub overrides: [u8; 3],
@@ -114,17 +186,19 @@ impl SenderHook<'_> {
     /// machine mm, no work offset.
     pub fn report(&self, st: &Status) -> String {
         let mut mpos = (self.positions)(st);
-        mpos.resize(self.axes, 0.0);
+        let axes = self.axes.max(mpos.len());
+        mpos.resize(axes, 0.0);
         let stopping = st.machine == MachineState::Running
             || (st.machine == MachineState::Holding && st.state != WireState::Held);
         Report {
             state: if self.hold { State::Hold { stopping } } else { State::Run },
             mpos,
-            wco: vec![0.0; self.axes],
+            wco: vec![0.0; axes],
             planner_free: PLANNER_BLOCKS,
             rx_free: self.rx.free(),
             feed: 0.0,
-            speed: 0.0,
+            // The spindle speed the board senses (a Z-slide job's; 0 for the others).
+            speed: st.z_spindle_rpm_milli as f64 / 1e3,
             overrides: self.overrides,
             accessories: ProgramOutputs::from_bits(st.outputs),
             mask: self.mask,
@@ -176,66 +250,6 @@ impl JobHook for SenderHook<'_> {
     }
 }
 
-/// `[MSG:...]` texts summing up a milling job in the job's units.
-pub fn milling_summary(name: &str, r: &MillingRunReport, fnom_n: f64) -> Vec<String> {
-    let tick_hz = motion::force::scenario::TICK_HZ as f64;
-    let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.0} ms", v * 1e3));
-    let forces: Vec<f64> = r.trace.iter().map(|p| p.force_n).collect();
-    let mean =
-        if forces.is_empty() { 0.0 } else { forces.iter().sum::<f64>() / forces.len() as f64 };
-    let mut out = vec![
-        format!(
-            "MILL {name}: X {:.3} mm of {:.3} mm in {:.3} s of board time ({:.1} s wall)",
-            r.x_steps as f64 / 1e3,
-            r.expected_x_steps as f64 / 1e3,
-            r.board_ticks as f64 / tick_hz,
-            r.seconds
-        ),
-        format!(
-            "MILL force: mean {mean:.0} N, peak {:.0} N, Fnom {fnom_n:.0} N, back within +-10 % \
-             {} after the depth step (host model {}); {} control updates",
-            r.peak_n,
-            ms(r.settle_s),
-            ms(r.model_settle_s),
-            r.updates
-        ),
-    ];
-    if r.faults != 0 {
-        out.push(format!("MILL faults: {}", fault_names(r.faults)));
-    }
-    out.extend(r.problems.iter().map(|p| format!("MILL check failed: {p}")));
-    if r.ok() {
-        out.push("MILL checks: ok (position and force as the host model)".into());
-    }
-    out
-}
-
-/// `[MSG:...]` texts summing up a polar playback.
-pub fn polar_summary(name: &str, r: &PolarReport) -> Vec<String> {
-    let tick_hz = motion::polar::job::wire_config().machine.tick_hz as f64;
-    let at = |p: [i64; 2]| {
-        let st = Status { positions: [p[0], p[1], 0, 0, 0, 0], ..Status::default() };
-        let v = polar_mm(&st);
-        format!("theta {:.3} deg, r {:.3} mm", v[0], v[1])
-    };
-    let mut out = vec![
-        format!(
-            "POLAR {name}: {} of {} events in {} blocks, {:.3} s of board time ({:.1} s wall)",
-            r.events_fired,
-            r.events,
-            r.blocks,
-            r.board_ticks as f64 / tick_hz,
-            r.seconds
-        ),
-        format!("POLAR end: {}; host model {}", at(r.positions), at(r.expected_positions)),
-    ];
-    out.extend(r.problems.iter().map(|p| format!("POLAR check failed: {p}")));
-    if r.ok() {
-        out.push("POLAR checks: ok (every event once, the host model's end)".into());
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -255,9 +269,48 @@ mod tests {
         for bad in ["$MILL=", "$MILL=a b", "$POLAR=s 9", "$POLAR=s 1 5:1", "$POLAR=s 1 1:1 x"] {
             assert!(matches!(parse(bad, d), Some(Err(_))), "{bad}");
         }
-        let e = parse("$TURN=t.toml", d).unwrap().unwrap_err();
-        assert!(e.contains("motionctl fourier run"), "{e}");
-        assert!(parse("$WIRE=w.toml", d).unwrap().is_err());
+        let turn = |flags: &[&str]| JobCmd::Turn {
+            name: flags[0].into(),
+            flags: flags[1..].iter().map(|f| f.to_string()).collect(),
+        };
+        assert_eq!(
+            parse("$TURN=t.txt 360 0:12.7 25.4", d),
+            Some(Ok(turn(&[
+                "t.txt",
+                "--units",
+                "mm",
+                "--table",
+                "/jobs/t.txt",
+                "--rpm",
+                "360",
+                "--x-start",
+                "0",
+                "--x-end",
+                "12.7",
+                "--feed",
+                "25.4"
+            ])))
+        );
+        assert_eq!(parse("$turn=BUILTIN", d), Some(Ok(turn(&["BUILTIN", "--units", "mm"]))));
+        assert_eq!(
+            parse("$WIRE=w.toml 1..3", d),
+            Some(Ok(JobCmd::Wire { file: "/jobs/w.toml".into(), segments: Some(1..3) }))
+        );
+        assert_eq!(
+            parse("$WIRE=w.toml", d),
+            Some(Ok(JobCmd::Wire { file: "/jobs/w.toml".into(), segments: None }))
+        );
+        for bad in [
+            "$TURN=",
+            "$TURN=t x",
+            "$TURN=t 360 5",
+            "$TURN=t 1 0:1 2 3",
+            "$WIRE=",
+            "$WIRE=w 3..1",
+            "$WIRE=w 1..2 x",
+        ] {
+            assert!(matches!(parse(bad, d), Some(Err(_))), "{bad}");
+        }
         assert_eq!(parse("$100=80", d), None);
         assert_eq!(parse("$J=X1", d), None);
     }
@@ -271,5 +324,14 @@ mod tests {
         st.positions[1] = motion::polar::job::R_STEPS_PER_IN as i64;
         let v = polar_mm(&st);
         assert!((v[0] - 90.0).abs() < 1e-9 && (v[1] - 25.4).abs() < 1e-9, "{v:?}");
+        // Turning: axis 0 the slide (Z, 10 uin steps), axis 1 the radial feed (X, 1 mil).
+        let mut st = Status::default();
+        st.positions[0] = -100_000;
+        st.positions[1] = 500;
+        let v = turning_mm(&st);
+        assert!((v[0] - 12.7).abs() < 1e-9 && v[1] == 0.0 && (v[2] + 25.4).abs() < 1e-9, "{v:?}");
+        // Wire: X, Y, beta, alpha steps -> X, Y, Z 0, A alpha, B beta.
+        st.positions[..4].copy_from_slice(&[200, -100, 30, 40]);
+        assert_eq!(wire_mm(&st, [100.0, 100.0, 10.0, 20.0]), vec![2.0, -1.0, 0.0, 2.0, 3.0]);
     }
 }

@@ -9,9 +9,11 @@
 //! - [`pipeline`]: the moves into an incremental planner, segments and events out;
 //! - [`session`]: the loop between the sender and the board's link;
 //! - [`endpoint`]: the pseudo-terminal and the TCP socket;
-//! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`).
+//! - [`jobs`]: the thesis capabilities as `$` commands (`$MILL=`, `$POLAR=`, `$TURN=`,
+//!   `$WIRE=`); [`job_summary`]: the `[MSG:]` lines that sum up their jobs.
 
 pub mod endpoint;
+pub mod job_summary;
 pub mod jobs;
 pub mod pipeline;
 pub mod program;
@@ -58,8 +60,9 @@ pub struct GrblArgs {
     /// Serve raw TCP (grblHAL's socket stream) on HOST:PORT, one sender at a time.
     #[arg(long, value_name = "HOST:PORT")]
     pub listen: Option<String>,
-    /// Directory the capability commands' job files (`$MILL=FILE`, `$POLAR=FILE`) are read
-    /// from when relative [default: the working directory].
+    /// Directory the capability commands' job files (`$MILL=FILE`, `$POLAR=FILE`,
+    /// `$TURN=TABLE`, `$WIRE=FILE`) are read from when relative [default: the working
+    /// directory].
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub jobs: PathBuf,
     /// With --sim: machine time per wall time of the simulated board.
@@ -199,6 +202,7 @@ fn serve(
         host: args.link.host_config(target),
         home: home_ok,
         wire,
+        caps: info.capabilities,
     };
     let mut bridge =
         session::Bridge::new(s, &mut *ep, machine, cfg, latest, alarm, persist).with_jobs(jobs);

@@ -55,9 +55,8 @@ pub enum Realtime {
     Feed(OverrideChange),
     Rapid(u8),
     Spindle(OverrideChange),
-    /// Spindle stop: accepted and not acted on (the bridge switches the spindle in program
-    /// order, from M3/M4/M5).
-    Accessory(u8),
+    /// Spindle stop (0x9E): toggles the spindle off and on during a feed hold.
+    SpindleStop,
     /// Flood (0xA0) or mist (0xA1) toggled at once.
     Coolant(Coolant),
     /// Any other byte of 0x80..=0xFF: ignored, as grbl does.
@@ -121,7 +120,7 @@ pub fn realtime(b: u8) -> Option<Realtime> {
         rt::SPINDLE_MINUS_10 => Realtime::Spindle(By(-10)),
         rt::SPINDLE_PLUS_1 => Realtime::Spindle(By(1)),
         rt::SPINDLE_MINUS_1 => Realtime::Spindle(By(-1)),
-        rt::SPINDLE_STOP => Realtime::Accessory(b),
+        rt::SPINDLE_STOP => Realtime::SpindleStop,
         rt::FLOOD_TOGGLE => Realtime::Coolant(Coolant::Flood),
         rt::MIST_TOGGLE => Realtime::Coolant(Coolant::Mist),
         0x80..=0xFF => Realtime::Ignored,

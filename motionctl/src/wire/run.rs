@@ -96,6 +96,20 @@ pub fn run(
     model_ticks: u64,
     opts: &WireRunOptions,
 ) -> anyhow::Result<WireRunReport> {
+    run_with(transport, cfg, segments, expected, model_ticks, opts, &mut runner::Unattended)
+}
+
+/// As [`run`], with `hook` asked every pass of the job's loop once the job started (it may
+/// hold, resume or abort it: the grbl bridge's sender does).
+pub fn run_with(
+    transport: &mut dyn Transport,
+    cfg: WireConfig,
+    segments: &[Segment],
+    expected: [i64; 4],
+    model_ticks: u64,
+    opts: &WireRunOptions,
+    hook: &mut dyn runner::JobHook,
+) -> anyhow::Result<WireRunReport> {
     let t0 = Instant::now();
     let say = |m: &str| {
         if opts.progress {
@@ -148,6 +162,7 @@ pub fn run(
     let mut last_say = Instant::now();
     let slack_ticks = (opts.slack.as_secs_f64() * f64::from(cfg.machine.tick_hz)) as u64;
     let mut watch = runner::JobWatch::new(model_ticks, SLOWDOWN, slack_ticks, NO_PROGRESS);
+    let mut steer = runner::Steer::default();
 
     loop {
         s.pump(Duration::from_millis(5)).map_err(link)?;
@@ -263,8 +278,11 @@ pub fn run(
             }
             break;
         }
+        if started {
+            steer.step(&mut s, hook, &latest, &mut watch)?;
+        }
         let moved = latest.positions.iter().fold(latest.tick, |h, &p| h.rotate_left(7) ^ p as u64);
-        let overdue = match started {
+        let overdue = match started && !steer.held() {
             true => watch.check(latest.tick, moved).err(),
             false => None,
         };

@@ -256,9 +256,10 @@ impl SimTarget {
         self.done_hash = crate::segment::order_hash(self.done_hash, seg.id);
         self.tick += seg.duration_ticks as u64;
         if self.queue.is_empty() && seg.exit_rate.to_bits() == 0 {
-            // The job ended at rest.
+            // The job ended at rest (an armed wire job with it, as on the board).
             self.running = false;
             self.machine = MachineState::Ready;
+            self.wire_armed = None;
             if let Some(fault) = self.probe.job_end() {
                 self.raise_fault(fault);
             }
@@ -310,6 +311,7 @@ impl SimTarget {
                 | CommandKind::ClearFault
         ) {
             self.probe.drop_move();
+            self.wire_armed = None;
         }
         self.mutations += 1;
     }

@@ -1,15 +1,22 @@
-//! The capability commands (`$MILL=`, `$POLAR=`; see [`crate::grbl::jobs`]): the job's runner
+//! The capability commands (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`; see [`crate::grbl::jobs`]):
+//! the job's runner
 //! on the bridge's link, the sender answered meanwhile, then the bridge's own session, config
 //! and status stream back, and the result said as `[MSG:]` lines and `ok`, or as an alarm.
 
 use super::{link_err, Bridge, Pending};
+use crate::cli_capabilities::WireBoardJob;
+use crate::fourier::run::{WireTable, ZRunOptions};
+use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
 use crate::grbl::settings;
 use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
 use anyhow::Result;
-use motion::protocol::{HostConfig, RequestBody, SimForceFault, WireConfig};
+use motion::protocol::{
+    HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_FORCE_JOB, CAP_WIRE_JOB,
+    CAP_ZSLIDE_JOB,
+};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -23,6 +30,8 @@ pub struct JobSetup {
     pub home: bool,
     /// The bridge's own config, sent again after a job.
     pub wire: WireConfig,
+    /// The board's capabilities (its Hello): a job it cannot run is refused before it starts.
+    pub caps: u32,
 }
 
 /// Longest wait for the bridge's requests in flight before a job takes the link.
@@ -32,6 +41,8 @@ const SETTLE: Duration = Duration::from_secs(5);
 enum Loaded {
     Mill(Box<crate::milling::job::MillingJob>),
     Polar { bytes: Vec<u8>, speed: f64, scale: motion::polar::playback::SizeScale },
+    Turn(WireTable, ZRunOptions),
+    Wire(Box<WireBoardJob>),
 }
 
 /// What a job gave back.
@@ -39,6 +50,20 @@ enum Done {
     /// The report, and the job's nominal force, N.
     Mill(crate::milling::run::MillingRunReport, f64),
     Polar(crate::polar::run::PolarReport),
+    /// The report, and the options it ran with.
+    Turn(crate::fourier::run::ZRunReport, ZRunOptions),
+    /// The report, and the job it ran.
+    Wire(crate::wire::run::WireRunReport, Box<WireBoardJob>),
+}
+
+/// The capability a command's job needs on the board, and what it is called.
+fn needs(cmd: &JobCmd) -> (u32, &'static str) {
+    match cmd {
+        JobCmd::Mill(_) => (CAP_FORCE_JOB, "force jobs (CAP_FORCE_JOB)"),
+        JobCmd::Polar { .. } => (CAP_EVENTS, "event jobs (CAP_EVENTS)"),
+        JobCmd::Turn { .. } => (CAP_ZSLIDE_JOB, "Z-slide jobs (CAP_ZSLIDE_JOB)"),
+        JobCmd::Wire { .. } => (CAP_WIRE_JOB, "wire jobs (CAP_WIRE_JOB)"),
+    }
 }
 
 fn file_name(p: &std::path::Path) -> String {
@@ -48,20 +73,21 @@ fn file_name(p: &std::path::Path) -> String {
 impl Bridge<'_> {
     /// A `$` line that names a capability: `false` when it does not.
     pub(super) fn capability_line(&mut self, raw: &str) -> Result<bool> {
-        let Some(dir) = self.jobs.as_ref().map(|j| j.dir.clone()) else { return Ok(false) };
+        let Some((dir, caps)) = self.jobs.as_ref().map(|j| (j.dir.clone(), j.caps)) else {
+            return Ok(false);
+        };
         let Some(parsed) = jobs::parse(raw, &dir) else { return Ok(false) };
         match parsed {
             Err(why) => {
                 self.say(&format!("[MSG:{why}]"));
-                let unsupported = why.contains("not run behind the bridge");
-                self.error(if unsupported {
-                    error::UNSUPPORTED_COMMAND
-                } else {
-                    error::INVALID_STATEMENT
-                });
+                self.error(error::INVALID_STATEMENT);
             }
             Ok(_) if self.alarm.is_some() => self.error(error::SYSTEM_GC_LOCK),
             Ok(_) if self.check || self.moving() => self.error(error::IDLE_ERROR),
+            Ok(cmd) if caps & needs(&cmd).0 == 0 => {
+                self.say(&format!("[MSG:the board runs no {}]", needs(&cmd).1));
+                self.error(error::UNSUPPORTED_COMMAND);
+            }
             Ok(cmd) => self.capability(cmd)?,
         }
         Ok(true)
@@ -82,6 +108,15 @@ impl Bridge<'_> {
                         Ok(Loaded::Polar { bytes, speed: *speed, scale: *scale })
                     }),
             ),
+            JobCmd::Turn { name, flags } => (
+                name.clone(),
+                crate::fourier::cli::turn_job(flags).map(|(t, o)| Loaded::Turn(t, o)),
+            ),
+            JobCmd::Wire { file, segments } => (
+                file_name(file),
+                crate::cli_capabilities::wire_board_job(file, segments.clone())
+                    .map(|j| Loaded::Wire(Box::new(j))),
+            ),
         };
         let loaded = match loaded {
             Ok(l) => l,
@@ -99,7 +134,7 @@ impl Bridge<'_> {
             rx: &mut self.rx,
             interrupt: self.interrupt.clone(),
             axes: self.spm.len(),
-            positions: jobs::milling_mm,
+            positions: Box::new(jobs::milling_mm),
             overrides: self.ovr,
             mask: self.settings.get(settings::STATUS_MASK) as u16,
             inches: self.settings.flag(settings::REPORT_INCHES),
@@ -119,7 +154,7 @@ impl Bridge<'_> {
                     .map(|r| Done::Mill(r, job.fnom_n))
             }
             Loaded::Polar { bytes, speed, scale } => {
-                hook.positions = jobs::polar_mm;
+                hook.positions = Box::new(jobs::polar_mm);
                 let opts = PolarRunOptions {
                     speed: *speed,
                     scale: *scale,
@@ -128,6 +163,36 @@ impl Bridge<'_> {
                     progress: true,
                 };
                 crate::polar::run::run_with(t, bytes, &opts, &mut hook).map(Done::Polar)
+            }
+            Loaded::Turn(table, o) => {
+                hook.positions = Box::new(jobs::turning_mm);
+                let o = ZRunOptions { host: setup.host, home: setup.home, ..o.clone() };
+                let say = |m: &str| eprintln!("motionctl: {m}");
+                crate::fourier::run::run_with(t, table, &o, &say, &mut hook)
+                    .map(|r| Done::Turn(r, o))
+            }
+            Loaded::Wire(job) => {
+                let spu = job.steps_per_unit;
+                hook.positions = Box::new(move |st| jobs::wire_mm(st, spu));
+                let opts = crate::wire::run::WireRunOptions {
+                    params: job.params,
+                    host: setup.host,
+                    home: setup.home,
+                    progress: true,
+                    stall: None,
+                    slack: crate::wire::run::SLACK,
+                };
+                let (cfg, segs) = (job.cfg, &job.segments);
+                crate::wire::run::run_with(
+                    t,
+                    cfg,
+                    segs,
+                    job.expected,
+                    job.model_ticks,
+                    &opts,
+                    &mut hook,
+                )
+                .map(|r| Done::Wire(r, job.clone()))
             }
         };
         let aborted = hook.abort;
@@ -152,8 +217,12 @@ impl Bridge<'_> {
             }
             Ok(done) => {
                 let (lines, job_faults) = match &done {
-                    Done::Mill(r, fnom_n) => (jobs::milling_summary(&name, r, *fnom_n), r.faults),
-                    Done::Polar(r) => (jobs::polar_summary(&name, r), 0),
+                    Done::Mill(r, fnom_n) => {
+                        (summary::milling_summary(&name, r, *fnom_n), r.faults)
+                    }
+                    Done::Polar(r) => (summary::polar_summary(&name, r), 0),
+                    Done::Turn(r, o) => (summary::turning_summary(&name, o, r), r.faults),
+                    Done::Wire(r, job) => (summary::wire_summary(&name, job, r), 0),
                 };
                 for l in lines {
                     self.say(&format!("[MSG:{l}]"));

@@ -23,7 +23,7 @@ impl Bridge<'_> {
             "$" => {
                 self.say(
                     "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x \
-                     $MILL=job $POLAR=stream $TURN=job $WIRE=job]",
+                     $MILL=job $POLAR=stream $TURN=table $WIRE=job]",
                 );
                 self.ok();
             }

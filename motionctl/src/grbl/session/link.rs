@@ -108,6 +108,7 @@ impl Bridge<'_> {
             self.stop_motion()?;
         }
         if self.alarm.is_some() {
+            self.spindle_stop_clear();
             return Ok(());
         }
 
@@ -121,6 +122,7 @@ impl Bridge<'_> {
         }
 
         self.front_events()?;
+        self.spindle_stop_step()?;
         self.send_segments()?;
         self.reconcile()?;
 

@@ -13,7 +13,7 @@
 //! and dwells to the board; Hold, Resume, Start), `link` (requests, statuses, answers, the
 //! loop's link step), `stop` (stopping, soft reset, startup lines), `alarms` (faults and
 //! refused moves), `dollar` (`$` commands), `settings_cmds` (commands that change stored
-//! settings) and `jog` (`$J=`).
+//! settings), `jog` (`$J=`) and `spindle_stop` (0x9E during a hold).
 
 mod alarms;
 mod capability;
@@ -23,6 +23,7 @@ mod lines;
 mod link;
 mod realtime;
 mod settings_cmds;
+mod spindle_stop;
 mod stop;
 mod stream;
 
@@ -101,6 +102,9 @@ pub struct Bridge<'a> {
     check: bool,
     homing: bool,
     dwell_until: Option<Instant>,
+    /// The real-time spindle stop, and the spin-up a resume waits for after it.
+    spindle_stop: spindle_stop::SpindleStop,
+    spin_up_until: Option<Instant>,
     /// Feed, rapid, spindle override, percent.
     ovr: [u8; 3],
     /// Feed of the last move queued, mm/min.
@@ -114,7 +118,7 @@ pub struct Bridge<'a> {
     /// The board refused queued motion: stop the rest.
     stop_wanted: bool,
     build_info: String,
-    /// Capability jobs (`$MILL=`, `$POLAR=`), when set up.
+    /// Capability jobs (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`), when set up.
     jobs: Option<JobSetup>,
     pub interrupt: Arc<AtomicBool>,
 }
@@ -174,6 +178,8 @@ impl<'a> Bridge<'a> {
             check: false,
             homing: false,
             dwell_until: None,
+            spindle_stop: Default::default(),
+            spin_up_until: None,
             ovr: [100; 3],
             feed_now: 0.0,
             startup_lines: persist.startup,
@@ -188,7 +194,7 @@ impl<'a> Bridge<'a> {
         }
     }
 
-    /// Lets senders run capability jobs (`$MILL=`, `$POLAR=`).
+    /// Lets senders run capability jobs (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`).
     pub fn with_jobs(mut self, jobs: JobSetup) -> Self {
         self.jobs = Some(jobs);
         self
@@ -251,5 +257,6 @@ impl<'a> Bridge<'a> {
             || self.latest.queue_depth > 0
             || matches!(self.latest.machine, MachineState::Running | MachineState::Holding)
             || self.dwell_until.is_some()
+            || self.spin_up_until.is_some()
     }
 }

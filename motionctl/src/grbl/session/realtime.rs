@@ -1,5 +1,5 @@
 //! Real-time bytes, acted on as they arrive: `?` (the status report), feed hold, safety door,
-//! cycle start, reset, jog cancel, the overrides and the coolant toggles.
+//! cycle start, reset, jog cancel, the overrides, the spindle stop and the coolant toggles.
 
 use super::{link_err, Bridge, Pending};
 use crate::grbl::pipeline::Out;
@@ -40,6 +40,8 @@ impl Bridge<'_> {
             Realtime::CycleStart => {
                 self.door = false;
                 self.hold = false;
+                // The stopped spindle comes back first; the resume waits for its spin-up.
+                self.spindle_stop.wanted = false;
                 if self.paused {
                     self.paused = false;
                     if matches!(self.motion.out.front(), Some(Out::Pause)) {
@@ -63,7 +65,8 @@ impl Bridge<'_> {
             Realtime::Rapid(v) => self.ovr[1] = v,
             Realtime::Spindle(c) => self.ovr[2] = c.apply(self.ovr[2]),
             Realtime::Coolant(c) => self.toggle_coolant(c)?,
-            Realtime::Accessory(_) | Realtime::Ignored => {}
+            Realtime::SpindleStop => self.spindle_stop_byte(),
+            Realtime::Ignored => {}
         }
         Ok(())
     }
@@ -99,7 +102,7 @@ impl Bridge<'_> {
             State::Check
         } else if self.door {
             State::Door
-        } else if self.hold || self.paused {
+        } else if self.hold || self.paused || self.spindle_holds() {
             let stopping = self.latest.machine == MachineState::Running
                 || (self.latest.machine == MachineState::Holding
                     && self.latest.state != WireState::Held);

@@ -51,6 +51,20 @@ impl Bridge<'_> {
             self.request(RequestBody::Abort, "Abort")?;
         }
         self.refresh()?;
+        // The board drops its queue in its background work after the Abort: until then its
+        // status still counts the dropped segments in flight, which would read as motion to
+        // start again.
+        let start = Instant::now();
+        while self.latest.queue_depth > 0 && start.elapsed() < STOP_WAIT {
+            std::thread::sleep(Duration::from_millis(2));
+            self.refresh()?;
+        }
+        if self.latest.queue_depth > 0 {
+            eprintln!(
+                "motionctl: the board still counts {} segments after Abort",
+                self.latest.queue_depth
+            );
+        }
         self.rebase();
         Ok(())
     }
@@ -81,6 +95,7 @@ impl Bridge<'_> {
     pub(super) fn soft_reset(&mut self) -> Result<()> {
         self.stop_motion()?;
         // As grbl's reset: the spindle and coolant stop with the motion.
+        self.spindle_stop_clear();
         self.switch_outputs(ProgramOutputs::OFF)?;
         self.rx.clear();
         self.check = false;

@@ -98,7 +98,7 @@ impl Bridge<'_> {
         if self.control_seq.is_some_and(|c| !seq_at_or_after(self.latest.next_seq, c + 1)) {
             return Ok(());
         }
-        let want_hold = self.hold || self.paused || self.door;
+        let want_hold = self.hold || self.paused || self.door || self.spindle_holds();
         let body = match self.latest.machine {
             MachineState::Running if want_hold => RequestBody::Hold,
             MachineState::Holding if !want_hold => RequestBody::Resume,
