@@ -13,7 +13,6 @@
 
 pub mod cli;
 pub mod resume;
-mod second_pass;
 pub mod stream;
 
 use crate::job::{Feed, Item, Machine, MoveCmd, Source, Target};

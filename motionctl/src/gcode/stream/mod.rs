@@ -10,7 +10,7 @@
 //! end). The second pass ([`items`]) reads the file again and streams it to the board
 //! ([`outputs`], in `second_pass`).
 
-pub use super::second_pass::outputs;
+mod second_pass;
 use super::{machine_diag, Converter, GcodeError};
 use crate::convert::{ConvertError, Program, ProgramItem, Stepper};
 use crate::job::{Item, Machine, Source};
@@ -20,6 +20,7 @@ use motion::MAX_AXES;
 use motion_gcode::canon::Pos;
 use motion_gcode::source::{LineSource, SeekSource};
 use motion_gcode::{Diagnostic, Event, Interpreter, ProbeResult};
+pub use second_pass::outputs;
 use std::fmt;
 use std::fs::File;
 use std::io::BufReader;

@@ -1,7 +1,7 @@
 //! The second pass of `run` over a G-code file ([`outputs`]): the file read again and planned as
 //! the board takes the segments, and the probe moves' results taken back into it.
 
-use super::stream::{Checked, Items, Stop};
+use super::{Checked, Items, Stop};
 use crate::plan::Stream;
 use motion::MAX_AXES;
 use motion_gcode::source::LineSource;
