@@ -265,7 +265,7 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
 
     /// One update (call once per tick, >= 20 kHz): spindle angle and speed from the source,
     /// its fault if any, the X position. Returns the command (frozen once faulted).
-    #[inline]
+    #[inline(never)]
     pub fn update<const ROWS: usize>(
         &mut self,
         table: &CoefficientTable<ROWS, WIDTH>,
@@ -291,12 +291,34 @@ impl<const WIDTH: usize> ZGen<WIDTH> {
         self.cfg.interp
     }
 
-    /// [`ZGen::update`] with the table's coefficients at `x_in_q24` from `coefficients` (called
-    /// at most once, after the state and speed checks): an owner may have interpolated them a
-    /// tick ahead, `table.coefficients(x_in_q24, self.interp())`, so the work of one update is
-    /// spread over two ticks. The result is the same.
+    /// [`ZGen::update`] with the table's coefficients at `x_in_q24` already interpolated, by
+    /// `table.coefficients(x_in_q24, self.interp())` (an owner that does that a tick ahead
+    /// spreads the work of one update over two ticks). The result is the same.
     #[inline(never)]
-    pub fn update_from(
+    pub fn update_with(
+        &mut self,
+        form: TableForm,
+        coefficients_in_q32: [i32; WIDTH],
+        x_in_q24: i32,
+        angle_turn_q32: u32,
+        speed_turn_q32_per_tick: i32,
+        sensor_fault: Option<FaultCode>,
+    ) -> ZUpdate {
+        self.update_from(
+            form,
+            || coefficients_in_q32,
+            x_in_q24,
+            angle_turn_q32,
+            speed_turn_q32_per_tick,
+            sensor_fault,
+        )
+    }
+
+    /// The update, with the coefficients from `coefficients` (called at most once, after the
+    /// state and speed checks). Inlined into its two entries, [`ZGen::update`] and
+    /// [`ZGen::update_with`], so each is one function as the update was before it had two.
+    #[inline(always)]
+    fn update_from(
         &mut self,
         form: TableForm,
         coefficients: impl FnOnce() -> [i32; WIDTH],

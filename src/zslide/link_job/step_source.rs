@@ -33,15 +33,15 @@ impl StepSource for ZJob {
             run.ahead.valid = false;
             let row = &run.ahead.coeffs_in_q32;
             let u = match (&mut run.gen, &self.table) {
-                (Gen::Power(g), LinkTable::Power(t)) => {
-                    let interp = g.interp();
-                    let c = || if ahead { narrow(row) } else { t.coefficients(x, interp) };
-                    g.update_from(t.form(), c, x, angle, speed, source_fault)
+                (Gen::Power(g), LinkTable::Power(t)) if ahead => {
+                    g.update_with(t.form(), narrow(row), x, angle, speed, source_fault)
+                }
+                (Gen::Power(g), LinkTable::Power(t)) => g.update(t, x, angle, speed, source_fault),
+                (Gen::Harmonic(g), LinkTable::Harmonic(t)) if ahead => {
+                    g.update_with(t.form(), *row, x, angle, speed, source_fault)
                 }
                 (Gen::Harmonic(g), LinkTable::Harmonic(t)) => {
-                    let interp = g.interp();
-                    let c = || if ahead { *row } else { t.coefficients(x, interp) };
-                    g.update_from(t.form(), c, x, angle, speed, source_fault)
+                    g.update(t, x, angle, speed, source_fault)
                 }
                 // Not reachable: the table cannot change while a run exists.
                 _ => run.last,
