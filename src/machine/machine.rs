@@ -486,7 +486,7 @@ impl Machine {
             _ => {}
         }
         self.apply_hold(dda);
-        self.arm_fast(raw, source.step_only_ticks());
+        self.arm_fast(raw, source);
         TickOut { step, outputs: self.outputs }
     }
 

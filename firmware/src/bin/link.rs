@@ -197,10 +197,13 @@ mod app {
 
     /// One machine tick at `tick_hz`: read the inputs, tick the machine (and through it the
     /// DDA), drive the pins and outputs, wake whoever has work. `wake` counts down to the status
-    /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock).
+    /// task's next run (`WAKE_TICKS`, 1 ms: a countdown because SetConfig restarts the clock);
+    /// step-only ticks count it too, and the full tick that comes next wakes the task (at most
+    /// `SUPERVISE_TICKS - 1` ticks late), so the machine alone decides which ticks are full ones
+    /// (a Z job keeps them off its generator's updates).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
-            wake: u32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
+            wake: i32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
             plain: bool = false, step_only: StepOnly = StepOnly::No, spindle_at_rest: bool = false,
             copy_counts: [i32; 2] = [0; 2]])]
@@ -212,12 +215,12 @@ mod app {
         let port = cx.shared.step_port;
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
-        // still, a force, event or wire job, or a Z job with step outputs; no status run due and
-        // no e-stop edge. A turning spindle's decoder still sees every tick.
+        // still, a force, event or wire job, or a Z job with step outputs; no e-stop edge. A
+        // turning spindle's decoder still sees every tick.
         // The plain job's own flag and path first, as short as it can be: its step-only tick is
         // the one the budget is for (sharing the capabilities' path below costs it a jump table
         // and a flag).
-        if *l.plain && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+        if *l.plain && !ESTOP_EDGE.load(Relaxed) {
             if !*l.spindle_at_rest {
                 l.spindle.update();
             }
@@ -229,7 +232,7 @@ mod app {
                     .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
                 return;
             }
-        } else if *l.step_only != StepOnly::No && *l.wake > 1 && !ESTOP_EDGE.load(Relaxed) {
+        } else if *l.step_only != StepOnly::No && !ESTOP_EDGE.load(Relaxed) {
             let step = match *l.step_only {
                 StepOnly::No => None,
                 StepOnly::Z => {
@@ -324,7 +327,7 @@ mod app {
             }
         });
         if *l.wake <= 1 {
-            *l.wake = WAKE_TICKS.load(Relaxed);
+            *l.wake = WAKE_TICKS.load(Relaxed) as i32;
             l.tick_wakes_status.write(());
         } else {
             *l.wake -= 1;

@@ -125,6 +125,10 @@ pub struct FourierRunArgs {
     /// Z output: the Z axis's step/dir or the DAC.
     #[arg(long, value_enum, default_value_t = ZOutputArg::Steps)]
     pub output: ZOutputArg,
+    /// The board's tick rate for the job, Hz (the generator updates every 1, 2 or 4 ticks, at
+    /// 20 kHz or more) [default: the Douglass scenario's 50 000].
+    #[arg(long, value_name = "HZ")]
+    pub tick_hz: Option<u32>,
     /// Print the summary as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -450,7 +454,16 @@ fn run_options(a: &FourierRunArgs, table: Option<&ZTable>) -> Result<ZRunOptions
             bail!("--speed-step-pct must be within (-90, 100] % (got {} %)", a.speed_step_pct);
         }
     }
+    let tick_hz = a.tick_hz.unwrap_or(d.tick_hz);
+    if !(motion::config::MIN_TICK_HZ..=motion::config::MAX_TICK_HZ).contains(&tick_hz) {
+        bail!(
+            "--tick-hz must be within {} .. {} Hz (got {tick_hz} Hz)",
+            motion::config::MIN_TICK_HZ,
+            motion::config::MAX_TICK_HZ
+        );
+    }
     Ok(ZRunOptions {
+        tick_hz,
         rpm_milli: (a.rpm * 1000.0).round() as u32,
         x_start_in: x_start,
         x_end_in: x_end,

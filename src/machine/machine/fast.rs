@@ -65,12 +65,14 @@ impl Machine {
         self.fast_left != 0
     }
 
-    /// End of a full tick: grants the next [`SUPERVISE_TICKS`]` - 1` ticks to
-    /// [`Machine::fast_tick`] when nothing but the DDA has work. `raw`: this tick's inputs
+    /// End of a full tick: grants the next [`SUPERVISE_TICKS`]` - 1` ticks (or the fewer the
+    /// source takes) to [`Machine::fast_tick`] when nothing but the DDA has work. `raw`: this tick's inputs
     /// before the debounce.
-    /// `source_ok`: the job's step source takes step-only ticks ([`StepSource::step_only_ticks`]).
+    /// `source`: the job's step source, which may refuse step-only ticks
+    /// ([`StepSource::step_only_ticks`]) or shorten their run ([`StepSource::step_only_run`]).
     #[inline]
-    pub(super) fn arm_fast(&mut self, raw: &Inputs, source_ok: bool) {
+    pub(super) fn arm_fast(&mut self, raw: &Inputs, source: &impl StepSource) {
+        let source_ok = source.step_only_ticks();
         // The machine's own state first: a capability job (every tick of one comes here) is
         // told apart by a few flag tests, before the inputs are looked at.
         let machine_quiet = !(self.starved || self.probe.watching())
@@ -94,7 +96,7 @@ impl Machine {
             && raw.probe == self.switch_filter.probe_level()
             && self.switch_filter.quiet();
         if quiet {
-            self.fast_left = SUPERVISE_TICKS - 1;
+            self.fast_left = source.step_only_run(SUPERVISE_TICKS - 1);
             // The full tick that ends this run keeps the job's books.
             self.job_watch_in = 1;
         } else {

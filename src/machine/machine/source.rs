@@ -26,6 +26,12 @@ pub trait StepSource {
     fn step_only_ticks(&self) -> bool {
         false
     }
+    /// How many step-only ticks a full tick grants, at most `max` (the machine's own period):
+    /// a source whose ticks differ in cost may take fewer, so that the full tick ending the run
+    /// falls on one of its cheap ticks and the two costs never add up in one interrupt.
+    fn step_only_run(&self, max: u8) -> u8 {
+        max
+    }
 }
 
 /// The DDA as a [`StepSource`]: what [`Machine::tick`](super::Machine::tick) runs.

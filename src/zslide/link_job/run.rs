@@ -96,6 +96,15 @@ impl ZRun {
         }
     }
 
+    /// The tick `n` ticks after the next one updates the generator or interpolates ahead for
+    /// it: the run's heavy ticks.
+    #[inline]
+    pub(super) fn heavy_in(&self, n: u8) -> bool {
+        let mask = (1u8 << self.update_shift) - 1;
+        let phase = self.update_phase.wrapping_add(n) & mask;
+        phase == 0 || (self.update_shift > 0 && phase == mask)
+    }
+
     /// X after one more tick: it feeds while the command follows the table, not in a hold.
     #[inline]
     pub(super) fn fed_x_in_q24(&self, hold: bool) -> i32 {

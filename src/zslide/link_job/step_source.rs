@@ -98,6 +98,23 @@ impl StepSource for ZJob {
         self.run.as_ref().is_some_and(|r| r.dac.is_none())
     }
 
+    /// The full tick that ends the run lands on a tick between the generator's heavy ones (the
+    /// update, and the coefficients interpolated on the tick before it): at most `max` ticks,
+    /// fewer by up to `2^shift - 1`. With updates every tick or every other one every tick is
+    /// heavy, and the run is `max`.
+    #[inline]
+    fn step_only_run(&self, max: u8) -> u8 {
+        let Some(run) = &self.run else { return max };
+        let mut n = max;
+        // At most one period back; a light phase exists once the period is 4 or more.
+        if run.update_shift >= 2 {
+            while n > 0 && run.heavy_in(n) {
+                n -= 1;
+            }
+        }
+        n
+    }
+
     /// Done: the command finished (past the blend), X at its end, the axes at their targets.
     fn idle(&self, _dda: &Dda) -> bool {
         let Some(run) = &self.run else { return true };

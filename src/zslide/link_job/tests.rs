@@ -118,6 +118,8 @@ struct Rig {
     job: ZJob,
     sim: SimSpindle,
     enc: QuadratureEncoder,
+    /// The spindle's speed per tick is the scenario's shifted right by this: a faster tick.
+    tick_shift: u32,
 }
 
 impl Rig {
@@ -129,7 +131,7 @@ impl Rig {
         job.install(t).unwrap();
         let sim = SimSpindle::new(0x4000_0000);
         let enc = QuadratureEncoder::new(sc::encoder_config(), sim.encoder(sc::CPR).0).unwrap();
-        Rig { m, dda, job, sim, enc }
+        Rig { m, dda, job, sim, enc, tick_shift: 0 }
     }
 
     /// One firmware tick with full ticks only: spindle, sense, inputs (the job's faults),
@@ -155,7 +157,7 @@ impl Rig {
     }
 
     fn sense(&mut self, t: u32, index_lost: bool) {
-        self.sim.advance(sc::spindle_speed_at(t));
+        self.sim.advance(sc::spindle_speed_at(t) >> self.tick_shift);
         let (c, i) = self.sim.encoder(sc::CPR);
         self.enc.update(c, if index_lost { None } else { i });
         self.job.sense_from(&self.enc);
@@ -171,7 +173,13 @@ impl Rig {
     }
 
     fn start(&mut self) {
-        self.job.start(&spec(), sc::TICK_HZ).unwrap();
+        self.start_at(sc::TICK_HZ);
+    }
+
+    /// Started at `tick_hz` (the generator's update period follows it), with the spindle's speed
+    /// per tick set to match from the first tick ([`Rig::tick_shift`]).
+    fn start_at(&mut self, tick_hz: u32) {
+        self.job.start(&spec(), tick_hz).unwrap();
         self.m.command(MachineCommand::StartZ, &mut self.dda).unwrap();
     }
 }
@@ -424,4 +432,32 @@ fn a_z_job_fault_on_a_step_only_tick_freezes_the_command_at_once_and_latches_wit
         latched_fast >= latched_full && latched_fast < latched_full + u32::from(SUPERVISE_TICKS)
     );
     assert_eq!(r.m.state(), MachineState::Fault);
+}
+
+#[test]
+fn full_ticks_keep_off_the_generators_heavy_ticks() {
+    // The default 100 kHz tick: the scenario's spindle at half its speed per tick.
+    let mut r = Rig::new();
+    r.tick_shift = 1;
+    let (mut full, mut on_heavy, mut job_ticks) = (0u32, 0u32, 0u32);
+    for t in 0..sc::RUN_TICKS {
+        if t == sc::ENGAGE_TICK {
+            r.start_at(2 * sc::TICK_HZ);
+        }
+        let running = r.m.z_job();
+        let (shift, phase) = r.job.run.as_ref().map_or((0, 0), |z| (z.update_shift, z.update_phase));
+        let (_, was_step_only) = r.tick_step_only(t, false);
+        // The job's first full tick (its start's) may fall anywhere; the machine aligns after it.
+        if running && job_ticks > u32::from(SUPERVISE_TICKS) {
+            assert_eq!(shift, 2, "100 kHz: an update every 4 ticks");
+            let mask = (1u8 << shift) - 1;
+            if !was_step_only {
+                full += 1;
+                on_heavy += u32::from(phase == 0 || phase == mask);
+            }
+        }
+        job_ticks += u32::from(running);
+    }
+    assert!(full > job_ticks / u32::from(SUPERVISE_TICKS) / 2, "{full} full ticks");
+    assert_eq!(on_heavy, 0, "{on_heavy} of {full} full ticks ran beside an update");
 }

@@ -498,7 +498,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
                 vec![s("fourier"), s("run")],
                 &[
                     "--rpm", "360", "--x-end", "0.02", "--feed", "0.1", "--blend", "0.005",
-                    "--output", "steps",
+                    "--output", "steps", "--tick-hz", "100000",
                 ],
             ),
             max_ticks: None,
