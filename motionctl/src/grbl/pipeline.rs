@@ -80,8 +80,7 @@ impl Pipeline {
         self.dirty = false;
         self.pending_moves = 0;
         self.out.clear();
-        self.pos_steps = *steps;
-        self.pos_mm = self.spm.iter().zip(steps).map(|(s, p)| *p as f64 / s).collect();
+        self.moved_to(steps);
     }
 
     /// Segments waiting for the link.

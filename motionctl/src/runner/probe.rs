@@ -48,9 +48,9 @@ pub fn probe_outcome(
 ) -> ProbeOutcome {
     let mut outcome =
         ProbeOutcome { tripped, trip_steps: [0; MAX_AXES], rest_steps: [0; MAX_AXES] };
-    for i in 0..n_axes.min(MAX_AXES) {
-        outcome.trip_steps[i] = st.probe_steps[i] - origin[i];
-        outcome.rest_steps[i] = st.positions[i] - origin[i];
+    for (i, o) in origin.iter().enumerate().take(n_axes) {
+        outcome.trip_steps[i] = st.probe_steps[i] - o;
+        outcome.rest_steps[i] = st.positions[i] - o;
     }
     outcome
 }

@@ -131,6 +131,25 @@ fn session(surface: Option<SimProbe>, script: impl FnOnce(&mut Sender)) {
     script(&mut sender);
 }
 
+/// Polls until idle: the machine must stand at `mpos` (mm, as the report prints it).
+fn idle_at(r: &mut Sender, mpos: &str) {
+    let st = r.until_idle();
+    assert!(st.starts_with(&format!("<Idle|MPos:{mpos}|")), "{st}");
+}
+
+/// `ALARM:n` and the `[MSG:]` naming the board's `fault`.
+fn alarm(r: &mut Sender, n: u8, fault: &str) {
+    r.expect(&format!("ALARM:{n}"));
+    let msg = r.line();
+    assert!(msg.starts_with(&format!("[MSG:board fault {fault}")), "{msg}");
+}
+
+fn unlock(r: &mut Sender) {
+    r.send("$X\n");
+    r.expect("[MSG:Caution: Unlocked]");
+    r.expect("ok");
+}
+
 /// `$#`: its lines up to `ok`.
 fn parameters(r: &mut Sender) -> Vec<String> {
     r.send("$#\n");
@@ -153,14 +172,12 @@ fn probe_moves_report_their_contact_and_the_program_goes_on_from_there() {
         r.send("G38.2 Z-10 F100\n");
         r.expect("[PRB:0.000,0.000,-3.000:1]");
         r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:0.000,0.000,-3.000|"), "{st}");
+        idle_at(r, "0.000,0.000,-3.000");
         // The parser stands where the probe stopped: an incremental move goes from there.
         r.send("G91 G0 Z1\nG90\n");
         r.expect("ok");
         r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:0.000,0.000,-2.000|"), "{st}");
+        idle_at(r, "0.000,0.000,-2.000");
         let p = parameters(r);
         assert_eq!(p.len(), 11, "{p:?}");
         assert_eq!(p.last().unwrap(), "[PRB:0.000,0.000,-3.000:1]", "{p:?}");
@@ -169,36 +186,25 @@ fn probe_moves_report_their_contact_and_the_program_goes_on_from_there() {
         r.send("G38.3 Z5 F300\n");
         r.expect("[PRB:0.000,0.000,5.000:0]");
         r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:0.000,0.000,5.000|"), "{st}");
+        idle_at(r, "0.000,0.000,5.000");
 
         // G38.2 along X, over the surface: no contact is ALARM:5, locked until $X.
         r.send("G38.2 X5 F600\n");
-        r.expect("ALARM:5");
-        let msg = r.line();
-        assert!(msg.starts_with("[MSG:board fault ProbeFail"), "{msg}");
+        alarm(r, 5, "ProbeFail");
         r.expect("[PRB:0.000,0.000,5.000:0]");
         r.expect("ok");
         r.send("G0 X0\n");
         r.expect("error:9");
-        r.send("$X\n");
-        r.expect("[MSG:Caution: Unlocked]");
-        r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:5.000,0.000,5.000|"), "{st}");
+        unlock(r);
+        idle_at(r, "5.000,0.000,5.000");
 
         // Already in contact: ALARM:4, nothing moves, no probe result.
         r.send("G0 Z-3.5\nG38.2 Z-5 F100\n");
         r.expect("ok");
-        r.expect("ALARM:4");
-        let msg = r.line();
-        assert!(msg.starts_with("[MSG:board fault ProbeInitial"), "{msg}");
+        alarm(r, 4, "ProbeInitial");
         r.expect("ok");
-        r.send("$X\n");
-        r.expect("[MSG:Caution: Unlocked]");
-        r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:5.000,0.000,-3.500|"), "{st}");
+        unlock(r);
+        idle_at(r, "5.000,0.000,-3.500");
         assert_eq!(parameters(r).last().unwrap(), "[PRB:0.000,0.000,5.000:0]");
 
         // A soft reset forgets the probe position, as grbl's does.
@@ -213,17 +219,24 @@ fn probe_moves_report_their_contact_and_the_program_goes_on_from_there() {
 fn without_a_surface_g38_2_alarms_and_unlocks_with_dollar_x() {
     session(None, |r| {
         r.send("G38.2 Z-10 F100\n");
-        r.expect("ALARM:5");
-        r.line();
+        alarm(r, 5, "ProbeFail");
         r.expect("[PRB:0.000,0.000,0.000:0]");
         r.expect("ok");
-        r.send("$X\n");
-        r.expect("[MSG:Caution: Unlocked]");
-        r.expect("ok");
+        unlock(r);
         // The rest goes on from where the move ended.
         r.send("G91 G0 Z2\n");
         r.expect("ok");
-        let st = r.until_idle();
-        assert!(st.starts_with("<Idle|MPos:0.000,0.000,-8.000|"), "{st}");
+        idle_at(r, "0.000,0.000,-8.000");
+
+        // Check mode: the probe block is checked and answered, nothing moves, no result.
+        r.send("$C\nG90 G38.2 Z-20 F100\n");
+        for want in ["[MSG:Enabled]", "ok", "ok"] {
+            r.expect(want);
+        }
+        r.send("$C\n");
+        for want in ["[MSG:Disabled]", "ok", "", "Grbl 1.1h ['$' for help]"] {
+            r.expect(want);
+        }
+        idle_at(r, "0.000,0.000,-8.000");
     });
 }
