@@ -3,7 +3,8 @@
 //! bridge's host test made under target/) streams a short corpus file through the
 //! pseudo-terminal with a feed hold and resume, a feed override, a jog and its cancel, every
 //! line acknowledged, and the machine must end at the file's programmed end point; then from the
-//! same port `$MILL=case_a_milling.toml` runs Case A as a force job (QEMU's simulated plant
+//! same port a G38.2 probe move onto the simulated surface (`--sim-probe`) must answer its
+//! `[PRB:]` at the surface before its `ok`, and `$MILL=case_a_milling.toml` runs Case A as a force job (QEMU's simulated plant
 //! cuts), answered with its summary and `ok`, the final X the move's; `$TURN=` a Z-slide job on
 //! the simulated spindle and `$WIRE=` two segments of the circle -> complex wire job, each
 //! answered with its end equal to the host model's and its checks ok. Checked here from the
@@ -33,6 +34,12 @@ const JOB_TIMEOUT: Duration = Duration::from_secs(120);
 /// The turning and wire jobs (the wire job file relative to `--jobs`).
 const TURN_LINE: &str = "$TURN=builtin 360 0:6.35 25.4";
 const WIRE_LINE: &str = "$WIRE=wire_job.toml 1..3";
+/// The simulated probe surface, and the probe move onto it from machine Z 0.
+const PROBE_SURFACE: &str = "z=-3";
+const PROBE_LINE: &str = "G91 G38.2 Z-10 F300";
+const PROBE_Z_MM: f64 = -3.0;
+/// The board latches the trip once its debounced input changes: a few steps past the surface.
+const PROBE_TOLERANCE_MM: f64 = 0.05;
 
 /// The bridge, killed (with its QEMU) when dropped.
 struct Bridge(Child);
@@ -134,6 +141,7 @@ pub fn test(root: &Path) -> Result<()> {
         .arg("--pty")
         .arg(&port)
         .args(["--jobs", JOBS])
+        .args(["--sim-probe", PROBE_SURFACE])
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::inherit())
@@ -171,6 +179,15 @@ pub fn test(root: &Path) -> Result<()> {
 
     let t1 = Instant::now();
     let mut tty = Port::open(&port)?;
+    // From machine Z 0 down onto the surface, then back to the file's end for the jobs after.
+    tty.capability("G90 G53 G0 Z0")?;
+    let lines = tty.capability(PROBE_LINE)?;
+    let Some(prb) = msg_in(&lines, "[PRB:").filter(|l| tripped_at_z(l, PROBE_Z_MM)) else {
+        bail!("{PROBE_LINE} on QEMU: expected [PRB:x,y,{PROBE_Z_MM}:1] before ok, got {lines:#?}");
+    };
+    tty.capability(&format!("G90 G53 G0 X{} Y{} Z{}", end[0], end[1], end[2]))?;
+    println!("  grbl on QEMU: {PROBE_LINE}: {prb}; {:.1} s wall", t1.elapsed().as_secs_f64());
+    let t1 = Instant::now();
     let lines = tty.capability(&format!("$MILL={MILL_JOB}"))?;
     let msg = |prefix: &str| msg_in(&lines, prefix);
     let job =
@@ -199,6 +216,15 @@ pub fn test(root: &Path) -> Result<()> {
         println!("  grbl on QEMU: {line}: {end}; {:.1} s wall", t.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// `[PRB:x,y,z:1]` with z within [`PROBE_TOLERANCE_MM`] of `z_mm`.
+fn tripped_at_z(prb: &str, z_mm: f64) -> bool {
+    let Some(fields) = prb.strip_prefix("[PRB:").and_then(|l| l.strip_suffix(":1]")) else {
+        return false;
+    };
+    let z = fields.split(',').nth(2).and_then(|z| z.parse::<f64>().ok());
+    z.is_some_and(|z| (z - z_mm).abs() <= PROBE_TOLERANCE_MM)
 }
 
 /// The first of `lines` that starts with `prefix`.

@@ -103,6 +103,14 @@ impl<S: LineSource> Interpreter<S> {
         self.events.pop_front()
     }
 
+    /// Events of the lines read so far not yet taken: [`Interpreter::next_event`] gives them
+    /// without reading on. A host that runs a probe move takes the rest of the probe's line
+    /// while this is true and stops there, so the next line is read (and the probe result
+    /// taken in, rs274's `read_inputs`) only once it has set the board's result.
+    pub fn has_queued_events(&self) -> bool {
+        !self.events.is_empty()
+    }
+
     /// Errors reported so far.
     pub fn errors(&self) -> usize {
         self.errors

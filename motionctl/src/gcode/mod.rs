@@ -21,7 +21,7 @@ use motion::protocol::{ProgramOutputs, SpindleDir};
 use motion_gcode::canon::{Canon, Pos};
 use motion_gcode::frame::{Frame, Motion};
 use motion_gcode::source::{LineSource, SeekSource};
-use motion_gcode::{curves, Diagnostic, Event, Interpreter, Options};
+use motion_gcode::{curves, Diagnostic, Event, Interpreter, Options, ProbeResult};
 use std::fmt;
 use std::io::Cursor;
 use std::path::Path;
@@ -184,6 +184,37 @@ impl<'a> Converter<'a> {
     /// Which G-code axis (0..6) drives each machine axis.
     pub fn axis_map(&self) -> &[Option<usize>] {
         &self.map
+    }
+
+    /// A probe move ended on the board, where its machine axes latched (`trip_mm`) and came to
+    /// rest (`rest_mm`), machine mm per machine axis: the frame moves to the rest position, and
+    /// the result is what the interpreter is told, as LinuxCNC's is (#5061..#5066 where it
+    /// tripped, or the move's end when it did not, #5070 whether it did, in the program's
+    /// coordinates and units). Shared by `run` and the grbl bridge.
+    pub fn probe_result(&mut self, tripped: bool, trip_mm: &[f64], rest_mm: &[f64]) -> ProbeResult {
+        let machine_pos = |mm: &[f64], frame_pos: &Pos| {
+            let mut p = *frame_pos;
+            for (g, v) in self.map.iter().zip(mm) {
+                if let Some(g) = g {
+                    p[*g] = *v;
+                }
+            }
+            p
+        };
+        let rest = machine_pos(rest_mm, &self.frame.position);
+        let probe = if tripped {
+            machine_pos(trip_mm, &self.frame.position)
+        } else {
+            // rs274's rule: no trip leaves the probe position at the programmed end.
+            self.frame.position
+        };
+        let result = ProbeResult {
+            probe_position: self.frame.to_program(&probe),
+            tripped,
+            end_position: self.frame.to_program(&rest),
+        };
+        self.frame.position = rest;
+        result
     }
 
     fn note(&mut self, line: u32, m: impl Into<String>) {

@@ -68,6 +68,11 @@ pub struct GrblArgs {
     /// With --sim: machine time per wall time of the simulated board.
     #[arg(long, hide = true, value_name = "X", default_value_t = 1.0)]
     pub sim_speed: f64,
+    /// A simulated board's probe surface for G38.x probe moves (--sim, --qemu), as `run
+    /// --sim-probe` takes it: the probe touches while a machine axis is at or below (`z=-3.2`
+    /// or `z<=-3.2`) or at or above (`x>=40`) that many mm, machine coordinates.
+    #[arg(long, value_name = "AXIS=MM")]
+    pub sim_probe: Option<crate::board_link::SimProbeSpec>,
 }
 
 /// The machine as the board's config: steps-space config and the wire config with the axes'
@@ -116,6 +121,10 @@ pub fn run(args: GrblArgs) -> Result<()> {
         );
     }
     let (cfg, wire) = board_config(&machine)?;
+    // A bad --sim-probe is said before any link is opened (serve sets it once connected).
+    if let Some(p) = &args.sim_probe {
+        p.resolve(&machine)?;
+    }
     let machine: &'static job::Machine = Box::leak(Box::new(machine));
     let persist = session::Persist {
         machine_path: args.machine.clone(),
@@ -176,6 +185,12 @@ fn serve(
             }
         }
     };
+    if let Some(sim) = args.sim_probe.as_ref().map(|p| p.resolve(machine)).transpose()? {
+        // Machine coordinates: the surface stays where it is whatever the bridge started at.
+        let spm: Vec<f64> = machine.axes.iter().map(|a| a.steps_per_mm).collect();
+        runner::set_sim_probe(&mut s, sim, &[0; motion::MAX_AXES], &spm)
+            .map_err(anyhow::Error::msg)?;
+    }
     runner::ask(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_MS }, "SetStatusPeriod")?;
     s.streaming = true;
     let latest = runner::ask_status(&mut s)?;

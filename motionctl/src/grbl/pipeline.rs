@@ -8,6 +8,7 @@
 
 use crate::convert::{feed_hz, rapid_feed_hz};
 use crate::job::{Feed, Machine};
+use motion::machine::ProbeKind;
 use motion::planner::{Move, PlanError, Planner};
 use motion::protocol::ProgramOutputs;
 use motion::{MachineConfig, Segment, MAX_AXES};
@@ -24,6 +25,11 @@ pub enum Out {
     Pause,
     /// G4: wait this long once the motion before it is done.
     Dwell(f64),
+    /// G38.x: once the motion before it is done, arm the board for a probe move of this kind;
+    /// the probe move's segments follow, then [`Out::ProbeEnd`].
+    Probe(ProbeKind),
+    /// The probe move's segments are all given: start them alone and wait for its result.
+    ProbeEnd,
 }
 
 /// A move the pipeline refused.
@@ -74,8 +80,7 @@ impl Pipeline {
         self.dirty = false;
         self.pending_moves = 0;
         self.out.clear();
-        self.pos_steps = *steps;
-        self.pos_mm = self.spm.iter().zip(steps).map(|(s, p)| *p as f64 / s).collect();
+        self.moved_to(steps);
     }
 
     /// Segments waiting for the link.
@@ -204,6 +209,39 @@ impl Pipeline {
         }
     }
 
+    /// A probe move to `target`: the motion before it ends at rest, then [`Out::Probe`], the
+    /// move planned alone from rest to rest, and [`Out::ProbeEnd`]. A move of no steps is
+    /// refused, as grbl refuses a probe target where the machine is: nothing to probe along.
+    pub fn push_probe(
+        &mut self,
+        target: &[Option<f64>],
+        feed: Feed,
+        kind: ProbeKind,
+    ) -> Result<(), MoveError> {
+        self.push_event(Out::Probe(kind));
+        let refused = match self.push_move(target, feed, false) {
+            Ok(()) if !self.dirty => Some(MoveError::Invalid(
+                "a probe move to where the machine is: nothing to probe along".into(),
+            )),
+            Ok(()) => None,
+            Err(e) => Some(e),
+        };
+        if let Some(e) = refused {
+            self.out.pop_back();
+            return Err(e);
+        }
+        self.flush();
+        self.out.push_back(Out::ProbeEnd);
+        Ok(())
+    }
+
+    /// The machine came to rest at `steps`, short of where the queued motion ends (a probe move
+    /// stopped at its trip); nothing may be planned past it yet.
+    pub fn moved_to(&mut self, steps: &[i64; MAX_AXES]) {
+        self.pos_steps = *steps;
+        self.pos_mm = self.spm.iter().zip(steps).map(|(s, p)| *p as f64 / s).collect();
+    }
+
     /// An event after the motion so far (which ends at rest first).
     pub fn push_event(&mut self, e: Out) {
         self.flush();
@@ -252,6 +290,38 @@ mod tests {
         let net = crate::plan::net_steps(&segs);
         assert_eq!(&net[..3], &[3200, 1600, 0]);
         assert_eq!(p.pos_steps[..3], [3200, 1600, 0]);
+    }
+
+    #[test]
+    fn a_probe_move_is_planned_alone_between_its_events() {
+        let mut p = pipeline();
+        p.push_move(&[Some(5.0), None, None], Feed::Rapid, false).unwrap();
+        let kind = ProbeKind::Toward;
+        p.push_probe(&[None, None, Some(-10.0)], Feed::MmPerMin(100.0), kind).unwrap();
+        assert!(!p.dirty, "nothing waits in the planner");
+        let at = |o: Out| p.out.iter().position(|x| *x == o).unwrap();
+        let (arm, end) = (at(Out::Probe(kind)), at(Out::ProbeEnd));
+        assert_eq!(end, p.out.len() - 1);
+        let z_steps: i64 = p.out.range(arm..end).map(|o| seg_steps(o)[2]).sum();
+        let x_steps: i64 = p.out.range(arm..end).map(|o| seg_steps(o)[0]).sum();
+        assert_eq!((x_steps, z_steps), (0, -4000), "the probe move's segments, Z only");
+        assert!(p.out.range(..arm).all(|o| seg_steps(o)[2] == 0), "the rapid before it");
+        assert_eq!(p.pos_steps[..3], [400, 0, -4000]);
+        // Stopped at its trip: the next move is planned from there.
+        p.moved_to(&[400, 0, -1200, 0, 0, 0]);
+        assert_eq!(p.pos_mm, vec![5.0, 0.0, -3.0]);
+        // Nowhere to go is refused, and leaves nothing queued.
+        let n = p.out.len();
+        let e = p.push_probe(&[None, None, Some(-3.0)], Feed::MmPerMin(100.0), kind).unwrap_err();
+        assert!(matches!(e, MoveError::Invalid(_)), "{e:?}");
+        assert_eq!(p.out.len(), n);
+    }
+
+    fn seg_steps(o: &Out) -> [i64; MAX_AXES] {
+        match o {
+            Out::Segment(s) => s.steps.map(i64::from),
+            _ => [0; MAX_AXES],
+        }
     }
 
     #[test]

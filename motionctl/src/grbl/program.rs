@@ -78,6 +78,9 @@ pub struct Program {
     conv: Converter<'static>,
     queue: Rc<RefCell<VecDeque<String>>>,
     markers: Rc<RefCell<u32>>,
+    /// The last block was a probe move whose result the interpreter has not been told
+    /// ([`Program::probed`]); it reads it with the next line.
+    probe_pending: bool,
 }
 
 impl Program {
@@ -111,6 +114,7 @@ impl Program {
             conv: Converter::new(machine),
             queue,
             markers,
+            probe_pending: false,
         };
         p.sync(at);
         p
@@ -192,8 +196,34 @@ impl Program {
         out
     }
 
-    /// One program line: its steps, or the first error (nothing of the block is kept).
+    /// The probe move of the last block ended on the board: whether it tripped, where the
+    /// machine axes latched (`trip_mm`) and came to rest (`rest_mm`), machine mm per machine
+    /// axis. The interpreter takes it in with the next line (#5061..#5070, and the rest of the
+    /// program continues from the rest position), as `motionctl run` tells it.
+    pub fn probed(&mut self, tripped: bool, trip_mm: &[f64], rest_mm: &[f64]) {
+        let result = self.conv.probe_result(tripped, trip_mm, rest_mm);
+        self.interp.world_mut().set_probe_result(result);
+        self.probe_pending = false;
+    }
+
+    /// A probe move whose result never came (refused, check mode, the machine stopped): no trip,
+    /// the machine where the converter follows it, so the next line reads a result of the
+    /// board's rather than the interpreter's own model of one.
+    fn settle_probe(&mut self) {
+        if !self.probe_pending {
+            return;
+        }
+        let frame = self.conv.frame.position;
+        let at: Vec<f64> =
+            self.conv.axis_map().iter().map(|g| g.map_or(0.0, |g| frame[g])).collect();
+        self.probed(false, &at, &at);
+    }
+
+    /// One program line: its steps, or the first error (nothing of the block is kept). After a
+    /// probe move the interpreter stops at the end of its block, before the next line, until
+    /// [`Program::probed`] (or the next line, which takes it as no trip).
     pub fn run(&mut self, line: &str) -> Result<Block, BlockError> {
+        self.settle_probe();
         if self.ended() {
             return Err(BlockError { code: 20, message: "program ended".into() });
         }
@@ -221,6 +251,7 @@ impl Program {
                     if matches!(&c.canon, Canon::Comment(m) if m == MARKER) {
                         break;
                     }
+                    self.probe_pending |= matches!(c.canon, Canon::StraightProbe { .. });
                     calls.push(c);
                 }
                 Event::Diagnostic(d) if d.is_error() => {
@@ -230,6 +261,11 @@ impl Program {
                     });
                 }
                 Event::Diagnostic(_) => {}
+            }
+            // The rest of a probe move's block, without reading on: the next line must wait
+            // for the board's result.
+            if self.probe_pending && !self.interp.has_queued_events() {
+                break;
             }
         }
         self.queue.borrow_mut().clear();
@@ -243,16 +279,6 @@ impl Program {
                 code: super::protocol::error::UNSUPPORTED_COMMAND,
                 message: m,
             })?;
-            // The bridge's own pipeline has no probe step yet: refused whole, as before
-            // `motionctl run` drove probe moves.
-            if loaded.items.iter().any(|i| matches!(i, Item::Probe { .. })) {
-                return Err(BlockError {
-                    code: super::protocol::error::UNSUPPORTED_COMMAND,
-                    message: "G38.x probing is not supported over the grbl bridge yet \
-                              (`motionctl run FILE` drives probe moves)"
-                        .into(),
-                });
-            }
             if let Canon::Message(m) = &c.canon {
                 block.messages.push(m.clone());
             }
@@ -316,9 +342,38 @@ mod tests {
         // Still usable after errors.
         let b = p.run("X1").unwrap();
         assert_eq!(target(&b.steps[0]), vec![Some(12.0), Some(5.0), Some(0.0)]);
-        let e = p.run("G38.2 Z-5 F100").unwrap_err();
-        assert_eq!(e.code, 20);
-        assert!(e.message.contains("G38.x probing is not supported over the grbl bridge"));
+    }
+
+    fn debug(p: &mut Program, words: &str) -> Vec<f64> {
+        let b = p.run(&format!("(debug,{words})")).unwrap();
+        b.messages[0].split_whitespace().map(|v| v.parse().unwrap()).collect()
+    }
+
+    #[test]
+    fn a_probe_block_waits_for_the_boards_result_and_the_program_goes_on_from_it() {
+        let m = machine();
+        let mut p = Program::new(m, &[0.0; 3]);
+        p.run("G10 L2 P1 Z1").unwrap();
+        let b = p.run("G38.2 Z-10 F100").unwrap();
+        match &b.steps[..] {
+            [Step::Item(Item::Probe { kind, mv })] => {
+                assert_eq!(*kind, motion::machine::ProbeKind::TowardError);
+                assert_eq!(mv.target, Target::Absolute(vec![Some(0.0), Some(0.0), Some(-9.0)]));
+            }
+            other => panic!("not one probe move: {other:?}"),
+        }
+        // Latched at machine Z -3, stopped 0.1 mm further on.
+        p.probed(true, &[0.0, 0.0, -3.0], &[0.0, 0.0, -3.1]);
+        let v = debug(&mut p, "#5063 #5070 #5422");
+        assert!((v[0] + 4.0).abs() < 1e-9 && v[1] == 1.0 && (v[2] + 4.1).abs() < 1e-9, "{v:?}");
+        let b = p.run("G91 G0 Z2").unwrap();
+        let z = target(&b.steps[0])[2].unwrap();
+        assert!((z + 1.1).abs() < 1e-9, "from the rest position: {z}");
+
+        // No result told (the move refused, or check mode): no trip, the programmed end.
+        p.run("G90 G38.3 X5 F100").unwrap();
+        let v = debug(&mut p, "#5061 #5070 #5420");
+        assert_eq!(v, vec![5.0, 0.0, 5.0]);
     }
 
     #[test]

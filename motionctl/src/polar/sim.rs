@@ -7,8 +7,8 @@ use crate::noise::NoiseStats;
 use crate::sim_board::SimBoard;
 use crate::transport::Transport;
 use motion::protocol::{
-    BoardLink, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SOFT_LIMITS,
-    CAP_STATUS_STREAM, CAP_WIRE_JOB,
+    BoardLink, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE, CAP_SIM_INPUTS,
+    CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
 use std::io;
 use std::time::{Duration, Instant};
@@ -38,11 +38,13 @@ impl EventSim {
     }
 
     /// The same board with its segments too at `speed` times real time (the grbl bridge's
-    /// `--sim`: G-code, event jobs and wire jobs on one board; `SimTarget` runs an armed wire
-    /// job's segments as plain ones, without stall handling).
+    /// `--sim`: G-code with probe moves against the surface `--sim-probe` sets, event jobs and
+    /// wire jobs on one board; `SimTarget` runs an armed wire job's segments as plain ones,
+    /// without stall handling).
     pub fn scaled(capacity: u16, speed: f64) -> Self {
         let mut board = SimBoard::new(capacity, speed);
-        board.board = BoardLink::new("motionctl-sim", CAPS | CAP_WIRE_JOB);
+        let caps = CAPS | CAP_WIRE_JOB | CAP_PROBE | CAP_SIM_INPUTS;
+        board.board = BoardLink::new("motionctl-sim", caps);
         EventSim { board, last: Instant::now(), owed_ticks: 0.0, speed }
     }
 

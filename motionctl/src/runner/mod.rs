@@ -38,6 +38,7 @@ pub use board::{
 pub use hook::{JobControl, JobHook, Steer, Unattended};
 pub use options::{RunOptions, SimProbe, DEFAULT_STATUS_PERIOD_MS};
 pub use outputs::{OutputSource, Outputs, Tagged};
+pub use probe::{probe_ended_as, probe_outcome, set_sim_probe};
 pub use report::{counters_text, ProbeOutcome, Probed, RunError, RunReport};
 pub use stream::{run, run_outputs, HEARTBEAT_EVERY};
 pub use watch::{JobWatch, Overdue};

@@ -5,15 +5,74 @@
 //! rest from there. The board drops what was left of the move after a trip: those segments are
 //! never done, and the order hash is checked over the ones that were.
 
-use super::board::seq_at_or_after;
+//!
+//! The pieces the grbl bridge's probe step shares are free functions here: reading how a probe
+//! move ended from the board's status ([`probe_ended_as`], [`probe_outcome`]) and setting a
+//! simulated board's probe surface ([`set_sim_probe`]).
+
+use super::board::{ask, seq_at_or_after};
 use super::options::SimProbe;
 use super::report::{err, ProbeOutcome, Probed, RunError};
 use super::stream::{query, Probing, Stream};
+use crate::link::Session;
 use crate::plan::Output;
 use motion::machine::{MachineState, ProbeKind, ProbePhase};
-use motion::protocol::{RequestBody, SimProbeSurface, SimRequest};
+use motion::protocol::{RequestBody, SimProbeSurface, SimRequest, Status};
 use motion::segment::order_hash;
 use motion::MAX_AXES;
+
+/// How the probe move started by the `Start` sent as `start_seq` ended, from a status of the
+/// board: `Ok(None)` while it has not (the status is older than the `Start`, the board is not
+/// back in `Ready` with an empty queue, or the move is still armed or moving), `Ok(Some(tripped))`
+/// once it has, `Err(phase)` when the board ended it some other way (refused, dropped).
+pub fn probe_ended_as(st: &Status, start_seq: u32) -> Result<Option<bool>, ProbePhase> {
+    let after_start = seq_at_or_after(st.next_seq, start_seq.wrapping_add(1));
+    if !after_start || st.machine != MachineState::Ready || st.queue_depth != 0 {
+        return Ok(None);
+    }
+    match ProbePhase::from_u8(st.probe_phase) {
+        ProbePhase::Tripped => Ok(Some(true)),
+        ProbePhase::Missed => Ok(Some(false)),
+        ProbePhase::Armed | ProbePhase::Moving => Ok(None),
+        other => Err(other),
+    }
+}
+
+/// Where a probe move that ended as `tripped` latched and left the first `n_axes` axes, steps
+/// from `origin` (a run's starting positions; zeros for the board's own machine positions).
+pub fn probe_outcome(
+    st: &Status,
+    origin: &[i64; MAX_AXES],
+    n_axes: usize,
+    tripped: bool,
+) -> ProbeOutcome {
+    let mut outcome =
+        ProbeOutcome { tripped, trip_steps: [0; MAX_AXES], rest_steps: [0; MAX_AXES] };
+    for (i, o) in origin.iter().enumerate().take(n_axes) {
+        outcome.trip_steps[i] = st.probe_steps[i] - o;
+        outcome.rest_steps[i] = st.positions[i] - o;
+    }
+    outcome
+}
+
+/// Sets a simulated board's probe surface (`--sim-probe`): `sim.at_mm` counts from
+/// `origin_steps` (a run's starting positions; zeros for machine coordinates). The error says
+/// what is wrong (no such axis, a board that is not simulated).
+pub fn set_sim_probe(
+    s: &mut Session,
+    sim: SimProbe,
+    origin_steps: &[i64; MAX_AXES],
+    steps_per_mm: &[f64],
+) -> Result<(), String> {
+    let Some(spm) = steps_per_mm.get(sim.axis).copied() else {
+        return Err(format!("--sim-probe: the machine has no axis {}", sim.axis));
+    };
+    let at_steps = origin_steps[sim.axis] + (sim.at_mm * spm).round() as i64;
+    let surface = SimProbeSurface { axis: sim.axis as u8, at_steps, below: sim.below };
+    ask(s, RequestBody::Sim(SimRequest::Probe { surface: Some(surface) }), "Sim(Probe)")
+        .map(drop)
+        .map_err(|e| format!("--sim-probe needs a simulated board (--sim or --qemu): {e}"))
+}
 
 impl Stream<'_, '_> {
     /// Arms the board for a probe move once everything before it is done and the board is at
@@ -77,28 +136,18 @@ impl Stream<'_, '_> {
         };
         let Some(start) = p.start_seq else { return Ok(false) };
         let st = &self.latest;
-        let after_start = seq_at_or_after(st.next_seq, start.wrapping_add(1));
-        if !after_start || st.machine != MachineState::Ready || st.queue_depth != 0 {
-            return Ok(false);
-        }
         let at = self.outputs.at(p.line);
-        let tripped = match ProbePhase::from_u8(st.probe_phase) {
-            ProbePhase::Tripped => true,
-            ProbePhase::Missed => false,
-            ProbePhase::Armed | ProbePhase::Moving => return Ok(false),
-            other => {
+        let tripped = match probe_ended_as(st, start) {
+            Ok(Some(tripped)) => tripped,
+            Ok(None) => return Ok(false),
+            Err(other) => {
                 return Err(err(format!(
                     "{at}{} probe move: the board ended it as {other:?}",
                     p.kind.gcode()
                 )))
             }
         };
-        let mut outcome =
-            ProbeOutcome { tripped, trip_steps: [0; MAX_AXES], rest_steps: [0; MAX_AXES] };
-        for i in 0..self.n_axes {
-            outcome.trip_steps[i] = st.probe_steps[i] - self.base.positions[i];
-            outcome.rest_steps[i] = st.positions[i] - self.base.positions[i];
-        }
+        let outcome = probe_outcome(st, &self.base.positions, self.n_axes, tripped);
         // The segments done during the probe move are its first ones, in order; the rest were
         // dropped at the trip and never will be.
         let done = self.job_done(st).saturating_sub(p.done_at_arm) as usize;
@@ -150,17 +199,6 @@ impl Stream<'_, '_> {
         sim: SimProbe,
         steps_per_mm: &[f64],
     ) -> Result<(), RunError> {
-        let Some(spm) = steps_per_mm.get(sim.axis).copied() else {
-            return Err(err(format!("--sim-probe: the machine has no axis {}", sim.axis)));
-        };
-        let at_steps = self.base.positions[sim.axis] + (sim.at_mm * spm).round() as i64;
-        let surface = SimProbeSurface { axis: sim.axis as u8, at_steps, below: sim.below };
-        query(
-            &mut self.s,
-            RequestBody::Sim(SimRequest::Probe { surface: Some(surface) }),
-            "Sim(Probe)",
-        )
-        .map_err(|e| err(format!("--sim-probe needs a simulated board (--sim or --qemu): {e}")))?;
-        Ok(())
+        set_sim_probe(&mut self.s, sim, &self.base.positions, steps_per_mm).map_err(err)
     }
 }

@@ -17,9 +17,8 @@ use crate::job::{Item, Machine, Source};
 use crate::plan::{self, PlanFailure, SimulateError, Stream, Totals};
 use motion::report::Report;
 use motion::MAX_AXES;
-use motion_gcode::canon::Pos;
 use motion_gcode::source::{LineSource, SeekSource};
-use motion_gcode::{Diagnostic, Event, Interpreter, ProbeResult};
+use motion_gcode::{Diagnostic, Event, Interpreter};
 pub use second_pass::outputs;
 use std::fmt;
 use std::fs::File;
@@ -210,30 +209,11 @@ impl<'m, S: LineSource> Items<'m, S> {
     ) {
         let Ok(stepper) = self.stepper.as_mut() else { return };
         stepper.set_position_steps(rest_steps);
-        let spm = stepper.steps_per_mm().to_vec();
-        let machine_mm = |steps: &[i64; MAX_AXES], frame_pos: &Pos| {
-            let mut p = *frame_pos;
-            for (i, g) in self.conv.axis_map().iter().enumerate() {
-                if let (Some(g), Some(spm)) = (g, spm.get(i)) {
-                    p[*g] = steps[i] as f64 / spm;
-                }
-            }
-            p
+        let mm = |steps: &[i64; MAX_AXES]| -> Vec<f64> {
+            stepper.steps_per_mm().iter().zip(steps).map(|(spm, s)| *s as f64 / spm).collect()
         };
-        let rest_mm = machine_mm(rest_steps, &self.conv.frame.position);
-        let probe_mm = if tripped {
-            machine_mm(trip_steps, &self.conv.frame.position)
-        } else {
-            // rs274's rule: no trip leaves the probe position at the programmed end.
-            self.conv.frame.position
-        };
-        let frame = &mut self.conv.frame;
-        let result = ProbeResult {
-            probe_position: frame.to_program(&probe_mm),
-            tripped,
-            end_position: frame.to_program(&rest_mm),
-        };
-        frame.position = rest_mm;
+        let (trip_mm, rest_mm) = (mm(trip_steps), mm(rest_steps));
+        let result = self.conv.probe_result(tripped, &trip_mm, &rest_mm);
         self.interp.world_mut().set_probe_result(result);
     }
 

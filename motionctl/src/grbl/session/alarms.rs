@@ -15,6 +15,7 @@ impl Bridge<'_> {
             return;
         }
         self.fault_alarm(new);
+        self.probe_faulted();
         // The board dropped its queue.
         self.pending.retain(|_, p| !matches!(p, Pending::Batch { .. }));
         self.rebase();

@@ -117,35 +117,25 @@ impl Bridge<'_> {
         if self.prog.ended() {
             self.new_program();
         }
-        let inches = self.settings.flag(settings::REPORT_INCHES);
-        let fmt = |v: &[f64]| -> String {
-            v.iter()
-                .map(|&x| if inches { format!("{:.4}", x / 25.4) } else { format!("{x:.3}") })
-                .collect::<Vec<_>>()
-                .join(",")
-        };
         let gaxis = self.gaxis.clone();
         let mut block = |base: u32| -> Vec<f64> {
             let nums: Vec<u32> = gaxis.iter().map(|&g| base + g as u32).collect();
             self.prog.parameters(&nums)
         };
-        let mut lines = Vec::new();
+        let mut values = Vec::new();
         for (i, name) in ["G54", "G55", "G56", "G57", "G58", "G59"].iter().enumerate() {
-            let v = block(5221 + 20 * i as u32);
-            lines.push(format!("[{name}:{}]", fmt(&v)));
+            values.push((*name, block(5221 + 20 * i as u32)));
         }
-        let g28 = block(5161);
-        let g30 = block(5181);
-        let g92 = block(5211);
-        lines.push(format!("[G28:{}]", fmt(&g28)));
-        lines.push(format!("[G30:{}]", fmt(&g30)));
-        lines.push(format!("[G92:{}]", fmt(&g92)));
+        values.push(("G28", block(5161)));
+        values.push(("G30", block(5181)));
+        values.push(("G92", block(5211)));
         let m = self.prog.modal();
         let k = if m.units == Units::Inches { 25.4 } else { 1.0 };
-        let tlo = m.tool_length_offset[2] * k;
-        lines.push(format!("[TLO:{}]", fmt(&[tlo])));
-        let zeros = vec![0.0; self.gaxis.len()];
-        lines.push(format!("[PRB:{}:0]", fmt(&zeros)));
+        values.push(("TLO", vec![m.tool_length_offset[2] * k]));
+        let mut lines: Vec<String> =
+            values.iter().map(|(name, v)| format!("[{name}:{}]", self.axes_text(v))).collect();
+        // The last probe result, last as grbl prints it.
+        lines.push(self.prb_line());
         for l in lines {
             self.say(&l);
         }

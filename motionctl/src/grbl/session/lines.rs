@@ -15,7 +15,9 @@ const HOST_QUEUE_MAX: usize = 48;
 impl Bridge<'_> {
     pub(super) fn lines(&mut self) -> Result<()> {
         while self.rx.has_line() {
-            if self.motion.queued_segments() > HOST_QUEUE_MAX
+            // As grbl's probe cycle: the next line waits until the probe move has ended.
+            if self.probe.is_some()
+                || self.motion.queued_segments() > HOST_QUEUE_MAX
                 || self.motion.out.len() > 4 * HOST_QUEUE_MAX
             {
                 break;
@@ -43,7 +45,7 @@ impl Bridge<'_> {
             return Ok(());
         }
         match self.gcode(t) {
-            None => self.ok(),
+            None => self.answer("ok".into()),
             Some(n) => self.error(n),
         }
         Ok(())
@@ -66,13 +68,18 @@ impl Bridge<'_> {
         // Every target checked before any is queued: a block runs whole or not at all.
         let mut from = self.motion.pos_mm.clone();
         for s in &block.steps {
-            if let Step::Item(Item::Move(MoveCmd { target: Target::Absolute(t), .. })) = s {
-                let to: Vec<f64> = t.iter().zip(&from).map(|(t, p)| t.unwrap_or(*p)).collect();
-                if let Err(e) = self.motion.check(&from, &to) {
-                    return Some(self.refuse_move(e));
-                }
-                from = to;
+            let (Step::Item(Item::Move(MoveCmd { target: Target::Absolute(t), .. }))
+            | Step::Item(Item::Probe {
+                mv: MoveCmd { target: Target::Absolute(t), .. }, ..
+            })) = s
+            else {
+                continue;
+            };
+            let to: Vec<f64> = t.iter().zip(&from).map(|(t, p)| t.unwrap_or(*p)).collect();
+            if let Err(e) = self.motion.check(&from, &to) {
+                return Some(self.refuse_move(e));
             }
+            from = to;
         }
         for s in block.steps {
             match s {
@@ -84,6 +91,14 @@ impl Bridge<'_> {
                     }
                     if let Err(e) = self.motion.push_move(&t, feed, self.check) {
                         return Some(self.refuse_move(e));
+                    }
+                }
+                Step::Item(Item::Probe {
+                    kind,
+                    mv: MoveCmd { target: Target::Absolute(t), feed, .. },
+                }) => {
+                    if let Some(n) = self.queue_probe(kind, &t, feed) {
+                        return Some(n);
                     }
                 }
                 Step::Item(Item::Move(_)) => {}

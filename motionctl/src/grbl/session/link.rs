@@ -124,6 +124,7 @@ impl Bridge<'_> {
         self.front_events()?;
         self.spindle_stop_step()?;
         self.send_segments()?;
+        self.probe_check_room()?;
         self.reconcile()?;
 
         // Heartbeat.

@@ -13,7 +13,8 @@
 //! and dwells to the board; Hold, Resume, Start), `link` (requests, statuses, answers, the
 //! loop's link step), `stop` (stopping, soft reset, startup lines), `alarms` (faults and
 //! refused moves), `dollar` (`$` commands), `settings_cmds` (commands that change stored
-//! settings), `jog` (`$J=`) and `spindle_stop` (0x9E during a hold).
+//! settings), `jog` (`$J=`), `spindle_stop` (0x9E during a hold) and `probe` (G38.x probe
+//! moves, each run alone with the block's answer after its result).
 
 mod alarms;
 mod capability;
@@ -21,11 +22,14 @@ mod dollar;
 mod jog;
 mod lines;
 mod link;
+mod probe;
 mod realtime;
 mod settings_cmds;
 mod spindle_stop;
 mod stop;
 mod stream;
+#[cfg(test)]
+mod tests_probe;
 
 pub use capability::JobSetup;
 pub use jog::{parse_jog, Jog};
@@ -120,6 +124,9 @@ pub struct Bridge<'a> {
     build_info: String,
     /// Capability jobs (`$MILL=`, `$POLAR=`, `$TURN=`, `$WIRE=`), when set up.
     jobs: Option<JobSetup>,
+    /// A probe move on its way (no line is taken until it has ended), and the last result.
+    probe: Option<probe::ProbeStep>,
+    last_probe: probe::LastProbe,
     pub interrupt: Arc<AtomicBool>,
 }
 
@@ -190,6 +197,8 @@ impl<'a> Bridge<'a> {
             stop_wanted: false,
             build_info: String::new(),
             jobs: None,
+            probe: None,
+            last_probe: probe::LastProbe::none(machine.axes.len()),
             interrupt: Arc::new(AtomicBool::new(false)),
         }
     }
@@ -202,28 +211,34 @@ impl<'a> Bridge<'a> {
 
     /// Serves senders until interrupted (then stops the machine) or the link fails.
     pub fn run(&mut self) -> Result<()> {
-        loop {
-            if self.interrupt.load(Ordering::SeqCst) {
-                self.stop_motion()?;
-                return Ok(());
-            }
-            let wait = if self.busy() { 1 } else { 5 };
-            let input = self.ep.poll(Duration::from_millis(wait))?;
-            if input.opened {
-                eprintln!("motionctl: a sender connected on {}", self.ep.describe());
-                self.soft_reset()?;
-            }
-            for b in input.data {
-                self.byte(b)?;
-            }
-            if input.closed {
-                eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
-                self.stop_motion()?;
-                self.rx.clear();
-            }
-            self.lines()?;
-            self.link()?;
+        while !self.step()? {}
+        Ok(())
+    }
+
+    /// One pass of the loop: what the sender sent, then the board; true once interrupted (the
+    /// machine stopped).
+    pub fn step(&mut self) -> Result<bool> {
+        if self.interrupt.load(Ordering::SeqCst) {
+            self.stop_motion()?;
+            return Ok(true);
         }
+        let wait = if self.busy() { 1 } else { 5 };
+        let input = self.ep.poll(Duration::from_millis(wait))?;
+        if input.opened {
+            eprintln!("motionctl: a sender connected on {}", self.ep.describe());
+            self.soft_reset()?;
+        }
+        for b in input.data {
+            self.byte(b)?;
+        }
+        if input.closed {
+            eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
+            self.stop_motion()?;
+            self.rx.clear();
+        }
+        self.lines()?;
+        self.link()?;
+        Ok(false)
     }
 
     fn busy(&self) -> bool {

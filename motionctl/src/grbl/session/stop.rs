@@ -84,6 +84,9 @@ impl Bridge<'_> {
         self.paused = false;
         self.jog = false;
         self.dwell_until = None;
+        // A probe move stopped before its end: the block is answered (no result; the
+        // interpreter takes it as no contact and is moved to where the machine stands).
+        self.end_probe(false);
         if !self.prog.ended() {
             let at = self.motion.pos_mm.clone();
             self.prog.sync(&at);
@@ -93,6 +96,10 @@ impl Bridge<'_> {
     /// Ctrl-X, and a sender connecting: stop, forget the queue, power-on parser state,
     /// welcome.
     pub(super) fn soft_reset(&mut self) -> Result<()> {
+        // As grbl's reset: a probe cycle under way is dropped unanswered, and the probe
+        // position cleared.
+        self.probe = None;
+        self.last_probe = super::probe::LastProbe::none(self.spm.len());
         self.stop_motion()?;
         // As grbl's reset: the spindle and coolant stop with the motion.
         self.spindle_stop_clear();
@@ -125,11 +132,10 @@ impl Bridge<'_> {
             if line.is_empty() {
                 continue;
             }
-            let answer = match self.gcode(&line) {
-                None => "ok".to_string(),
-                Some(n) => format!("error:{n}"),
-            };
-            self.say(&format!(">{line}:{answer}"));
+            match self.gcode(&line) {
+                None => self.answer(format!(">{line}:ok")),
+                Some(n) => self.say(&format!(">{line}:error:{n}")),
+            }
             if self.alarm.is_some() {
                 break;
             }

@@ -19,12 +19,24 @@ impl Bridge<'_> {
             && !matches!(self.latest.machine, MachineState::Running | MachineState::Holding)
     }
 
-    /// Spindle and coolant, pause and dwell events once the motion before them is done.
+    /// Spindle and coolant, pause and dwell events once the motion before them is done; a
+    /// probe move armed then, and its result taken once it has ended (the segments its trip
+    /// dropped never complete, so that end is the probe's to tell).
     pub(super) fn front_events(&mut self) -> Result<()> {
         while let Some(&front) = self.motion.out.front() {
             match front {
                 Out::Segment(_) => break,
+                Out::ProbeEnd => {
+                    if !self.probe_ended()? {
+                        break;
+                    }
+                }
                 _ if !self.drained() => break,
+                Out::Probe(kind) => {
+                    if !self.arm_probe(kind)? {
+                        break;
+                    }
+                }
                 Out::Outputs(to) => {
                     self.motion.out.pop_front();
                     self.switch_outputs(to)?;
@@ -102,12 +114,20 @@ impl Bridge<'_> {
         let body = match self.latest.machine {
             MachineState::Running if want_hold => RequestBody::Hold,
             MachineState::Holding if !want_hold => RequestBody::Resume,
-            MachineState::Ready if !want_hold && self.latest.queue_depth > 0 => RequestBody::Start,
+            MachineState::Ready
+                if !want_hold && self.latest.queue_depth > 0 && self.probe_allows_start() =>
+            {
+                RequestBody::Start
+            }
             _ => return Ok(()),
         };
+        let start = body == RequestBody::Start;
         let seq = self.s.send(body).map_err(link_err)?;
         self.pending.insert(seq, Pending::Control);
         self.control_seq = Some(seq);
+        if start {
+            self.probe_started(seq);
+        }
         Ok(())
     }
 }
