@@ -7,9 +7,9 @@
 //! What the board cannot do (spindle-synchronised motion) is refused with a message saying so;
 //! what it cannot switch (M62..M68 outputs) is reported as a warning and not executed. A probe
 //! move (G38.2..G38.5) becomes one [`Item::Probe`]: `run` drives it alone and replans the rest
-//! of the program from where the board stopped ([`stream::Items::probed`]). The spindle (M3, M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`]
-//! each time one of them switches, carrying all of them; a dwell (G4) is a stop at rest the
-//! runner times.
+//! of the program from where the board stopped ([`stream::Items::probed`]). The spindle (M3,
+//! M4, M5) and the coolant (M7, M8, M9) become one [`Item::Outputs`] each time one of them
+//! switches, carrying all of them; a dwell (G4) is a stop at rest the runner times.
 
 pub mod cli;
 pub mod resume;
