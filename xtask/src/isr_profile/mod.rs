@@ -304,7 +304,8 @@ fn profile_job(
 }
 
 /// Set to a directory: each job also writes `<job>-idle.pcs` and `<job>-busy.pcs` (`PC COUNT`
-/// per line, hex PC) for `llvm-symbolizer` to map onto source lines.
+/// per line, hex PC) for `llvm-symbolizer` to map onto source lines, and `<job>-longest.pcs`
+/// (the longest tick's PCs in execution order).
 const PCS_ENV: &str = "ISR_PROFILE_PCS";
 
 fn write_pcs(dir: &Path, job: &str, a: &trace::Analyzer<'_>) -> Result<()> {
@@ -317,6 +318,9 @@ fn write_pcs(dir: &Path, job: &str, a: &trace::Analyzer<'_>) -> Result<()> {
         let text: String = v.iter().map(|(pc, n)| format!("{pc:#x} {n}\n")).collect();
         std::fs::write(dir.join(format!("{stem}-{kind}.pcs")), text)?;
     }
+    // The longest tick, one PC per executed instruction in order.
+    let text: String = a.pcs_longest.iter().map(|pc| format!("{pc:#x} 1\n")).collect();
+    std::fs::write(dir.join(format!("{stem}-longest.pcs")), text)?;
     Ok(())
 }
 

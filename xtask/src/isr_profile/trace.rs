@@ -43,6 +43,10 @@ pub struct Analyzer<'p> {
     /// over the others, for a line-by-line look at where a tick goes.
     pub pcs_idle: HashMap<u32, u64>,
     pub pcs_busy: HashMap<u32, u64>,
+    /// With [`Analyzer::keep_pcs`]: the PCs of the longest instance (modelled cycles), in
+    /// execution order, for a look at what the worst tick ran.
+    pub pcs_longest: Vec<u32>,
+    longest_cycles: u32,
     keep_pcs: bool,
     current: Option<Current>,
 }
@@ -88,6 +92,8 @@ impl<'p> Analyzer<'p> {
             lines: 0,
             pcs_idle: HashMap::new(),
             pcs_busy: HashMap::new(),
+            pcs_longest: Vec::new(),
+            longest_cycles: 0,
             keep_pcs: false,
             current: None,
         }
@@ -187,6 +193,10 @@ impl<'p> Analyzer<'p> {
                         if cur.inst.marks == 0 { &mut self.pcs_idle } else { &mut self.pcs_busy };
                     for &a in &cur.pcs {
                         *to.entry(a).or_insert(0) += 1;
+                    }
+                    if self.keep_pcs && cur.inst.cycles > self.longest_cycles {
+                        self.longest_cycles = cur.inst.cycles;
+                        self.pcs_longest = std::mem::take(&mut cur.pcs);
                     }
                     self.instances.push(cur.inst);
                     // The PC after the exception return may be the handler again (tail-chain).
