@@ -138,7 +138,11 @@ fn milling_board(
     let job = job::read(path)?;
     // The journal is read, and the resume point checked against the job, before the link.
     let from = if resume { Some(resume_point(path, &job)?) } else { None };
-    let journal = crate::journal::Writer::new(path, 1)?.of_kind(run::JOURNAL_KIND);
+    // An injected fault's run ends held on purpose: it keeps no journal to resume from.
+    let journal = match fault {
+        Some(_) => None,
+        None => Some(crate::journal::Writer::new(path, 1)?.of_kind(run::JOURNAL_KIND)),
+    };
     // The plain simulated board runs no force jobs: `--sim` gets the one that does.
     let (mut t, qemu_guard) = if link.sim {
         let board: Box<dyn crate::transport::Transport> =
@@ -155,7 +159,7 @@ fn milling_board(
         fault: fault.unwrap_or(motion::protocol::SimForceFault::None),
     };
     let mut hook = crate::runner::Unattended;
-    let result = run::run_resumable(&mut *t, &job, &opts, Some(journal), from.as_ref(), &mut hook);
+    let result = run::run_resumable(&mut *t, &job, &opts, journal, from.as_ref(), &mut hook);
     let r = crate::qemu::finish(qemu_guard, result)?;
     if let Some(p) = &csv {
         run::write_csv(p, &r.trace)?;
