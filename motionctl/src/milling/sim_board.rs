@@ -100,8 +100,8 @@ impl ForceSimTarget {
         }
         dda.tick();
         let now = dda.positions();
-        for i in 0..MAX_AXES {
-            self.inner.positions[i] = run.start[i] + now[i] - run.dda_base[i];
+        for (i, p) in self.inner.positions.iter_mut().enumerate() {
+            *p = run.start[i] + now[i] - run.dda_base[i];
         }
         if let Some(f) = self.force.as_mut().filter(|f| f.is_running()) {
             if f.sample_due() {
@@ -212,16 +212,19 @@ impl LinkTarget for ForceSimTarget {
         Ok(())
     }
     fn start(&mut self) -> Result<(), ErrorCode> {
-        self.inner.start()?;
-        if let Some(p) = self.inner.force_armed {
-            let tick_hz = self.inner.config.machine.tick_hz;
-            let job = ForceJob::new(&p, tick_hz, true, self.inner.sim_milling.as_ref())
-                .map_err(|_| ErrorCode::OutOfRange)?;
-            let axis = job.axis();
-            self.force = Some(job);
-            if let Some(f) = self.force.as_mut() {
-                f.start(self.inner.positions[axis]);
+        // The force job is made first: a refusal must change nothing.
+        let job = match self.inner.force_armed {
+            Some(p) => {
+                let tick_hz = self.inner.config.machine.tick_hz;
+                let sim = self.inner.sim_milling.as_ref();
+                Some(ForceJob::new(&p, tick_hz, true, sim).map_err(|_| ErrorCode::OutOfRange)?)
             }
+            None => None,
+        };
+        self.inner.start()?;
+        if let Some(mut job) = job {
+            job.start(self.inner.positions[job.axis()]);
+            self.force = Some(job);
         }
         Ok(())
     }
