@@ -221,17 +221,28 @@ fn milling_board(
             r.x_steps as f64 / 1e3,
             r.expected_x_steps as f64 / 1e3
         );
-        crate::outln!(
-            "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step (host \
-             model {})",
-            r.peak_n,
-            opt_ms(r.settle_s),
-            opt_ms(r.model_settle_s)
-        );
-        crate::outln!(
-            "feed       {} 300..400 ms after the step",
-            r.feed_after_mm_min.map_or("-".into(), |v| format!("{v:.1} mm/min"))
-        );
+        // A run resumed inside the cut met the work again at the resume point: its trace after
+        // the depth step is not the first run's, and is not judged.
+        let inside = r.resumed_from_steps.is_some_and(|x| x > job.setup.plant.wall_steps);
+        if inside {
+            crate::outln!(
+                "force      peak {:.0} N (the re-entry); settling after the depth step not \
+                 judged: resumed inside the cut",
+                r.peak_n
+            );
+        } else {
+            crate::outln!(
+                "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step \
+                 (host model {})",
+                r.peak_n,
+                opt_ms(r.settle_s),
+                opt_ms(r.model_settle_s)
+            );
+            crate::outln!(
+                "feed       {} 300..400 ms after the step",
+                r.feed_after_mm_min.map_or("-".into(), |v| format!("{v:.1} mm/min"))
+            );
+        }
         if let Some(a) = after_resume(&r) {
             crate::outln!("{}", a.line(&job));
         }
