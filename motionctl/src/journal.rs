@@ -30,6 +30,14 @@ pub struct Entry {
     /// Segments the board reported done, of `segments`.
     pub segments_done: u32,
     pub segments: u32,
+    /// The kind of job that wrote it when not a `run` job (G-code, TOML): `"milling"` for
+    /// `milling run`, whose resume reads only its own kind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// For a job cut along one move (milling): how far along it the machine is, steps of its
+    /// feed axis from the job's start (the board's last status: never ahead of the cut).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feed_axis_steps: Option<i64>,
 }
 
 /// `FILE.journal` for the job `FILE`.
@@ -74,6 +82,20 @@ pub fn read(job: &Path) -> Result<Entry> {
     Ok(e)
 }
 
+/// As [`read`], for a `kind` job (`milling`): a journal another kind of run wrote is refused.
+pub fn read_kind(job: &Path, kind: &str) -> Result<Entry> {
+    let e = read(job)?;
+    if e.kind.as_deref() != Some(kind) {
+        bail!(
+            "{}: the journal is a {} run's, not a {kind} run's: run the job the way it was \
+             run, or remove the journal",
+            path_for(job).display(),
+            e.kind.as_deref().map_or("`motionctl run`", |k| k)
+        );
+    }
+    Ok(e)
+}
+
 /// Keeps the journal of one run up to date.
 pub struct Writer {
     path: PathBuf,
@@ -96,6 +118,8 @@ impl Writer {
                 line: 0,
                 segments_done: 0,
                 segments,
+                kind: None,
+                feed_axis_steps: None,
             },
             last: None,
             every: WRITE_EVERY,
@@ -144,9 +168,49 @@ impl Writer {
             .with_context(|| format!("renaming to {}", self.path.display()))
     }
 
+    /// The journal of a `kind` job (read back only by [`read_kind`]).
+    pub fn of_kind(mut self, kind: &str) -> Self {
+        self.entry.kind = Some(kind.to_string());
+        self
+    }
+
+    /// As [`Self::update`], with the position along the job's one move (`feed_axis_steps`,
+    /// from the job's start): written when the line, the segments done or the position moved.
+    pub fn update_along(&mut self, line: usize, done: u32, feed_axis_steps: i64) -> Option<String> {
+        let now = (line, done, Some(feed_axis_steps));
+        if self.broken
+            || now == (self.entry.line, self.entry.segments_done, self.entry.feed_axis_steps)
+        {
+            return None;
+        }
+        if self.last.is_some_and(|t| t.elapsed() < self.every) && self.entry.line != 0 {
+            return None;
+        }
+        self.entry.line = line;
+        self.entry.segments_done = done;
+        self.entry.feed_axis_steps = Some(feed_axis_steps);
+        self.last = Some(Instant::now());
+        self.write_or_warn()
+    }
+
+    fn write_or_warn(&mut self) -> Option<String> {
+        match self.write() {
+            Ok(()) => None,
+            Err(e) => {
+                self.broken = true;
+                Some(format!("cannot keep the run journal ({e:#}): this run cannot be resumed"))
+            }
+        }
+    }
+
     /// The job completed: the journal goes.
     pub fn finished(&self) {
         let _ = std::fs::remove_file(&self.path);
+    }
+
+    /// The position along the job's one move the journal holds (none written yet: `None`).
+    pub fn feed_axis_steps(&self) -> Option<i64> {
+        self.entry.feed_axis_steps
     }
 
     /// The line the journal holds (0: none written yet).

@@ -3,6 +3,7 @@
 //! job's units, as CSV, a plot, or JSON.
 
 use super::figure::{self, Trace};
+use super::resume::MillingResume;
 use super::summary::{job_json, job_lines, SimSummary};
 use super::{job, run, simulate};
 use crate::plot::Style;
@@ -53,6 +54,12 @@ pub enum MillingCmd {
         /// spindle-stop. The run then expects the hold with that fault's code.
         #[arg(long, value_name = "FAULT", value_parser = parse_sim_fault)]
         fault: Option<motion::protocol::SimForceFault>,
+        /// Go on from where the last run of this job stopped (a board reset, a brown-out, a power
+        /// loss: its `JOB.journal` keeps the position along the move): home, spindle on, the
+        /// approach along the slot already cut, then the force loop re-armed with the job's
+        /// nominal force and settings for the rest of the move.
+        #[arg(long, conflicts_with = "fault")]
+        resume: bool,
     },
 }
 
@@ -76,8 +83,8 @@ fn parse_sim_fault(s: &str) -> Result<motion::protocol::SimForceFault, String> {
 pub fn run_milling(cmd: MillingCmd) -> Result<()> {
     match cmd {
         MillingCmd::Simulate { job, plot, csv, json } => milling_simulate(&job, plot, csv, json),
-        MillingCmd::Run { job, link, csv, plot, json, fault } => {
-            milling_board(&job, &link, csv, plot, json, fault)
+        MillingCmd::Run { job, link, csv, plot, json, fault, resume } => {
+            milling_board(&job, &link, csv, plot, json, fault, resume)
         }
     }
 }
@@ -126,9 +133,24 @@ fn milling_board(
     plot: Option<PathBuf>,
     as_json: bool,
     fault: Option<motion::protocol::SimForceFault>,
+    resume: bool,
 ) -> Result<()> {
     let job = job::read(path)?;
-    let (mut t, qemu_guard) = link.open()?;
+    // The journal is read, and the resume point checked against the job, before the link.
+    let from = if resume { Some(resume_point(path, &job)?) } else { None };
+    // An injected fault's run ends held on purpose: it keeps no journal to resume from.
+    let journal = match fault {
+        Some(_) => None,
+        None => Some(crate::journal::Writer::new(path, 1)?.of_kind(run::JOURNAL_KIND)),
+    };
+    // The plain simulated board runs no force jobs: `--sim` gets the one that does.
+    let (mut t, qemu_guard) = if link.sim {
+        let board: Box<dyn crate::transport::Transport> =
+            Box::new(super::sim_board::ForceSimBoard::new(1.0));
+        (board, None)
+    } else {
+        link.open()?
+    };
     let opts = run::MillingRunOptions {
         host: motion::protocol::HostConfig { rto_ms: 100, window: 8 },
         // QEMU's machine has no switches: homing there takes it where it stands.
@@ -136,7 +158,8 @@ fn milling_board(
         progress: !as_json,
         fault: fault.unwrap_or(motion::protocol::SimForceFault::None),
     };
-    let result = run::run(&mut *t, &job, &opts);
+    let mut hook = crate::runner::Unattended;
+    let result = run::run_resumable(&mut *t, &job, &opts, journal, from.as_ref(), &mut hook);
     let r = crate::qemu::finish(qemu_guard, result)?;
     if let Some(p) = &csv {
         run::write_csv(p, &r.trace)?;
@@ -173,6 +196,8 @@ fn milling_board(
             ("statuses", json!(r.trace.len())),
             ("board_s", json!(board_s)),
             ("wall_s", json!(r.seconds)),
+            ("resumed_from_x_mm", json!(r.resumed_from_steps.map(|x| x as f64 / 1e3))),
+            ("after_resume", json!(after_resume(&r).map(|a| a.json()))),
             ("ok", json!(r.ok())),
             ("problems", json!(r.problems)),
         ] {
@@ -196,17 +221,31 @@ fn milling_board(
             r.x_steps as f64 / 1e3,
             r.expected_x_steps as f64 / 1e3
         );
-        crate::outln!(
-            "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step (host \
-             model {})",
-            r.peak_n,
-            opt_ms(r.settle_s),
-            opt_ms(r.model_settle_s)
-        );
-        crate::outln!(
-            "feed       {} 300..400 ms after the step",
-            r.feed_after_mm_min.map_or("-".into(), |v| format!("{v:.1} mm/min"))
-        );
+        // A run resumed inside the cut met the work again at the resume point: its trace after
+        // the depth step is not the first run's, and is not judged.
+        let inside = r.resumed_from_steps.is_some_and(|x| x > job.setup.plant.wall_steps);
+        if inside {
+            crate::outln!(
+                "force      peak {:.0} N (the re-entry); settling after the depth step not \
+                 judged: resumed inside the cut",
+                r.peak_n
+            );
+        } else {
+            crate::outln!(
+                "force      peak {:.0} N; back within +-10 % of Fnom {} after the depth step \
+                 (host model {})",
+                r.peak_n,
+                opt_ms(r.settle_s),
+                opt_ms(r.model_settle_s)
+            );
+            crate::outln!(
+                "feed       {} 300..400 ms after the step",
+                r.feed_after_mm_min.map_or("-".into(), |v| format!("{v:.1} mm/min"))
+            );
+        }
+        if let Some(a) = after_resume(&r) {
+            crate::outln!("{}", a.line(&job));
+        }
         crate::outln!("faults     {}", if r.faults == 0 { "none" } else { &fault_names });
         // One machine-readable line for scripts (xtask milling-e2e).
         crate::outln!("{}", r.summary_line());
@@ -218,4 +257,70 @@ fn milling_board(
         anyhow::bail!("the milling run failed {} check(s)", r.problems.len());
     }
     Ok(())
+}
+
+/// The resume point of `path`'s milling job from its journal, checked against the job.
+fn resume_point(path: &std::path::Path, job: &job::MillingJob) -> Result<MillingResume> {
+    let entry = crate::journal::read_kind(path, run::JOURNAL_KIND)?;
+    let Some(x) = entry.feed_axis_steps else {
+        anyhow::bail!(
+            "{}: the journal holds no position along the move (written before the cut began): \
+             run the job from its start",
+            crate::journal::path_for(path).display()
+        );
+    };
+    MillingResume::new(job, x).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// What a resumed run's force loop did after the resume point.
+struct AfterResume {
+    from_mm: f64,
+    statuses: usize,
+    force_n: f64,
+    mean_force_n: f64,
+    min_override: f64,
+}
+
+/// The trace of a resumed run past its resume point, with the loop cutting.
+fn after_resume(r: &run::MillingRunReport) -> Option<AfterResume> {
+    let from = r.resumed_from_steps?;
+    let cut: Vec<_> = r
+        .trace
+        .iter()
+        .filter(|p| p.x_steps >= from && p.phase == motion::protocol::ForcePhase::Cutting)
+        .collect();
+    let last = cut.last()?;
+    Some(AfterResume {
+        from_mm: from as f64 / 1e3,
+        statuses: cut.len(),
+        force_n: last.force_n,
+        mean_force_n: cut.iter().map(|p| p.force_n).sum::<f64>() / cut.len() as f64,
+        min_override: cut.iter().map(|p| p.override_).fold(f64::INFINITY, f64::min),
+    })
+}
+
+impl AfterResume {
+    fn line(&self, job: &job::MillingJob) -> String {
+        format!(
+            "resumed    at move 1 of 1, X {:.3} mm; force loop re-armed (Fnom {:.0} N): {} \
+             statuses cutting after it, force {:.0} N at the last (mean {:.0} N), override down \
+             to {:.2}",
+            self.from_mm,
+            job.fnom_n,
+            self.statuses,
+            self.force_n,
+            self.mean_force_n,
+            self.min_override
+        )
+    }
+
+    fn json(&self) -> serde_json::Value {
+        json!({
+            "from_x_mm": self.from_mm,
+            "statuses_cutting": self.statuses,
+            "last_force_n": self.force_n,
+            "mean_force_n": self.mean_force_n,
+            "min_override": self.min_override,
+        })
+    }
 }

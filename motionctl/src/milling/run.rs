@@ -12,6 +12,8 @@
 //! an injected fault, the hold with that fault's code and the position the board counted.
 
 use super::job::MillingJob;
+use super::resume::MillingResume;
+use crate::journal;
 use crate::link::{LinkFailure, Session};
 use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
@@ -44,6 +46,14 @@ pub const WINDOW_S: f64 = 0.400;
 pub const FEED_WINDOW_S: f64 = 0.020;
 /// Penetration where an injected fault starts (the scenario's fault variants'), um.
 pub const FAULT_AT_UM: u32 = 5_000;
+
+/// How `runner::home` reports that homing ended: a resume whose board was homed by
+/// `ready_board` (after a reset) does not home twice; were the message to change, it would, which
+/// is safe.
+const HOMED_SAYS: &str = "homed at ";
+
+/// The journal kind of a milling run (`JOB.journal`): `milling run --resume` reads only its own.
+pub const JOURNAL_KIND: &str = "milling";
 
 /// What [`run`] needs besides the job.
 #[derive(Clone, Debug)]
@@ -87,6 +97,8 @@ pub struct MillingRunReport {
     pub updates: u32,
     pub board_ticks: u64,
     pub seconds: f64,
+    /// A resumed run: where it went on from, X steps from the job's start.
+    pub resumed_from_steps: Option<i64>,
     pub problems: Vec<String>,
 }
 
@@ -172,6 +184,23 @@ pub fn run_with(
     opts: &MillingRunOptions,
     hook: &mut dyn runner::JobHook,
 ) -> anyhow::Result<MillingRunReport> {
+    run_resumable(transport, job, opts, None, None, hook)
+}
+
+/// As [`run_with`], keeping the job's cursor in `journal` (the position along its move, so a
+/// run cut by a board reset or a power loss can go on), and from `resume` when given: the
+/// spindle on, the approach, then the force job re-armed from there ([`super::resume`]).
+pub fn run_resumable(
+    transport: &mut dyn Transport,
+    job: &MillingJob,
+    opts: &MillingRunOptions,
+    mut journal: Option<journal::Writer>,
+    resume: Option<&MillingResume>,
+    hook: &mut dyn runner::JobHook,
+) -> anyhow::Result<MillingRunReport> {
+    if resume.is_some() && opts.fault != SimForceFault::None {
+        bail!("a resumed milling run injects no fault: run the fault case from the job's start");
+    }
     let t0 = Instant::now();
     let say = |m: &str| {
         if opts.progress {
@@ -182,7 +211,10 @@ pub fn run_with(
     let params = job_params(&setup.control, &setup.chain, 0);
     motion::force::link_job::check_job(&params)
         .map_err(|f| anyhow!("the milling job's force setup is out of range: {f}"))?;
-    let sim = sim_params(&setup.plant, opts.fault, FAULT_AT_UM);
+    let sim = match resume {
+        Some(r) => r.sim_params(job),
+        None => sim_params(&setup.plant, opts.fault, FAULT_AT_UM),
+    };
     let cfg = wire_config();
     let tick_hz = cfg.machine.tick_hz as f64;
     // The host model: the same force code without the link (its settling, for the report).
@@ -202,8 +234,31 @@ pub fn run_with(
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
     let (query, status) = (runner::ask, runner::ask_status);
-    runner::ready_board(&mut s, cfg, opts.home, "milling machine (X)", &|m| say(m))
+    // A resume homes: the journal's position counts from the job's origin, which only homing
+    // brings the machine back to (a reset board does not know where it stands).
+    let homed_now = std::cell::Cell::new(false);
+    let watch_homing = |m: &str| {
+        homed_now.set(homed_now.get() || m.starts_with(HOMED_SAYS));
+        say(m)
+    };
+    let home = opts.home || resume.is_some();
+    runner::ready_board(&mut s, cfg, home, "milling machine (X)", &watch_homing)
         .map_err(|e| anyhow!("{e}"))?;
+    if resume.is_some() && !homed_now.get() {
+        runner::home(&mut s, cfg.machine.tick_hz, &|m| say(m)).map_err(|e| anyhow!("{e}"))?;
+    }
+    // The job's origin: where the homed machine stands, before any approach.
+    let x0 = status(&mut s)?.positions[0];
+    if let Some(r) = resume {
+        say(&format!(
+            "resuming at move 1 of 1, X {:.3} mm of {:.3} (the journal's cursor): homed, the \
+             force loop re-armed with Fnom {:.0} N after the approach",
+            r.from_mm(),
+            setup.move_steps as f64 / 1e3,
+            job.fnom_n
+        ));
+        super::resume::restore(&mut s, r, x0, cfg.machine.tick_hz, &|m| say(m))?;
+    }
     if simulated {
         query(&mut s, RequestBody::Sim(SimRequest::Milling(sim)), "Sim(Milling)")?;
         say("sent the simulated plant (eq 4.17 cut)");
@@ -211,7 +266,7 @@ pub fn run_with(
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
     query(&mut s, RequestBody::ArmForce(params), "ArmForce")?;
-    let seg = setup.segment();
+    let seg = resume.map_or_else(|| setup.segment(), |r| r.rest);
     let batch = SegmentBatch::from_slice(&[seg]).ok_or_else(|| anyhow!("segment batch"))?;
     query(&mut s, RequestBody::QueueSegments(batch), "QueueSegments")?;
     let base = status(&mut s)?;
@@ -222,8 +277,11 @@ pub fn run_with(
     let model_ticks = setup.max_ticks;
     let mut watch = runner::JobWatch::new(model_ticks, 2.0, sc::TICK_HZ as u64 * 10, NO_PROGRESS);
     let mut latest = base.clone();
-    let mut report =
-        MillingRunReport { expected_x_steps: setup.move_steps as i64, ..Default::default() };
+    let mut report = MillingRunReport {
+        expected_x_steps: setup.move_steps as i64,
+        resumed_from_steps: resume.map(|r| r.from_steps),
+        ..Default::default()
+    };
     let mut last_poll = Instant::now();
     let mut poll_seq: Option<u32> = None;
     // Statuses of the last FEED_WINDOW_S of board time: the feed is measured across them (two
@@ -232,7 +290,6 @@ pub fn run_with(
     let window_ticks = (FEED_WINDOW_S * tick_hz) as u64;
     let mut ran = false;
     let mut steer = runner::Steer::default();
-    let x0 = base.positions[0];
     let mut record = |st: &Status, trace: &mut Vec<BoardPoint>| {
         let x = st.positions[0] - x0;
         while prev.len() > 1 && prev[1].0 + window_ticks <= st.tick {
@@ -273,7 +330,7 @@ pub fn run_with(
             match ev {
                 HostEvent::Status(st) => fresh.push(st),
                 HostEvent::SessionLost(code) => {
-                    bail!("{}: the job cannot resume safely", LinkFailure::SessionLost(code))
+                    bail!("{}", lost_session(LinkFailure::SessionLost(code), journal.as_ref()))
                 }
                 _ => {}
             }
@@ -297,6 +354,18 @@ pub fn run_with(
             ran = true;
         }
         let ended = matches!(latest.machine, MachineState::Ready | MachineState::Fault);
+        if ran {
+            // The cursor: how far along the move the board's last status puts the tool.
+            // A resumed run's cursor never goes back before its resume point (the approach's
+            // last stretch is in the slot already cut).
+            let x = latest.positions[0] - x0;
+            let x = resume.map_or(x, |r| x.max(r.from_steps));
+            if let Some(j) = journal.as_mut() {
+                if let Some(w) = j.update_along(1, 0, x) {
+                    say(&w);
+                }
+            }
+        }
         if ran && after_start && ended {
             break;
         }
@@ -335,6 +404,9 @@ pub fn run_with(
     report.seconds = t0.elapsed().as_secs_f64();
     let (fnom_n, trip_n) = (job.fnom_n, job.trip_n);
     let (settle, feed_after, peak) = judge(&report.trace, fnom_n, job.step_at_steps());
+    // A run resumed inside the cut meets the work again at the resume point, not at the wall:
+    // the settling after the depth step is judged only where it met the work as the first did.
+    let judge_settling = resume.is_none_or(|r| r.before_the_wall(job));
     report.settle_s = settle;
     report.feed_after_mm_min = feed_after;
     report.peak_n = peak.max(fin.force_peak_mn as f64 / 1e3);
@@ -361,6 +433,7 @@ pub fn run_with(
                 .model_settle_s
                 .map_or(SETTLE_LIMIT_S, |m| (m + SETTLE_SLACK_S).max(SETTLE_LIMIT_S));
             match settle {
+                _ if !judge_settling => {}
                 Some(t) if t <= limit => {}
                 Some(t) => p.push(format!(
                     "force outside Fnom +-10 % until {:.0} ms after the depth step (limit {:.0} \
@@ -373,6 +446,9 @@ pub fn run_with(
             }
             if report.peak_n > trip_n {
                 p.push(format!("force {:.0} N above the trip level {trip_n:.0} N", report.peak_n));
+            }
+            if resume.is_some() && report.updates == 0 {
+                p.push("the force loop made no control update after the resume".into());
             }
         }
         Some(code) => {
@@ -399,7 +475,31 @@ pub fn run_with(
             let _ = s.request(RequestBody::ClearFault);
         }
     }
+    if resume.is_some() {
+        // The resume switched the spindle on: the job's end switches it off.
+        let off = RequestBody::SetProgramOutputs(motion::protocol::ProgramOutputs::OFF);
+        query(&mut s, off, "SetProgramOutputs (spindle off)")?;
+        say("spindle off (the job's end)");
+    }
+    if let Some(j) = &journal {
+        if report.x_steps == report.expected_x_steps {
+            j.finished();
+        }
+    }
     Ok(report)
+}
+
+/// The error of a run whose board lost its session (a reset, a power loss): with a journal, how
+/// to go on.
+fn lost_session(why: LinkFailure, journal: Option<&journal::Writer>) -> String {
+    match journal.and_then(|j| j.feed_axis_steps().map(|x| (j.path().display(), x))) {
+        Some((path, x)) => format!(
+            "{why}: the journal ({path}) keeps the cut at X {:.3} mm; `motionctl milling run \
+             JOB --resume` homes, re-arms the force loop and goes on from there",
+            x as f64 / 1e3
+        ),
+        None => format!("{why}: the job cannot resume (no journal was kept)"),
+    }
 }
 
 /// The board trace as CSV: time (s), force and tooth peak (N), override, feed (mm/min), X
