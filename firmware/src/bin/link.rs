@@ -152,7 +152,9 @@ mod app {
         // Fits: both board names are short (the link cuts it to 24 bytes anyway). Pushed piece
         // by piece: core::fmt::write would link the formatting machinery for this one line.
         for piece in [board::NAME, " ", env!("CARGO_PKG_VERSION")] {
-            let _ = name.push_str(piece);
+            if name.push_str(piece).is_err() {
+                break;
+            }
         }
         let mut link = Link::new(&name, preparer, tick_rate);
         if let Some(site) = last_panic {
