@@ -54,11 +54,16 @@ pub fn take_recorded() -> Option<PanicSite> {
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     cortex_m::interrupt::disable();
-    match info.location() {
-        Some(l) => record(l.file(), l.line(), l.column()),
-        None => record("(unknown)", 0, 0),
-    }
-    defmt::error!("{}", defmt::Display2Format(info));
+    let (file, line, column) = match info.location() {
+        Some(l) => (l.file(), l.line(), l.column()),
+        None => ("(unknown)", 0, 0),
+    };
+    record(file, line, column);
+    // The site and a constant message without core::fmt: formatting the PanicInfo would link
+    // the whole formatting machinery (and every panic's argument formatting) into the image.
+    // A message with arguments (an index out of bounds, say) is named by its site.
+    let message = info.message().as_str().unwrap_or("(a formatted message; see the site)");
+    defmt::error!("panicked at {=str}:{=u32}:{=u32}: {=str}", file, line, column, message);
     crate::board::exit(false)
 }
 

@@ -149,11 +149,13 @@ mod app {
             motion.machine.faults().mask()
         );
         let mut name = heapless::String::<32>::new();
-        // Fits: both board names are short (the link cuts it to 24 bytes anyway).
-        let _ = core::fmt::write(
-            &mut name,
-            format_args!("{} {}", board::NAME, env!("CARGO_PKG_VERSION")),
-        );
+        // Fits: both board names are short (the link cuts it to 24 bytes anyway). Pushed piece
+        // by piece: core::fmt::write would link the formatting machinery for this one line.
+        for piece in [board::NAME, " ", env!("CARGO_PKG_VERSION")] {
+            if name.push_str(piece).is_err() {
+                break;
+            }
+        }
         let mut link = Link::new(&name, preparer, tick_rate);
         if let Some(site) = last_panic {
             link.board.set_last_panic(site);
@@ -399,7 +401,7 @@ mod app {
                 let pushed = match next {
                     Ok(prepared) => motion.lock(|m| m.dda.push(&prepared)).is_ok(),
                     Err((id, e)) => {
-                        defmt::error!("segment {=u32} rejected: {}", id, defmt::Debug2Format(&e));
+                        defmt::error!("segment {=u32} rejected: {}", id, e);
                         false
                     }
                 };
@@ -469,7 +471,7 @@ mod app {
                 SAVING_CONFIG.store(false, Relaxed);
                 match saved {
                     Ok(()) => defmt::info!("config saved to flash"),
-                    Err(e) => defmt::error!("config not saved: {}", defmt::Debug2Format(&e)),
+                    Err(e) => defmt::error!("config not saved: {=str}", link::save_error_name(e)),
                 }
             }
             for response in responses.iter().flatten() {

@@ -27,6 +27,7 @@
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 
 use motion::dda::{MotionState, Preparer};
+use motion::machine::persist::SaveError;
 use motion::machine::{BoardConfig, BootConfig, Machine, MachineState, ResetCause, WatchdogGate};
 use motion::polar::playback::QUEUE_DEPTH;
 use motion::polar::playback::{Playback, SizeScale};
@@ -204,4 +205,14 @@ impl Motion {
 /// Ticks between status-task runs at `tick_hz` (>= MIN_TICK_HZ after validation, so >= 10).
 pub(super) fn wake_ticks(tick_hz: u32) -> u32 {
     (tick_hz / POLLS_PER_SECOND).max(1)
+}
+
+/// The log's name for a refused config save: a constant string, where `Debug` formatting would
+/// link core::fmt into the image for this one line.
+pub fn save_error_name(e: SaveError) -> &'static str {
+    match e {
+        SaveError::TooLarge => "TooLarge (the config does not fit a record)",
+        SaveError::Flash => "Flash (an erase or write failed)",
+        SaveError::Geometry => "Geometry (the flash slots do not fit a record)",
+    }
 }
