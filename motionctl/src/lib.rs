@@ -29,6 +29,7 @@ pub mod qemu;
 pub mod runner;
 pub mod sample_job;
 pub mod sim_board;
+pub mod sim_wire;
 pub mod toml_run;
 pub mod transport;
 pub mod units;

@@ -3,13 +3,12 @@
 //! by `speed`), and the periodic status stream runs on the wall clock. For tests of the runner,
 //! and for `motionctl run --sim` (hidden) to try a job without hardware.
 
+use crate::sim_wire::SimWire;
 use crate::transport::Transport;
 use motion::protocol::LinkTarget as _;
-use motion::protocol::Response;
 use motion::protocol::{
-    encode_frame, BoardLink, FrameDecoder, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME,
-    CAP_OVERRIDE, CAP_PROBE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME,
-    MAX_FRAME_WIRE,
+    BoardLink, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::{Rate, MAX_AXES};
 use std::io;
@@ -31,8 +30,7 @@ pub struct SimTrouble {
 pub struct SimBoard {
     pub board: BoardLink,
     pub target: SimTarget,
-    decoder: FrameDecoder<MAX_FRAME>,
-    out: Vec<u8>,
+    wire: SimWire,
     start: Instant,
     last: Instant,
     /// Machine ticks owed to the running queue.
@@ -65,8 +63,7 @@ impl SimBoard {
         SimBoard {
             board: BoardLink::new("motionctl-sim", caps),
             target: SimTarget::new(WireConfig::UNSET, capacity),
-            decoder: FrameDecoder::new(),
-            out: Vec::new(),
+            wire: SimWire::new(),
             start: now,
             last: now,
             budget_ticks: 0.0,
@@ -87,13 +84,6 @@ impl SimBoard {
 
     fn now_ms(&self) -> u64 {
         self.start.elapsed().as_millis() as u64
-    }
-
-    fn emit(&mut self, resp: &Response) {
-        let mut buf = [0u8; MAX_FRAME_WIRE];
-        if let Ok(f) = encode_frame(resp, &mut buf) {
-            self.out.extend_from_slice(f);
-        }
     }
 
     fn silent(&mut self) -> bool {
@@ -154,7 +144,7 @@ impl SimBoard {
             }
         }
         if let Some(resp) = self.board.poll(self.now_ms(), &self.target) {
-            self.emit(&resp);
+            self.wire.emit(&resp);
         }
     }
 }
@@ -165,35 +155,28 @@ impl Transport for SimBoard {
         if self.silent() {
             return Ok(());
         }
-        for &b in bytes {
-            if let Some(frame) = self.decoder.push(b) {
-                self.frames_in += 1;
-                let resp = self.board.on_frame(frame, &mut self.target);
-                self.emit(&resp);
-            }
-        }
+        self.frames_in += self.wire.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
         if self.silent() {
-            self.out.clear();
+            self.wire.clear();
         }
-        if self.out.is_empty() {
-            // Nothing to say yet: wait a little, as a real port would.
-            std::thread::sleep(timeout.min(Duration::from_millis(1)));
+        if self.wire.is_empty() {
+            SimWire::idle_wait(timeout);
             self.advance();
             if self.silent() {
-                self.out.clear();
+                self.wire.clear();
             }
         }
-        Ok(std::mem::take(&mut self.out))
+        Ok(self.wire.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
         self.reconnects += 1;
-        self.decoder.reset();
+        self.wire.reset();
         Ok(())
     }
 

@@ -186,6 +186,8 @@ pub fn test(root: &Path) -> Result<()> {
         bail!("{PROBE_LINE} on QEMU: expected [PRB:x,y,{PROBE_Z_MM}:1] before ok, got {lines:#?}");
     };
     tty.capability(&format!("G90 G53 G0 X{} Y{} Z{}", end[0], end[1], end[2]))?;
+    // Its `ok` is the line's acceptance: a `$` command waits for the move's end (else error:8).
+    tty.wait_idle()?;
     println!("  grbl on QEMU: {PROBE_LINE}: {prb}; {:.1} s wall", t1.elapsed().as_secs_f64());
     let t1 = Instant::now();
     let lines = tty.capability(&format!("$MILL={MILL_JOB}"))?;
@@ -292,6 +294,24 @@ impl Port {
             }
         }
         false
+    }
+
+    /// Asks for status reports (`?`) until one says Idle.
+    fn wait_idle(&mut self) -> Result<()> {
+        let start = Instant::now();
+        loop {
+            self.tty.write_all(b"?")?;
+            let asked = Instant::now();
+            let wait = Duration::from_millis(500);
+            while let Ok(l) = self.rx.recv_timeout(wait.saturating_sub(asked.elapsed())) {
+                if l.starts_with("<Idle") {
+                    return Ok(());
+                }
+            }
+            if start.elapsed() > JOB_TIMEOUT {
+                bail!("the machine is not Idle after {} s", JOB_TIMEOUT.as_secs());
+            }
+        }
     }
 
     /// Sends the capability command `line`; every line up to the answer, which must be `ok`.

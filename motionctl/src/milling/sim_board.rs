@@ -13,15 +13,15 @@
 //! ([`ForceSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
 //! gone) and the machine's path so far is kept.
 
+use crate::sim_wire::SimWire;
 use crate::transport::Transport;
 use motion::dda::{Command, Dda, Preparer};
 use motion::force::link_job::ForceJob;
 use motion::machine::{MachineState, ProbeKind};
 use motion::protocol::{
-    encode_frame, BoardLink, ErrorCode, FaultCode, ForceJobParams, FrameDecoder, HomingConfig,
-    LinkTarget, ProgramOutputs, Response, SimRequest, SimTarget, Status, WireConfig, WireState,
-    CAP_DDA, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS,
-    CAP_STATUS_STREAM, MAX_FRAME, MAX_FRAME_WIRE,
+    BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs,
+    SimRequest, SimTarget, Status, WireConfig, WireState, CAP_DDA, CAP_FORCE_JOB, CAP_HOLD_RESUME,
+    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::segment::Segment;
 use motion::{Rate, MAX_AXES};
@@ -278,8 +278,7 @@ impl LinkTarget for ForceSimTarget {
 pub struct ForceSimBoard {
     pub board: BoardLink,
     pub target: ForceSimTarget,
-    decoder: FrameDecoder<MAX_FRAME>,
-    out: Vec<u8>,
+    wire: SimWire,
     last: Instant,
     budget_ticks: f64,
     /// Machine time per wall time.
@@ -305,8 +304,7 @@ impl ForceSimBoard {
         ForceSimBoard {
             board: BoardLink::new("motionctl-force-sim", caps),
             target: ForceSimTarget::new(CAPACITY),
-            decoder: FrameDecoder::new(),
-            out: Vec::new(),
+            wire: SimWire::new(),
             last: Instant::now(),
             budget_ticks: 0.0,
             speed,
@@ -320,13 +318,6 @@ impl ForceSimBoard {
     fn now_ms(&self) -> u64 {
         let hz = self.target.inner.config.machine.tick_hz.max(1) as u64;
         self.target.inner.tick * 1000 / hz
-    }
-
-    fn emit(&mut self, resp: &Response) {
-        let mut buf = [0u8; MAX_FRAME_WIRE];
-        if let Ok(f) = encode_frame(resp, &mut buf) {
-            self.out.extend_from_slice(f);
-        }
     }
 
     /// Runs the machine up to now (at most [`MAX_ADVANCE_S`] of machine time) and emits the
@@ -357,7 +348,7 @@ impl ForceSimBoard {
             if self.target.inner.tick.is_multiple_of(period_ticks) {
                 let ms = self.now_ms();
                 if let Some(resp) = self.board.poll(ms, &self.target) {
-                    self.emit(&resp);
+                    self.wire.emit(&resp);
                 }
             }
         }
@@ -377,26 +368,21 @@ impl ForceSimBoard {
 impl Transport for ForceSimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
-        for &b in bytes {
-            if let Some(frame) = self.decoder.push(b) {
-                let resp = self.board.on_frame(frame, &mut self.target);
-                self.emit(&resp);
-            }
-        }
+        self.wire.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
-        if self.out.is_empty() {
-            std::thread::sleep(timeout.min(Duration::from_millis(1)));
+        if self.wire.is_empty() {
+            SimWire::idle_wait(timeout);
             self.advance();
         }
-        Ok(std::mem::take(&mut self.out))
+        Ok(self.wire.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
-        self.decoder.reset();
+        self.wire.reset();
         Ok(())
     }
 

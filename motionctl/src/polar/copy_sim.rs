@@ -3,11 +3,11 @@
 //! `TeachRecorder` and simulated-encoder slew), ticked on the wall clock `speed` times faster
 //! than real time.
 
+use crate::sim_wire::SimWire;
 use crate::transport::Transport;
 use motion::protocol::{
-    encode_frame, BoardLink, CopySim, FrameDecoder, SimTarget, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS,
-    CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, MAX_FRAME,
-    MAX_FRAME_WIRE,
+    BoardLink, CopySim, SimTarget, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
+    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use std::io;
 use std::time::{Duration, Instant};
@@ -25,8 +25,7 @@ const CAPS: u32 = CAP_DDA
 pub struct CopySimBoard {
     pub board: BoardLink,
     pub target: CopySim,
-    decoder: FrameDecoder<MAX_FRAME>,
-    out: Vec<u8>,
+    wire: SimWire,
     start: Instant,
     last: Instant,
     owed_ticks: f64,
@@ -39,19 +38,11 @@ impl CopySimBoard {
         CopySimBoard {
             board: BoardLink::new("motionctl-copy-sim", CAPS),
             target: CopySim::new(SimTarget::new(motion::polar::job::wire_config(), 32)),
-            decoder: FrameDecoder::new(),
-            out: Vec::new(),
+            wire: SimWire::new(),
             start: now,
             last: now,
             owed_ticks: 0.0,
             speed,
-        }
-    }
-
-    fn emit(&mut self, resp: &motion::protocol::Response) {
-        let mut buf = [0u8; MAX_FRAME_WIRE];
-        if let Ok(f) = encode_frame(resp, &mut buf) {
-            self.out.extend_from_slice(f);
         }
     }
 
@@ -66,7 +57,7 @@ impl CopySimBoard {
         self.target.run_copy(whole as u64);
         let now_ms = self.start.elapsed().as_millis() as u64;
         if let Some(resp) = self.board.poll(now_ms, &self.target) {
-            self.emit(&resp);
+            self.wire.emit(&resp);
         }
     }
 }
@@ -74,26 +65,21 @@ impl CopySimBoard {
 impl Transport for CopySimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
-        for &b in bytes {
-            if let Some(frame) = self.decoder.push(b) {
-                let resp = self.board.on_frame(frame, &mut self.target);
-                self.emit(&resp);
-            }
-        }
+        self.wire.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
-        if self.out.is_empty() {
-            std::thread::sleep(timeout.min(Duration::from_millis(1)));
+        if self.wire.is_empty() {
+            SimWire::idle_wait(timeout);
             self.advance();
         }
-        Ok(std::mem::take(&mut self.out))
+        Ok(self.wire.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
-        self.decoder.reset();
+        self.wire.reset();
         Ok(())
     }
 

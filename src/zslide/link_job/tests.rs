@@ -445,7 +445,8 @@ fn full_ticks_keep_off_the_generators_heavy_ticks() {
             r.start_at(2 * sc::TICK_HZ);
         }
         let running = r.m.z_job();
-        let (shift, phase) = r.job.run.as_ref().map_or((0, 0), |z| (z.update_shift, z.update_phase));
+        let (shift, phase) =
+            r.job.run.as_ref().map_or((0, 0), |z| (z.update_shift, z.update_phase));
         let (_, was_step_only) = r.tick_step_only(t, false);
         // The job's first full tick (its start's) may fall anywhere; the machine aligns after it.
         if running && job_ticks > u32::from(SUPERVISE_TICKS) {
