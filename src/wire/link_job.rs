@@ -354,6 +354,8 @@ mod tests {
         hash: u64,
         /// DDA clock at the job start (homing ticked it).
         t0: u64,
+        /// The machine's plain segments in flight after the run (a plain job may follow).
+        in_flight: u32,
     }
 
     /// The link firmware's loop on the host: the host streams segments as credits allow
@@ -429,6 +431,7 @@ mod tests {
             power_on_ticks,
             hash: rec.hash(),
             t0,
+            in_flight: m.in_flight(&dda),
         };
         (outcome, step_only_ticks)
     }
@@ -455,6 +458,9 @@ mod tests {
     fn stall_mid_job_retraces_recovers_and_ends_exactly_through_the_machine() {
         let o = run(8, |t| STALL.contains(&t), |_| false);
         assert_eq!((o.state, o.faults), (MachineState::Ready, 0));
+        // The wire job's segments went through the DDA, not the plain queue: nothing is left
+        // in flight for the next job to wait on.
+        assert_eq!(o.in_flight, 0);
         let end = total_steps(job());
         assert_eq!(o.positions, end, "exact final position");
         assert_eq!(o.net, o.positions, "net steps on the pins == machine counters");

@@ -225,6 +225,10 @@ impl Machine {
         if source.idle(dda) {
             self.event_job = false;
             self.events_queued = false;
+            // A wire job's segments ran through the DDA without entering the plain job's
+            // count: the count starts again from here (nothing plain can be queued during it).
+            self.admitted = 0;
+            self.done_base = dda.segments_done();
             self.enter(MachineState::Ready);
         } else if source.starved() {
             self.raise(FaultCode::QueueUnderrun);
