@@ -16,7 +16,7 @@
 use crate::dda::{Command, Dda, StepOutput};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
 use crate::protocol::{
-    FaultCode, ForceJobParams, ForcePhase, ForceStrategy, SimForceFault, SimMillingParams,
+    FaultCode, ForceJobParams, ForcePhase, ForceStrategy, SimForceFault, SimMillingParams, Status,
     MAX_OVERRIDE_BITS,
 };
 use crate::segment::Rate;
@@ -354,6 +354,17 @@ pub struct ForceTelemetry {
     pub override_bits: u32,
     pub phase: ForcePhase,
     pub updates: u32,
+}
+
+impl ForceTelemetry {
+    /// The force fields of `Status` (the board's and the host simulator's alike).
+    pub fn write_status(&self, s: &mut Status) {
+        s.force_mn = self.force_mn;
+        s.force_peak_mn = self.peak_mn;
+        s.force_override_bits = self.override_bits;
+        s.force_phase = self.phase as u8;
+        s.force_updates = self.updates;
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -158,12 +158,7 @@ pub fn drop_job(m: &mut Motion) {
 /// The force job's telemetry, into `s`.
 pub fn status(m: &Motion, s: &mut Status) {
     if let Some(j) = m.job.force() {
-        let t = j.telemetry();
-        s.force_mn = t.force_mn;
-        s.force_peak_mn = t.peak_mn;
-        s.force_override_bits = t.override_bits;
-        s.force_phase = t.phase as u8;
-        s.force_updates = t.updates;
+        j.telemetry().write_status(s);
     }
 }
 

@@ -189,11 +189,7 @@ impl LinkTarget for ForceSimTarget {
         let mut st = self.inner.status();
         if let Some(f) = &self.force {
             let t = f.telemetry();
-            st.force_mn = t.force_mn;
-            st.force_peak_mn = t.peak_mn;
-            st.force_override_bits = t.override_bits;
-            st.force_phase = t.phase as u8;
-            st.force_updates = t.updates;
+            t.write_status(&mut st);
             if f.is_running() && t.updates != 0 {
                 st.override_bits = t.override_bits;
             }
