@@ -241,7 +241,11 @@ def main():
             print("before jog:", log.state, g._rx_buffer_fill, log.reads[-5:], file=sys.stderr)
         g.send_immediately("$J=G21 G91 X50 F600")
         wait("Jog", lambda: log.state == "Jog", 10)
-        time.sleep(0.4)
+        # Cancel once the machine is seen moving, not after a fixed time: on a loaded machine
+        # QEMU can take longer than any fixed pause to start the jog, and a cancel before the
+        # first step rightly moves nothing.
+        wait("the jog's first motion", lambda: log.mpos[0] > start[0], 20)
+        time.sleep(0.2)
         os.write(raw, b"\x85")
         wait("Idle after jog cancel", lambda: log.state == "Idle", 10)
         jogged = log.mpos[0] - start[0]
