@@ -343,9 +343,11 @@ impl ForceController {
         }
         self.integ_q30 += (ki * e_q16) >> 2;
         let (lo, hi) = (self.p.feed_min.to_bits() as i64, self.p.feed_max.to_bits() as i64);
-        // Anti-windup: the integrator never carries the output past a clamp.
-        self.integ_q30 = self.integ_q30.clamp(lo - p_q30, hi - p_q30);
-        (self.integ_q30 + p_q30).clamp(lo, hi)
+        // Anti-windup: the integrator never carries the output past a clamp. `max` then `min`
+        // rather than `clamp`, which asserts its bounds' order: no panic branch at interrupt
+        // rate (the params check keeps feed_min <= feed_max).
+        self.integ_q30 = self.integ_q30.max(lo - p_q30).min(hi - p_q30);
+        (self.integ_q30 + p_q30).max(lo).min(hi)
     }
 }
 
