@@ -58,9 +58,10 @@ pub enum Cmd {
     /// place the machine pole.
     #[command(subcommand)]
     Polar(crate::polar::cli::PolarCmd),
-    /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables.
-    #[command(subcommand)]
-    Fourier(crate::cli_capabilities::FourierCmd),
+    /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables and turning jobs
+    /// (also `fourier`, its older name).
+    #[command(subcommand, visible_alias = "fourier")]
+    Turning(crate::cli_capabilities::FourierCmd),
     /// Constant-force milling (Elbestawi): simulate a milling job's force loop, plot it.
     #[command(subcommand)]
     Milling(crate::cli_capabilities::MillingCmd),
@@ -435,7 +436,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
         Cmd::Grbl(args) => crate::grbl::run(args),
         Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
-        Cmd::Fourier(cmd) => crate::cli_capabilities::run_fourier(cmd),
+        Cmd::Turning(cmd) => crate::cli_capabilities::run_fourier(cmd),
         Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),
         Cmd::Milling(cmd) => crate::cli_capabilities::run_milling(cmd),
         Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),

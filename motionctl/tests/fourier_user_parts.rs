@@ -25,7 +25,7 @@ fn temp(name: &str) -> std::path::PathBuf {
 /// The table `fourier table ARGS --out FILE` writes, parsed back.
 fn table(args: &[&str], file: &str) -> ZTable {
     let path = temp(file);
-    let mut all = vec!["fourier", "table"];
+    let mut all = vec!["turning", "table"];
     all.extend_from_slice(args);
     all.extend_from_slice(&["--out", path.to_str().unwrap()]);
     let (ok, _, err) = motionctl(&all);

@@ -1,4 +1,4 @@
-//! End to end, Z-slide jobs: `motionctl fourier run --qemu` runs the built-in
+//! End to end, Z-slide jobs: `motionctl turning run --qemu` runs the built-in
 //! Douglass table on the link firmware in QEMU twice: 360 rpm with the Z axis's step/dir output,
 //! then with the DAC output and a +20 % spindle speed step 0.25 s (board time) after the start.
 //! X feeds 0 -> 0.5 in at 1 in/s (a short feed: the whole step stays well under a minute of
@@ -26,7 +26,7 @@ pub fn test(root: &Path) -> Result<()> {
         let o = ZRunOptions { output, speed_step: step, ..ZRunOptions::default() };
         let s = |x: &str| x.to_string();
         let mut args = vec![
-            s("fourier"),
+            s("turning"),
             s("run"),
             s("--qemu"),
             s("--firmware"),
@@ -50,7 +50,7 @@ pub fn test(root: &Path) -> Result<()> {
         }
         let (ok, stdout, wall) = run_motionctl(root, &bin, &args)?;
         if !ok {
-            bail!("motionctl fourier run ({output:?}) failed (see its output above)");
+            bail!("motionctl turning run ({output:?}) failed (see its output above)");
         }
         let m = summary_ints(&stdout, "zslide-summary ")?;
         let get = |k: &str| m.get(k).copied().unwrap_or(i64::MIN);

@@ -1,4 +1,4 @@
-//! `motionctl fourier ...`: the Z-slide coefficient table of the user's part (`table`) and a
+//! `motionctl turning ...`: the Z-slide coefficient table of the user's part (`table`) and a
 //! turning job on the board (`run`).
 
 use super::figure::table_figure;
@@ -27,7 +27,7 @@ pub enum FourierCmd {
     Run(FourierRunArgs),
 }
 
-/// `motionctl fourier table`.
+/// `motionctl turning table`.
 #[derive(Args, Debug)]
 pub struct TableArgs {
     /// `thesis`: FOREX4's numerical method (Appendix B-1) for any constants; with the defaults
@@ -85,7 +85,7 @@ pub struct TableArgs {
     pub firmware_rust: Option<PathBuf>,
 }
 
-/// `motionctl fourier run`.
+/// `motionctl turning run`.
 #[derive(Args, Debug)]
 pub struct FourierRunArgs {
     #[command(flatten)]
@@ -93,7 +93,7 @@ pub struct FourierRunArgs {
     /// Spindle speed, rpm (QEMU: the simulated spindle's; a real spindle must turn at it).
     #[arg(long, default_value_t = 360.0, allow_negative_numbers = true)]
     pub rpm: f64,
-    /// Table file, as `fourier table --out` (or --csv) writes it, in inches or mm
+    /// Table file, as `turning table --out` (or --csv) writes it, in inches or mm
     /// [default: the built-in thesis table, accurate mode].
     #[arg(long, value_name = "FILE")]
     pub table: Option<PathBuf>,
@@ -283,7 +283,7 @@ fn fourier_table(a: &TableArgs) -> Result<()> {
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
     let comments = vec![
-        format!("motionctl fourier table: {description}"),
+        format!("motionctl turning table: {description}"),
         format!("mode {}; {}", built.method, t.form.describe()),
         format!(
             "X 0 .. {:.4} {un} in steps of {:.4} {un}: {} rows",

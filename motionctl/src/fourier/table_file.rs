@@ -1,4 +1,4 @@
-//! The Z table file: what `motionctl fourier table --out` writes and `fourier run --table` (and
+//! The Z table file: what `motionctl turning table --out` writes and `turning run --table` (and
 //! through it the board) takes. Text, one row per line:
 //!
 //! ```text
