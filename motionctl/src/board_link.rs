@@ -238,6 +238,11 @@ pub fn stream_outputs(
         progress: true,
         interrupt: Some(interrupt),
         home: link.home || link.qemu || link.sim,
+        zero_here: runner::ZeroHere::for_run(
+            link.qemu || link.sim,
+            yes,
+            std::io::stdin().is_terminal(),
+        ),
         journal,
         sim_probe,
     };

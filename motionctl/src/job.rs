@@ -49,6 +49,9 @@ pub struct Machine {
     /// Largest distance between an arc (or spline) and the chords it is cut into, mm
     /// (`arc_tolerance_mm`, default 0.002 as grbl's `$12`).
     pub arc_tolerance_mm: f64,
+    /// Axes homed on their switches, in turn (`home_order`, else the axes with a `home` entry
+    /// in file order); empty: no switches, homing takes the axes where they stand.
+    pub home_order: Vec<usize>,
 }
 
 /// Default chord tolerance of arcs and splines, mm (grbl's default `$12`).
@@ -76,6 +79,8 @@ pub struct Axis {
     /// Soft limits, mm.
     pub min_mm: f64,
     pub max_mm: f64,
+    /// Its homing switch (`home = { ... }`), if it has one.
+    pub home: Option<crate::homing::AxisHome>,
 }
 
 impl Machine {
@@ -88,6 +93,13 @@ impl Machine {
     pub fn axis_names(&self) -> String {
         let names: Vec<&str> = self.axes.iter().map(|a| a.name.as_str()).collect();
         names.join(", ")
+    }
+
+    /// The board's homing config (`HomingConfig::NONE` for a machine without switches).
+    pub fn homing(&self) -> motion::protocol::HomingConfig {
+        let homes: Vec<_> = self.axes.iter().map(|a| a.home).collect();
+        let steps: Vec<f64> = self.axes.iter().map(|a| a.steps_per_mm).collect();
+        crate::homing::config(&self.home_order, &homes, &steps)
     }
 }
 
@@ -334,6 +346,8 @@ struct RawMachine {
     /// At most 1 mm: a coarser chord is not an arc.
     #[serde(default)]
     arc_tolerance_mm: Option<Positive<1>>,
+    #[serde(default)]
+    home_order: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]
@@ -355,6 +369,8 @@ struct RawAxis {
     junction_jerk_mm_s: NonNegative<{ MAX_KINEMATIC as u64 }>,
     min_mm: Coord,
     max_mm: Coord,
+    #[serde(default)]
+    home: Option<crate::homing::RawHome>,
 }
 
 #[derive(Deserialize)]
@@ -473,6 +489,18 @@ impl RawMachine {
                     format!("must be below max_mm ({} >= {})", a.min_mm.0, a.max_mm.0),
                 ));
             }
+            let limits = crate::homing::AxisLimits {
+                steps_per_mm: a.steps_per_mm.0,
+                max_rate_mm_s: a.max_rate_mm_s.0,
+                min_mm: a.min_mm.0,
+                max_mm: a.max_mm.0,
+            };
+            let home = a
+                .home
+                .as_ref()
+                .map(|h| crate::homing::check_axis(h, &limits))
+                .transpose()
+                .map_err(|(f, why)| JobError::new(field(&format!("home.{f}")), why))?;
             axes.push(Axis {
                 name,
                 steps_per_mm: a.steps_per_mm.0,
@@ -481,8 +509,13 @@ impl RawMachine {
                 junction_jerk_mm_s: a.junction_jerk_mm_s.0,
                 min_mm: a.min_mm.0,
                 max_mm: a.max_mm.0,
+                home,
             });
         }
+        let names: Vec<&str> = axes.iter().map(|a| a.name.as_str()).collect();
+        let homed: Vec<bool> = axes.iter().map(|a| a.home.is_some()).collect();
+        let home_order = crate::homing::order(self.home_order.as_deref(), &names, &homed)
+            .map_err(|why| JobError::new("machine.home_order", why))?;
         Ok(Machine {
             tick_hz: self.tick_hz,
             timing: StepTiming {
@@ -493,6 +526,7 @@ impl RawMachine {
             axes,
             switch_debounce_ms: self.switch_debounce_ms.map_or(DEFAULT_SWITCH_DEBOUNCE_MS, |d| d.0),
             arc_tolerance_mm: self.arc_tolerance_mm.map_or(DEFAULT_ARC_TOLERANCE_MM, |t| t.0),
+            home_order,
         })
     }
 }

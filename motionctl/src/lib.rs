@@ -13,6 +13,7 @@ pub mod csv_log;
 pub mod fourier;
 pub mod gcode;
 pub mod grbl;
+pub mod homing;
 pub mod job;
 pub mod journal;
 pub mod link;

@@ -105,6 +105,15 @@ impl Progress {
         }
     }
 
+    /// Runs `f` with the bars hidden: a question for the operator on the terminal.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        if self.fancy {
+            self.multi.suspend(f)
+        } else {
+            f()
+        }
+    }
+
     pub fn finish(&self) {
         self.line.finish_and_clear();
         self.bar.finish_and_clear();

@@ -8,16 +8,17 @@
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
-//! | `zslide-e2e` | `motionctl fourier run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
+//! | `zslide-e2e` | `motionctl turning run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `grbl-e2e` | `motionctl grbl --qemu --pty` with the link firmware in QEMU behind it: a third-party sender (grbl-streamer) streams a corpus file with a hold, a resume, a feed override, a jog and its cancel, ending at its programmed end; then `$MILL=`, `$TURN=` and `$WIRE=` from the same port, each ending as the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
-//! | `faults` | the fault-injection suite: board faults on the host model, reset, power cut, link drop and USART overrun bursts on the link firmware in QEMU, the config record, every bad-input class of `motionctl`; writes `target/faults.json` |
+//! | `faults` | the fault-injection suite: board faults on the host model, reset, power cut, link drop, USART overrun bursts and a corrupt config record on the link firmware in QEMU, the config record on the host, every bad-input class of `motionctl`; writes `target/faults.json` |
 //! | `bench` | DDA micro-benchmarks in QEMU, sizes; writes `target/bench.json` and `BENCHMARKS.md` |
 //! | `bench-faults` | only the fault suite's figures of `bench`: runs `faults`, rewrites the reliability section of BENCHMARKS.md, merges `faults_injected` / `faults_survived` into `target/bench.json` |
 //! | `bench-gcode` | only the G-code planning figures of `bench`: `motionctl plan` (release) of a generated 1 000 000-line surfacing file, segments/s and peak RSS, merged into `target/bench.json` |
 //! | `isr-profile [JOB]...` | the whole TIM2 handler of the link firmware, every tick of real jobs in QEMU (instruction trace), instructions and modelled cycles by situation |
 //! | `isr-cycles [JOB]...` | the isr-profile jobs on the link firmware built with `isr-cycles`: the board's own count of its tick handler (instructions under QEMU, DWT cycles on an F405) |
 //! | `flash <board>` | builds and runs the firmware on a real board with `probe-rs run` (`f405-motion`: the `link` firmware) |
+//! | `decode-log ELF LOG` | prints the defmt log a firmware wrote (a QEMU log of `faults` or `motionctl --qemu`) as text |
 //!
 //! Every command first makes sure the pinned toolchain, the thumb target, `llvm-tools` and
 //! `qemu-system-arm` are installed.
@@ -224,6 +225,15 @@ fn run() -> Result<()> {
                 std::time::Duration::from_secs(secs.parse()?),
             )?;
             run.print("  fw| ");
+            Ok(())
+        }
+        "decode-log" => {
+            let [elf, log] = rest else { bail!("usage: cargo xtask decode-log ELF LOG") };
+            let bytes = std::fs::read(log).with_context(|| format!("reading {log}"))?;
+            // A QEMU log starts with QEMU's own text lines; defmt resynchronises after them.
+            for line in firmware::decode_text(std::path::Path::new(elf), &bytes)? {
+                println!("{line}");
+            }
             Ok(())
         }
         "flash" => {

@@ -11,10 +11,12 @@
 //! | USART1 | host link (`link` firmware), 115200 8N1 from the 16 MHz HSI; QEMU's `-serial` |
 //! | (sim) | spindle for Z-slide jobs: `Sim(Spindle)` sets its speed, the encoder logic reads it |
 //! | semihosting | defmt log frames on QEMU's stdout, exit status |
+//! | SRAM (`.uninit`) | the stored config, a NOR-flash model that survives a reset (`config_ram.rs`) |
 
 #![no_std]
 
 mod clocks;
+mod config_ram;
 mod cycles;
 mod log;
 mod sim_io;
@@ -22,12 +24,13 @@ mod spindle;
 mod step_port;
 
 pub use board_stm32f405::{pac, HostSerial, TickRate, TickTimer, Watchdog};
+pub use config_ram::RamConfig;
 pub use cycles::CycleCounter;
 pub use sim_io::{CopyEncoders, MachineIo};
 pub use spindle::Spindle;
 pub use step_port::StepPort;
 
-use board_contract::{NoConfigStorage, NoForceAdc, Parts};
+use board_contract::{NoForceAdc, Parts};
 use motion::machine::ResetCause;
 
 /// QEMU has no e-stop input: the interrupt is never raised.
@@ -56,9 +59,9 @@ impl board_contract::Board for Board {
     type HostSerial = HostSerial;
     /// QEMU ignores the IWDG; started anyway so the link firmware is the same code.
     type Watchdog = Watchdog;
-    /// No persisted config under QEMU (its flash is read-only ROM): always missing at boot;
-    /// the store itself is tested on the host over a NOR-flash mock.
-    type ConfigStorage = NoConfigStorage;
+    /// QEMU's flash is read-only ROM: the record is kept in RAM that survives a reset
+    /// (`config_ram`), in the same store format the real board's flash holds.
+    type ConfigStorage = RamConfig;
     type CopyEncoders = CopyEncoders;
     /// QEMU's ADC values are fake: force jobs sample the simulated milling plant in the tick.
     type ForceAdc = NoForceAdc;
@@ -78,7 +81,7 @@ impl board_contract::Board for Board {
             io: MachineIo,
             host: HostSerial::new(dp.USART1, clocks.pclk2_hz, Self::HOST_BAUD),
             watchdog: Watchdog::new(dp.IWDG),
-            config: NoConfigStorage,
+            config: RamConfig::take(),
             copy_encoders: CopyEncoders::new(),
             force_adc: None,
             spindle: Spindle::new(),

@@ -171,6 +171,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode> {
+        // The same switches again change nothing: no flash write, and the machine stays homed
+        // (a new config would lose the homing), so a host may send them before every job.
+        if *homing == self.with(|m| m.machine.config().homing()) {
+            return Ok(());
+        }
         let wire = self.with(|m| m.machine.config().wire);
         self.install(&BoardConfig::with_homing(wire, homing))
     }

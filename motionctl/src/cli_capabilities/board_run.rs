@@ -18,6 +18,7 @@ pub(super) fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) ->
         junction_jerk_mm_s: m::JUNCTION_JERK_HZ as f64 / steps_per_unit,
         min_mm: min,
         max_mm: max,
+        home: None,
     };
     crate::job::Job {
         machine: crate::job::Machine {
@@ -31,6 +32,7 @@ pub(super) fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) ->
             ],
             switch_debounce_ms: crate::job::DEFAULT_SWITCH_DEBOUNCE_MS,
             arc_tolerance_mm: crate::job::DEFAULT_ARC_TOLERANCE_MM,
+            home_order: Vec::new(),
         },
         items: Vec::new(),
         feed_commands: Vec::new(),

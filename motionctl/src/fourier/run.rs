@@ -1,4 +1,4 @@
-//! `motionctl fourier run`: a Z-slide job on a board with `CAP_ZSLIDE_JOB`, checked
+//! `motionctl turning run`: a Z-slide job on a board with `CAP_ZSLIDE_JOB`, checked
 //! against the host model.
 //!
 //! Hello -> the board ready (`runner::ready_board`: config, ConfigMissing cleared, homing) ->
@@ -377,7 +377,7 @@ pub fn run_with(
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
     let (query, status) = (runner::ask, runner::ask_status);
-    runner::ready_board(&mut s, cfg, o.home, "Z-slide machine (Z, X)", say)
+    runner::ready_board(&mut s, cfg, runner::Home::allowed(o.home), "Z-slide machine (Z, X)", say)
         .map_err(|e| anyhow!("{e}"))?;
     if sim {
         query(

@@ -173,7 +173,14 @@ fn serve(
     );
     let say = |m: &str| eprintln!("motionctl: {m}");
     let home_ok = args.link.home || args.link.qemu || args.link.sim;
-    let alarm = match runner::ready_board(&mut s, wire, home_ok, "machine file", &say) {
+    // The machine file's switches, for `$H` too; on a machine without any, `--home` (or a
+    // simulated board) is the operator's word that the axes stand at machine zero, as `$H` is.
+    let home = runner::Home::Switches {
+        homing: &machine.homing(),
+        allowed: home_ok,
+        zero_here: &|_: &str| true,
+    };
+    let alarm = match runner::ready_board(&mut s, wire, home, "machine file", &say) {
         Ok(_) => None,
         Err(e) => {
             let st = runner::ask_status(&mut s)?;

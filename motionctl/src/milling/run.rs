@@ -242,8 +242,14 @@ pub fn run_resumable(
         say(m)
     };
     let home = opts.home || resume.is_some();
-    runner::ready_board(&mut s, cfg, home, "milling machine (X)", &watch_homing)
-        .map_err(|e| anyhow!("{e}"))?;
+    runner::ready_board(
+        &mut s,
+        cfg,
+        runner::Home::allowed(home),
+        "milling machine (X)",
+        &watch_homing,
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     if resume.is_some() && !homed_now.get() {
         runner::home(&mut s, cfg.machine.tick_hz, &|m| say(m)).map_err(|e| anyhow!("{e}"))?;
     }

@@ -205,8 +205,14 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
     let (query, status) = (runner::ask, runner::ask_status);
-    runner::ready_board(&mut s, cfg, opts.home, "polar machine (theta, r)", &|m| say(m))
-        .map_err(|e| anyhow!("{e}"))?;
+    runner::ready_board(
+        &mut s,
+        cfg,
+        runner::Home::allowed(opts.home),
+        "polar machine (theta, r)",
+        &|m| say(m),
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     let base = status(&mut s)?;
     let origin = base.encoder_counts;
     if opts.trace.is_some() {

@@ -225,8 +225,14 @@ pub fn run_with(
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
     let (query, status) = (runner::ask, runner::ask_status);
-    runner::ready_board(&mut s, cfg, opts.home, "polar machine (theta, r)", &|m| say(m))
-        .map_err(|e| anyhow!("{e}"))?;
+    runner::ready_board(
+        &mut s,
+        cfg,
+        runner::Home::allowed(opts.home),
+        "polar machine (theta, r)",
+        &|m| say(m),
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     query(&mut s, RequestBody::SetOverride { rate_bits: speed.to_bits() }, "SetOverride")?;
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;

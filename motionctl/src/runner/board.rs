@@ -7,7 +7,9 @@ use crate::convert::Program;
 use crate::job::Job;
 use crate::link::{describe_rejection, Session};
 use motion::machine::MachineState;
-use motion::protocol::{AxisScale, FaultCode, Reply, RequestBody, Status, WireConfig};
+use motion::protocol::{
+    AxisScale, FaultCode, HomingConfig, Reply, RequestBody, Status, WireConfig,
+};
 use motion::MAX_AXES;
 use std::time::Duration;
 
@@ -66,15 +68,41 @@ pub fn ask_status(s: &mut Session) -> anyhow::Result<Status> {
     }
 }
 
+/// Whether and how [`ready_board`] homes a board that is not homed.
+#[derive(Clone, Copy)]
+pub enum Home<'a> {
+    /// Refuse the job: the operator homes the board (`motionctl home`) or passes `--home`.
+    Refuse,
+    /// Home with the switches the board was given before.
+    AsConfigured,
+    /// Give the board the job's machine's switches first (a board given the same ones keeps
+    /// its homing; other ones make it home again), then home if `allowed`. A machine without
+    /// switches takes the axes where they stand as machine zero: only once `zero_here` says
+    /// the operator put them there.
+    Switches { homing: &'a HomingConfig, allowed: bool, zero_here: &'a dyn Fn(&str) -> bool },
+}
+
+impl Home<'_> {
+    /// `Refuse` or `AsConfigured`.
+    pub fn allowed(home: bool) -> Home<'static> {
+        if home {
+            Home::AsConfigured
+        } else {
+            Home::Refuse
+        }
+    }
+}
+
 /// Brings a connected board to `Ready` with `cfg`, as every job runner starts: refuses a board
 /// with a latched fault other than `ConfigMissing` / `ConfigCorrupt` or one that is busy, sends
 /// `cfg` when the board's differs (or a fault is latched), clears either of those two (the
-/// faults sending the config removes; a corrupt record is reported), and homes when the board is not homed and `home` allows it. `what` names
-/// the machine in messages. Returns the board's status from before the config was sent.
+/// faults sending the config removes; a corrupt record is reported), gives it the machine's
+/// switches and homes when the board is not homed, as `home` says. `what` names the machine in
+/// messages. Returns the board's status from before the config was sent.
 pub fn ready_board(
     s: &mut Session,
     cfg: WireConfig,
-    home_allowed: bool,
+    home: Home<'_>,
     what: &str,
     say: &dyn Fn(&str),
 ) -> Result<Status, String> {
@@ -125,15 +153,34 @@ pub fn ready_board(
              the {what}'s (check the board's flash if this happens again)"
         ));
     }
+    if let Home::Switches { homing, .. } = home {
+        query(s, RequestBody::SetHoming(*homing), &format!("SetHoming ({what})"))?;
+    }
     let now = status(s)?;
     if now.machine != MachineState::Ready {
-        if !home_allowed {
-            return Err(format!(
-                "the board is not homed (state {:?}): home it (`motionctl home`) or pass --home",
-                now.machine
-            ));
+        match home {
+            Home::Refuse | Home::Switches { allowed: false, .. } => {
+                return Err(format!(
+                    "the board is not homed (state {:?}): home it (`motionctl home`) or pass \
+                     --home",
+                    now.machine
+                ))
+            }
+            Home::Switches { homing, zero_here, .. } if homing.count == 0 => {
+                let ask = format!(
+                    "the {what} has no homing switches (no axis has a `home` entry): homing \
+                     takes the axes where they stand now as machine zero"
+                );
+                if !zero_here(&ask) {
+                    return Err(format!(
+                        "{ask}. Jog them to machine zero (where the job's coordinates start), \
+                         then run again with --yes, or answer yes at the prompt"
+                    ));
+                }
+            }
+            Home::Switches { .. } | Home::AsConfigured => {}
         }
-        home(s, cfg.machine.tick_hz, say).map_err(|e| e.to_string())?;
+        self::home(s, cfg.machine.tick_hz, say).map_err(|e| e.to_string())?;
     }
     Ok(st)
 }

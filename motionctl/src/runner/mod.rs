@@ -32,11 +32,11 @@ mod verify;
 mod watch;
 
 pub use board::{
-    ask, ask_status, axes_of, fault_names, home, ready_board, seq_at_or_after, wire_config,
+    ask, ask_status, axes_of, fault_names, home, ready_board, seq_at_or_after, wire_config, Home,
     HOMING_BOARD_SECONDS, HOMING_STUCK,
 };
 pub use hook::{JobControl, JobHook, Steer, Unattended};
-pub use options::{RunOptions, SimProbe, DEFAULT_STATUS_PERIOD_MS};
+pub use options::{RunOptions, SimProbe, ZeroHere, DEFAULT_STATUS_PERIOD_MS};
 pub use outputs::{OutputSource, Outputs, Tagged};
 pub use probe::{probe_ended_as, probe_outcome, set_sim_probe};
 pub use report::{counters_text, ProbeOutcome, Probed, RunError, RunReport};

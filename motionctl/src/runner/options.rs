@@ -30,6 +30,8 @@ pub struct RunOptions {
     pub interrupt: Option<Arc<AtomicBool>>,
     /// Home the board first if it is not homed (else such a board refuses the job).
     pub home: bool,
+    /// Who vouches that a machine without switches stands at machine zero when it is homed.
+    pub zero_here: ZeroHere,
     /// Keep the run journal (the line executing, for `run --resume`).
     pub journal: Option<crate::journal::Writer>,
     /// A simulated board's probe surface, set before the job (`run --sim-probe`).
@@ -47,8 +49,69 @@ impl Default for RunOptions {
             progress: false,
             interrupt: None,
             home: false,
+            zero_here: ZeroHere::Simulated,
             journal: None,
             sim_probe: None,
         }
+    }
+}
+
+/// Homing a machine without switches takes the axes where they stand as machine zero: who
+/// vouches that they stand there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZeroHere {
+    /// A simulated machine (the simulator, QEMU) starts at its zero: nothing to ask.
+    Simulated,
+    /// The operator said so on the command line (`--yes`).
+    Confirmed,
+    /// Ask the operator on the terminal.
+    Ask,
+    /// No terminal to ask on and no `--yes`: refuse.
+    Refuse,
+}
+
+impl ZeroHere {
+    /// The choice for a run: a simulated board needs no one, else `--yes`, else the terminal.
+    pub fn for_run(simulated: bool, yes: bool, terminal: bool) -> ZeroHere {
+        match (simulated, yes, terminal) {
+            (true, _, _) => ZeroHere::Simulated,
+            (false, true, _) => ZeroHere::Confirmed,
+            (false, false, true) => ZeroHere::Ask,
+            (false, false, false) => ZeroHere::Refuse,
+        }
+    }
+
+    /// Whether the axes stand at machine zero; `why` says what homing will do. Asks on the
+    /// terminal (stderr, one line from stdin: `yes` or `y`) for `Ask`.
+    pub fn confirm(self, why: &str) -> bool {
+        match self {
+            ZeroHere::Simulated | ZeroHere::Confirmed => true,
+            ZeroHere::Refuse => false,
+            ZeroHere::Ask => {
+                eprint!("motionctl: {why}. Are the axes at machine zero? Type yes to home here: ");
+                let mut answer = String::new();
+                std::io::stdin().read_line(&mut answer).is_ok() && is_yes(&answer)
+            }
+        }
+    }
+}
+
+fn is_yes(answer: &str) -> bool {
+    matches!(answer.trim().to_ascii_lowercase().as_str(), "yes" | "y")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_simulated_board_or_the_operator_vouches_for_the_zero() {
+        assert_eq!(ZeroHere::for_run(true, false, false), ZeroHere::Simulated);
+        assert_eq!(ZeroHere::for_run(false, true, false), ZeroHere::Confirmed);
+        assert_eq!(ZeroHere::for_run(false, false, true), ZeroHere::Ask);
+        assert_eq!(ZeroHere::for_run(false, false, false), ZeroHere::Refuse);
+        assert!(!ZeroHere::Refuse.confirm("x"));
+        assert!(ZeroHere::Confirmed.confirm("x"));
+        assert!(is_yes(" Yes\n") && is_yes("y") && !is_yes("") && !is_yes("no"));
     }
 }

@@ -2,7 +2,7 @@
 //! segments as credits allow, starts the board, keeps the link alive and schedules the feed
 //! commands, until everything sent is done; then the checks.
 
-use super::board::{axes_of, ready_board, seq_at_or_after, status_of, wire_config};
+use super::board::{axes_of, ready_board, seq_at_or_after, status_of, wire_config, Home};
 use super::options::RunOptions;
 use super::outputs::{peek, Outputs, Tagged, Whereabouts};
 use super::report::{err, link_err, RunError, RunReport};
@@ -166,12 +166,13 @@ impl<'t, 'o> Stream<'t, 'o> {
             ),
         );
         let want = wire_config(job, program);
-        ready_board(&mut s, want, opts.home, "job's machine", &|m| say(&progress, m)).map_err(
-            |e| {
-                let why = want.validate().err().map(|e| format!(" ({e:?})")).unwrap_or_default();
-                err(format!("{e}{why}"))
-            },
-        )?;
+        let homing = job.machine.homing();
+        let zero_here = |why: &str| progress.suspend(|| opts.zero_here.confirm(why));
+        let home = Home::Switches { homing: &homing, allowed: opts.home, zero_here: &zero_here };
+        ready_board(&mut s, want, home, "job's machine", &|m| say(&progress, m)).map_err(|e| {
+            let why = want.validate().err().map(|e| format!(" ({e:?})")).unwrap_or_default();
+            err(format!("{e}{why}"))
+        })?;
         query(
             &mut s,
             RequestBody::SetStatusPeriod { ms: opts.status_period_ms },

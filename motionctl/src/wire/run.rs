@@ -134,8 +134,14 @@ pub fn run_with(
     }
     say(&format!("connected to {}: firmware {:?}", s.describe(), info.firmware.as_str()));
     let (query, status) = (runner::ask, runner::ask_status);
-    runner::ready_board(&mut s, cfg, opts.home, "wire machine (X, Y, beta, alpha)", &|m| say(m))
-        .map_err(|e| anyhow!("{e}"))?;
+    runner::ready_board(
+        &mut s,
+        cfg,
+        runner::Home::allowed(opts.home),
+        "wire machine (X, Y, beta, alpha)",
+        &|m| say(m),
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     if opts.stall.is_some() {
         query(&mut s, RequestBody::Sim(SimRequest::Inject { wire_stall: false }), "Sim(Inject)")?;
     }

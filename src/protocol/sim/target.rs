@@ -386,6 +386,10 @@ impl LinkTarget for SimTarget {
     }
 
     fn set_homing(&mut self, homing: &HomingConfig) -> Result<(), ErrorCode> {
+        // The same switches again change nothing: the machine stays homed.
+        if *homing == self.homing {
+            return Ok(());
+        }
         self.homing = *homing;
         self.take(CommandKind::SetConfig);
         Ok(())
@@ -533,9 +537,9 @@ impl LinkTarget for SimTarget {
             SimRequest::Inject { wire_stall } => self.sim_wire_stall = wire_stall,
             SimRequest::Milling(params) => self.sim_milling = Some(params),
             SimRequest::Probe { surface } => self.sim_probe = surface,
-            SimRequest::Spindle { .. } | SimRequest::Encoders { .. } => {
-                return Err(ErrorCode::Unsupported)
-            }
+            SimRequest::Spindle { .. }
+            | SimRequest::Encoders { .. }
+            | SimRequest::CorruptConfig => return Err(ErrorCode::Unsupported),
         }
         self.mutations += 1;
         Ok(())

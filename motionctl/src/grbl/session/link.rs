@@ -34,7 +34,8 @@ impl Bridge<'_> {
         what: &str,
     ) -> Result<Result<(), String>> {
         let say = |m: &str| eprintln!("motionctl: {m}");
-        let r = runner::ready_board(&mut self.s, wire, home, what, &say).map(drop);
+        let r = runner::ready_board(&mut self.s, wire, runner::Home::allowed(home), what, &say)
+            .map(drop);
         runner::ask(
             &mut self.s,
             RequestBody::SetStatusPeriod { ms: crate::grbl::STATUS_MS },

@@ -101,7 +101,8 @@ fn session(surface: Option<SimProbe>, script: impl FnOnce(&mut Sender)) {
     let mut t: Box<dyn Transport> = Box::new(EventSim::scaled(SIM_CAPACITY, SIM_SPEED));
     let mut s = Session::new(&mut *t, HostConfig { rto_ms: 50, window: 8 });
     s.connect().unwrap();
-    runner::ready_board(&mut s, wire_cfg, true, "machine file", &|_| {}).unwrap();
+    runner::ready_board(&mut s, wire_cfg, runner::Home::AsConfigured, "machine file", &|_| {})
+        .unwrap();
     if let Some(sim) = surface {
         let spm: Vec<f64> = machine.axes.iter().map(|a| a.steps_per_mm).collect();
         runner::set_sim_probe(&mut s, sim, &[0; motion::MAX_AXES], &spm).unwrap();
