@@ -1,9 +1,12 @@
 //! The force job as the link firmware runs it (`link_tick` around `Machine::tick`), on the host.
 
 use super::*;
+use crate::dda::Dda;
 use crate::force::scenario::{self as sc, ForceScenario, Variant};
 use crate::machine::{BoardConfig, MachineCommand};
+use crate::machine::{Inputs, Machine, MachineState, TickOut};
 use crate::protocol::{AxisScale, HomingConfig, WireConfig};
+use crate::protocol::{ForceStrategy, MAX_OVERRIDE_BITS};
 use crate::scenario::run_to_end;
 
 fn board() -> BoardConfig {
