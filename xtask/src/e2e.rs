@@ -117,7 +117,7 @@ pub(crate) fn summary_ints(
 }
 
 /// `motionctl-summary k=v ...` -> map.
-fn summary(stdout: &str) -> Result<std::collections::BTreeMap<String, f64>> {
+pub(crate) fn summary(stdout: &str) -> Result<std::collections::BTreeMap<String, f64>> {
     let line = stdout
         .lines()
         .find(|l| l.starts_with("motionctl-summary "))
