@@ -8,8 +8,8 @@
 //! the segments either side of it are candidates too; the deviation is the least, over the
 //! candidates, of the per-axis (Chebyshev) distance from the position to the segment.
 //!
-//! Only the segments sent and not yet done are kept (with the last one done): at most the
-//! board's queue, however long the file.
+//! Only the segments sent and not yet done are kept, with the last [`KEEP_DONE`] done: at most
+//! the board's queue and a few more, however long the file.
 //!
 //! What moves off the planned path on purpose is not checked, or re-anchored:
 //! - a probe move (G38.x) stops where the probe trips and the rest of the job is planned from
@@ -35,6 +35,9 @@ pub const PATH_STEP_STEPS: f64 = 1.0;
 pub const BRESENHAM_ROUNDING_STEPS: f64 = 0.5;
 /// Largest per-axis distance of a status report from the planned path.
 pub const PATH_LIMIT_STEPS: f64 = PATH_STEP_STEPS + BRESENHAM_ROUNDING_STEPS;
+/// Segments kept after they are done (beyond the last): a report overtaken by a newer one (a
+/// polled status answered after the stream's next) is still checked against them.
+const KEEP_DONE: i64 = 16;
 
 /// What the path check found, for the run's report.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -43,7 +46,7 @@ pub struct PathSummary {
     pub samples: u64,
     /// Reports taken during probe moves (not checked: the board stops those early).
     pub skipped_probing: u64,
-    /// Reports older than one already checked (a polled status overtaken by the stream).
+    /// Reports older than one already checked whose segments are no longer kept.
     pub skipped_stale: u64,
     /// The largest per-axis distance from the planned path seen, steps.
     pub max_dev_steps: f64,
@@ -75,7 +78,7 @@ pub(super) struct PathCheck {
     axes: Vec<String>,
     /// The job's file, for messages naming a line of it.
     label: Option<String>,
-    /// The last segment done (or the start point) and every segment sent after it.
+    /// The last segments done (or the start point) and every segment sent after them.
     window: VecDeque<Span>,
     /// The job's index of `window[0]` (-1: the start point before the first segment).
     first: i64,
@@ -128,21 +131,25 @@ impl PathCheck {
             self.summary.skipped_probing += 1;
             return;
         }
-        if self.last_tick.is_some_and(|t| st.tick < t) {
-            self.summary.skipped_stale += 1;
-            return;
-        }
-        self.last_tick = Some(st.tick);
         let done = done as i64;
-        // Keep the last segment done: a report on the boundary may still be on it.
-        while self.first < done - 1 && self.window.len() > 1 {
-            self.window.pop_front();
-            self.first += 1;
+        let newest = self.last_tick.is_none_or(|t| st.tick >= t);
+        if newest {
+            self.last_tick = Some(st.tick);
+            // The segment just done stays a candidate (a report on the boundary), and a few
+            // before it for reports overtaken by this one.
+            while self.first < done - 1 - KEEP_DONE && self.window.len() > 1 {
+                self.window.pop_front();
+                self.first += 1;
+            }
         }
         let best = (done - 1..=done + 1)
             .filter_map(|i| self.span(i))
             .map(|s| (deviation(&st.positions, s, self.axes.len()), *s))
             .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0));
+        if best.is_none() && !newest {
+            self.summary.skipped_stale += 1;
+            return;
+        }
         self.summary.samples += 1;
         let Some(((dev, axis), _)) = best else {
             let sent = self.first + self.window.len() as i64;
@@ -355,13 +362,21 @@ mod tests {
     }
 
     #[test]
-    fn an_older_report_after_a_newer_one_is_skipped_not_misread() {
+    fn an_older_report_after_a_newer_one_is_checked_while_its_segments_are_kept() {
         let mut c = check();
-        c.observe(&status(10, 1300, 450), 1, false);
+        // 40 more segments of 10 steps in Y from (1400, 650).
+        for k in 0..40 {
+            c.sent(&seg(100 + k, 0, 10), Some(20));
+        }
+        c.observe(&status(100, 1400, 1050), 42, false);
+        // Overtaken reports: one of a segment still kept, on and off the path ...
+        c.observe(&status(90, 1400, 905), 27, false);
+        c.observe(&status(91, 1402, 905), 27, false);
+        // ... and one of a segment no longer kept: skipped, not misread.
         c.observe(&status(5, 600, 50), 0, false);
         let s = c.summary();
-        assert!(s.ok(), "{s:?}");
-        assert_eq!((s.samples, s.skipped_stale), (1, 1));
+        assert_eq!((s.samples, s.off_path, s.skipped_stale), (3, 1, 1), "{s:?}");
+        assert!(s.first_off.unwrap().contains("tick 91"));
     }
 
     #[test]
