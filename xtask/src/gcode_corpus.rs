@@ -12,7 +12,7 @@
 //! not fail the run. A table goes to stdout, the same rows to `target/gcode-corpus.json`, and
 //! each run's output to `target/gcode-corpus/FILE.log`.
 
-use crate::e2e::{build_motionctl, summary};
+use crate::e2e::{build_motionctl, summary, wait_at_most};
 use crate::firmware::{self, Board};
 use crate::gcode_e2e::MACHINE;
 use anyhow::{bail, Context, Result};
@@ -233,20 +233,7 @@ fn run_one(root: &Path, bin: &Path, elf: &Path, row: &mut Row) -> Result<()> {
         .stderr(log)
         .spawn()
         .with_context(|| format!("could not start {}", bin.display()))?;
-    let status = loop {
-        if let Some(s) = child.try_wait()? {
-            break Some(s);
-        }
-        if start.elapsed() > limit {
-            // SIGINT first: motionctl aborts the board and stops its QEMU on the way out.
-            let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
-            std::thread::sleep(Duration::from_secs(3));
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let status = wait_at_most(&mut child, start, limit)?;
     row.wall_s = Some(start.elapsed().as_secs_f64());
     let out = std::fs::read_to_string(&log_path).unwrap_or_default();
     let s = summary(&out).ok();
