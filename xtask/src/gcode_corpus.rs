@@ -10,7 +10,8 @@
 //! With `--all` every file runs (QEMU runs in real time at best: about 45 min). Files the
 //! planner refuses on purpose ([`REFUSED`]) are listed as refused with their first error, and do
 //! not fail the run. A table goes to stdout, the same rows to `target/gcode-corpus.json`, and
-//! each run's output to `target/gcode-corpus/FILE.log`.
+//! each run's output to `target/gcode-corpus/FILE.log`. Each file runs from a copy there, so the
+//! run journal `motionctl run` keeps beside its file (`FILE.journal`) stays out of the corpus.
 
 use crate::e2e::{build_motionctl, summary, wait_at_most};
 use crate::firmware::{self, Board};
@@ -133,14 +134,14 @@ fn run(root: &Path, select: Select) -> Result<()> {
     Ok(())
 }
 
-/// The corpus's G-code files (not its notes), by name.
+/// The corpus's G-code files (not its notes, nor a run journal a stopped run left), by name.
 fn corpus_files(root: &Path) -> Result<Vec<String>> {
     let dir = root.join(CORPUS);
     let mut files = Vec::new();
     for e in std::fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))? {
         let e = e?;
         let name = e.file_name().to_string_lossy().into_owned();
-        if e.file_type()?.is_file() && !name.ends_with(".md") {
+        if e.file_type()?.is_file() && !name.ends_with(".md") && !name.ends_with(".journal") {
             files.push(name);
         }
     }
@@ -216,7 +217,9 @@ fn first_error(stderr: &str) -> String {
 
 /// `motionctl run --qemu` of one planned file; its output to the log, the outcome to `row`.
 fn run_one(root: &Path, bin: &Path, elf: &Path, row: &mut Row) -> Result<()> {
-    let path = format!("{CORPUS}/{}", row.file);
+    let path = format!("{LOG_DIR}/{}", row.file);
+    std::fs::copy(root.join(CORPUS).join(&row.file), root.join(&path))
+        .with_context(|| format!("copying {} to {LOG_DIR}", row.file))?;
     let log_path = root.join(LOG_DIR).join(format!("{}.log", row.file));
     let log = std::fs::File::create(&log_path)
         .with_context(|| format!("creating {}", log_path.display()))?;
