@@ -11,10 +11,10 @@
 //! Only the segments sent and not yet done are kept, with the last [`KEEP_DONE`] done: at most
 //! the board's queue and a few more, however long the file.
 //!
-//! What moves off the planned path on purpose is not checked, or re-anchored:
-//! - a probe move (G38.x) stops where the probe trips and the rest of the job is planned from
-//!   where the axes came to rest: reports during the move are skipped (counted as such), and the
-//!   check starts again from the rest position once the move has ended;
+//! What leaves the planned path on purpose is re-anchored, or not checked:
+//! - a probe move (G38.x) stops where the probe trips (decelerating on its path, and its
+//!   reports are checked against it) and the rest of the job is planned from where the axes came
+//!   to rest: once the move has ended, the check starts again from there;
 //! - an abort (Ctrl-C, a file that changed under the run) ends the run at once: nothing after it
 //!   is checked.
 //!
@@ -44,8 +44,8 @@ const KEEP_DONE: i64 = 16;
 pub struct PathSummary {
     /// Status reports checked.
     pub samples: u64,
-    /// Reports taken during probe moves (not checked: the board stops those early).
-    pub skipped_probing: u64,
+    /// Of those, reports taken during probe moves.
+    pub during_probes: u64,
     /// Reports older than one already checked whose segments are no longer kept.
     pub skipped_stale: u64,
     /// The largest per-axis distance from the planned path seen, steps.
@@ -128,8 +128,7 @@ impl PathCheck {
     /// under way.
     pub(super) fn observe(&mut self, st: &Status, done: u32, probing: bool) {
         if probing {
-            self.summary.skipped_probing += 1;
-            return;
+            self.summary.during_probes += 1;
         }
         let done = done as i64;
         let newest = self.last_tick.is_none_or(|t| st.tick >= t);
@@ -339,26 +338,26 @@ mod tests {
     }
 
     #[test]
-    fn probe_moves_are_skipped_and_the_rest_checked_from_where_they_stopped() {
+    fn a_probe_move_is_checked_to_where_it_stopped_and_the_rest_from_there() {
         let mut c = check();
         c.observe(&status(1, 1100, 50), 1, false);
-        // The diagonal is a probe move that stops a third of the way: reports during it are
-        // not checked ...
+        // The diagonal is a probe move that stops a third of the way, on its path ...
         c.observe(&status(2, 1200, 250), 1, true);
+        c.observe(&status(3, 1202, 248), 1, true);
+        assert_eq!(c.summary().off_path, 1, "off the probe move's path is caught");
         let mut rest = [0; MAX_AXES];
         rest[..2].copy_from_slice(&[1200, 250]);
         // ... its last two thirds were dropped (counted done), and the rest starts from there.
         c.reanchor(rest, 2);
         c.sent(&seg(20, 0, -250), Some(12));
-        c.observe(&status(3, 1200, 250), 2, false);
-        c.observe(&status(4, 1200, 100), 2, false);
-        c.observe(&status(5, 1200, 0), 3, false);
+        c.observe(&status(4, 1200, 250), 2, false);
+        c.observe(&status(5, 1200, 100), 2, false);
+        c.observe(&status(6, 1200, 0), 3, false);
         let s = c.summary();
-        assert!(s.ok(), "{s:?}");
-        assert_eq!((s.samples, s.skipped_probing), (4, 1));
-        // Off the replanned rest is still caught.
-        c.observe(&status(6, 1203, 0), 3, false);
-        assert_eq!(c.summary().off_path, 1);
+        assert_eq!((s.samples, s.during_probes, s.off_path), (6, 2, 1), "{s:?}");
+        // Off the replanned rest is caught too.
+        c.observe(&status(7, 1203, 0), 3, false);
+        assert_eq!(c.summary().off_path, 2);
     }
 
     #[test]

@@ -155,7 +155,7 @@ impl RunReport {
             },
             "path": {
                 "samples": self.path.samples,
-                "skipped_probing": self.path.skipped_probing,
+                "during_probes": self.path.during_probes,
                 "skipped_stale": self.path.skipped_stale,
                 "max_dev_steps": self.path.max_dev_steps,
                 "limit_steps": PATH_LIMIT_STEPS,
@@ -334,8 +334,8 @@ fn path_text(p: &PathSummary) -> String {
             p.first_off.as_deref().unwrap_or("?")
         )
     };
-    if p.skipped_probing > 0 {
-        let _ = write!(t, "; {} during probe moves not checked", p.skipped_probing);
+    if p.during_probes > 0 {
+        let _ = write!(t, " ({} of them during probe moves)", p.during_probes);
     }
     if p.skipped_stale > 0 {
         let _ = write!(t, "; {} older than one already checked, skipped", p.skipped_stale);
