@@ -88,6 +88,18 @@ fn two_thousand_segments_through_one_percent_noise_arrive_once_in_order() {
 }
 
 #[test]
+fn every_status_report_lies_on_the_planned_path() {
+    let p = prepare(&zigzag_job(200));
+    let mut board = SimBoard::new(SIM_CAPACITY, 8.0);
+    let r = run(&p, &mut board, opts(20)).unwrap();
+    assert!(r.ok(), "{:?}", r.problems);
+    assert!(r.path.ok() && r.path.samples > 20, "{:?}", r.path);
+    // The simulated board completes whole segments: its reports are at segment ends, exactly.
+    assert_eq!(r.path.max_dev_steps, 0.0, "{:?}", r.path);
+    assert!(r.machine_line().ends_with("path_max_dev_steps=0.000 path_ok=1"));
+}
+
+#[test]
 fn a_silent_link_is_reopened_and_the_job_resumes() {
     let p = prepare(&zigzag_job(200));
     let mut board = SimBoard::new(SIM_CAPACITY, 8.0);

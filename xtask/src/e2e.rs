@@ -16,7 +16,7 @@ use motionctl::convert::feed_hz;
 use motionctl::sample_job::{job_toml, targets, to_steps, AXES, TICK_HZ};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 /// Segments in the job (one per move: the moves are short enough never to be split).
@@ -117,7 +117,7 @@ pub(crate) fn summary_ints(
 }
 
 /// `motionctl-summary k=v ...` -> map.
-fn summary(stdout: &str) -> Result<std::collections::BTreeMap<String, f64>> {
+pub(crate) fn summary(stdout: &str) -> Result<std::collections::BTreeMap<String, f64>> {
     let line = stdout
         .lines()
         .find(|l| l.starts_with("motionctl-summary "))
@@ -261,25 +261,34 @@ pub(crate) fn run_motionctl(
         }
         all
     });
-    let status = loop {
-        if let Some(s) = child.try_wait()? {
-            break Some(s);
-        }
-        if start.elapsed() > RUN_TIMEOUT {
-            // SIGINT first: motionctl aborts the board and kills its QEMU on the way out.
-            let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
-            std::thread::sleep(Duration::from_secs(3));
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = wait_at_most(&mut child, start, RUN_TIMEOUT)?;
     let stdout = reader.join().unwrap_or_default();
     let Some(status) = status else {
         bail!("motionctl did not finish within {} s; stopped it", RUN_TIMEOUT.as_secs());
     };
     Ok((status.success(), stdout, start.elapsed()))
+}
+
+/// Waits for a motionctl `child` started at `start`; after `limit`, stops it (`None`).
+pub(crate) fn wait_at_most(
+    child: &mut Child,
+    start: Instant,
+    limit: Duration,
+) -> Result<Option<ExitStatus>> {
+    loop {
+        if let Some(s) = child.try_wait()? {
+            return Ok(Some(s));
+        }
+        if start.elapsed() > limit {
+            // SIGINT first: motionctl aborts the board and kills its QEMU on the way out.
+            let _ = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+            std::thread::sleep(Duration::from_secs(3));
+            let _ = child.kill();
+            let _ = child.wait();
+            return Ok(None);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
 
 struct Prepared {

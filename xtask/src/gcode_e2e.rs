@@ -1,9 +1,11 @@
 //! `cargo xtask gcode-e2e`: real G-code files from the corpus (written by CAM programs and
 //! senders, host/gcode/tests/corpus) run end to end: through motion-gcode, the planner and the
-//! link protocol to the simulated board, and one to the link firmware in QEMU. Each run must
-//! execute every segment once, in order, and end at the host model's position, which
-//! `motionctl`'s planning already pinned to the program's end point. (The power cut in the middle
-//! of the QEMU file, with `run --resume` on a fresh board, is a case of `cargo xtask faults`.)
+//! link protocol to the simulated board, and every file of up to 30 s of machine time to the link
+//! firmware in QEMU (`cargo xtask gcode-corpus`'s short set, which also checks the executed path).
+//! Each run must execute every segment once, in order, and end at the host model's position,
+//! which `motionctl`'s planning already pinned to the program's end point. (The power cut in the
+//! middle of [`ON_QEMU`], with `run --resume` on a fresh board, is a case of `cargo xtask
+//! faults`.)
 //! A probing program (host/gcode/tests/programs) runs on both boards against a simulated probe
 //! surface (`run --sim-probe`): its G38.2 must trip, and the rest, planned from where the board
 //! stopped, must end where it was planned to.
@@ -16,6 +18,7 @@ pub(crate) const MACHINE: &str = "motionctl/examples/corpus-machine.toml";
 /// Short files (a few seconds of machine time each): G10 L2/L20 offsets with G53, and a
 /// helical thread mill in G91 with R-form arcs.
 const ON_SIM: [&str; 2] = ["linuxcnc-g10-l2-l20.ngc", "cncjs-helical-thread-milling.gcode"];
+/// The corpus file the fault suite cuts the power in the middle of.
 pub(crate) const ON_QEMU: &str = "cncjs-helical-thread-milling.gcode";
 /// Probes a part's top (G38.2, which must trip), makes it the work Z zero, cuts, then a G38.3
 /// that misses; the simulated probe surface it runs against, and the probe moves that trip.
@@ -28,7 +31,6 @@ pub fn test(root: &Path) -> Result<()> {
     let corpus = |f: &str| format!("host/gcode/tests/corpus/{f}");
     let mut runs: Vec<(String, &str, Vec<&str>)> =
         ON_SIM.iter().map(|f| (corpus(f), "--sim", vec![])).collect();
-    runs.push((corpus(ON_QEMU), "--qemu", vec![]));
     for board in ["--sim", "--qemu"] {
         runs.push((PROBING.to_string(), board, vec!["--sim-probe", PROBE_SURFACE]));
     }
@@ -59,5 +61,5 @@ pub fn test(root: &Path) -> Result<()> {
             wall.as_secs_f64()
         );
     }
-    Ok(())
+    crate::gcode_corpus::short_set(root)
 }

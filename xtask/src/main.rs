@@ -30,6 +30,7 @@ mod divcheck;
 mod e2e;
 mod faults;
 mod firmware;
+mod gcode_corpus;
 mod gcode_e2e;
 mod golden;
 mod grbl_e2e;
@@ -81,6 +82,8 @@ commands:
                                                         the board times its own tick handler (instructions
                                                         under QEMU, DWT cycles on an F405) and logs it
   gcode-e2e                                             run real G-code files on the simulated board and in QEMU
+  gcode-corpus [--all] [FILE]...                        run the corpus files (planned <= 30 s; --all: every one) in
+                                                        QEMU: hash, end position and path checked; target/gcode-corpus.json
   rs274-oracle                                          compare motion-gcode with LinuxCNC's rs274, call for call,
                                                         on the G-code corpus and test programs
   qemu ELF SECONDS                                       run a firmware ELF in QEMU for at most SECONDS, print its
@@ -218,6 +221,7 @@ fn run() -> Result<()> {
         }
         "rs274-oracle" => rs274::check(&root),
         "gcode-e2e" => gcode_e2e::test(&root),
+        "gcode-corpus" => gcode_corpus::command(&root, rest),
         "qemu" => {
             let [elf, secs] = rest else { bail!("usage: cargo xtask qemu ELF SECONDS") };
             let run = firmware::run_qemu_for(

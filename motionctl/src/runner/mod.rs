@@ -10,8 +10,9 @@
 //! and the board is idle -> verify: segments done == sent, the board's order hash == the hash of
 //! the ids sent (every segment exactly once, in order), final positions == the host model's.
 //!
-//! One concern a file, each importing only those named before it here: `options` and `report`
-//! (what a run is given and what it gives back), `watch` (limits on a running job), `board`
+//! One concern a file, each importing only those named before it here: `path_check` (every
+//! status report against the planned path), `options` and `report` (what a run is given and
+//! what it gives back), `watch` (limits on a running job), `board`
 //! (asking the board, bringing it to `Ready`), `outputs` (what is sent, and where the run is in
 //! it), then the run itself: `stream` (connecting, the loop and most of its steps), `replies`
 //! (what the board said), `events` (spindle, coolant, pauses and dwells between segments),
@@ -24,6 +25,7 @@ mod events;
 mod hook;
 mod options;
 mod outputs;
+mod path_check;
 mod probe;
 mod replies;
 mod report;
@@ -38,6 +40,7 @@ pub use board::{
 pub use hook::{JobControl, JobHook, Steer, Unattended};
 pub use options::{RunOptions, SimProbe, ZeroHere, DEFAULT_STATUS_PERIOD_MS};
 pub use outputs::{OutputSource, Outputs, Tagged};
+pub use path_check::{PathSummary, PATH_LIMIT_STEPS};
 pub use probe::{probe_ended_as, probe_outcome, set_sim_probe};
 pub use report::{counters_text, ProbeOutcome, Probed, RunError, RunReport};
 pub use stream::{run, run_outputs, HEARTBEAT_EVERY};

@@ -155,6 +155,8 @@ impl Stream<'_, '_> {
         self.report.expected_hash =
             p.ids[..done].iter().fold(p.hash_at_arm, |h, &id| order_hash(h, id));
         self.dropped += (p.ids.len() - done) as u32;
+        // The rest of the job is planned from where the axes came to rest.
+        self.path.reanchor(st.positions, self.sent_segs);
         let (kind, line) = (p.kind, p.line);
         self.outputs.probed(&outcome).map_err(|e| err(format!("{at}{e}")))?;
         self.say(&format!("{at}{} probe move {}", kind.gcode(), self.describe_probe(&outcome)));

@@ -57,6 +57,8 @@ impl Stream<'_, '_> {
                         if st.faults == 0 && seq_at_or_after(st.next_seq, self.latest.next_seq) {
                             self.report.max_queue_depth =
                                 self.report.max_queue_depth.max(st.queue_depth);
+                            let done = self.job_done(&st);
+                            self.path.observe(&st, done, self.probing.is_some());
                             self.latest = st;
                         }
                     }
@@ -129,6 +131,7 @@ impl Stream<'_, '_> {
                 self.total
             )));
         }
+        self.path.observe(&st, done, self.probing.is_some());
         self.latest = st;
         Ok(())
     }

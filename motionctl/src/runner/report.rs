@@ -1,6 +1,7 @@
 //! What a run did ([`RunReport`], as text, JSON and one line for scripts) and why one stopped
 //! early ([`RunError`]).
 
+use super::path_check::{PathSummary, PATH_LIMIT_STEPS};
 use crate::link::LinkFailure;
 use crate::noise::NoiseStats;
 use motion::machine::ProbeKind;
@@ -64,6 +65,8 @@ pub struct RunReport {
     pub final_outputs: u8,
     /// Every probe move (G38.x), in program order, as the board ended it.
     pub probes: Vec<Probed>,
+    /// The board's positions in its status reports against the planned path.
+    pub path: PathSummary,
     pub problems: Vec<String>,
 }
 
@@ -73,7 +76,8 @@ impl RunReport {
     }
 
     /// Names what is wrong with a finished run of `total` segments in `problems`: segments
-    /// missing, lost or reordered, positions off the host model, the queue overflowed.
+    /// missing, lost or reordered, positions off the host model, the queue overflowed, the
+    /// path executed off the planned one.
     pub(super) fn check(&mut self, total: u32) {
         if self.done != total {
             self.problems.push(format!("{} segments done, {total} sent", self.done));
@@ -95,6 +99,16 @@ impl RunReport {
             self.problems.push(format!(
                 "queue overflow: credits up to {} of capacity {}, {} QueueFull NAKs",
                 self.max_credits, self.capacity, self.queue_full_naks
+            ));
+        }
+        if !self.path.ok() {
+            self.problems.push(format!(
+                "the executed path left the planned one: {} of {} status reports more than \
+                 {PATH_LIMIT_STEPS} steps off it (worst {:.2} steps); the first: {}",
+                self.path.off_path,
+                self.path.samples,
+                self.path.max_dev_steps,
+                self.path.first_off.as_deref().unwrap_or("?")
             ));
         }
         self.min_credits = self.min_credits.min(self.max_credits);
@@ -139,6 +153,14 @@ impl RunReport {
                 "steps_deferred": self.board.steps_deferred,
                 "starve_holds": self.board.starve_holds,
             },
+            "path": {
+                "samples": self.path.samples,
+                "during_probes": self.path.during_probes,
+                "skipped_stale": self.path.skipped_stale,
+                "max_dev_steps": self.path.max_dev_steps,
+                "limit_steps": PATH_LIMIT_STEPS,
+                "ok": self.path.ok(),
+            },
             "output_switches": self.output_switches.len(),
             "final_outputs": self.final_outputs,
             "problems": self.problems,
@@ -152,7 +174,8 @@ impl RunReport {
              seconds={:.3} stream_seconds={:.3} acked_per_s={:.1} frames_out={} \
              retransmissions={} link_naks={} bad_frames_in={} reconnects={} statuses={} \
              status_hz_board={:.2} status_hz_wall={:.2} capacity={} max_queue_depth={} \
-             min_credits={} max_credits={} queue_full_naks={} probes={} probes_tripped={}",
+             min_credits={} max_credits={} queue_full_naks={} probes={} probes_tripped={} \
+             path_samples={} path_max_dev_steps={:.3} path_ok={}",
             self.ok() as u8,
             self.segments,
             self.acked,
@@ -177,6 +200,9 @@ impl RunReport {
             self.queue_full_naks,
             self.probes.len(),
             self.probes.iter().filter(|p| p.outcome.tripped).count(),
+            self.path.samples,
+            self.path.max_dev_steps,
+            self.path.ok() as u8,
         )
     }
 
@@ -228,6 +254,7 @@ impl RunReport {
             self.max_queue_depth,
             self.queue_full_naks
         );
+        let _ = writeln!(t, "path       {}", path_text(&self.path));
         let _ = writeln!(t, "board      {}", counters_text(&self.board));
         if !self.output_switches.is_empty() {
             let _ = writeln!(
@@ -288,6 +315,32 @@ pub fn counters_text(c: &BoardCounters) -> String {
         c.steps_deferred,
         c.starve_holds
     )
+}
+
+/// The path check in words: how many status reports, how far off the planned path.
+fn path_text(p: &PathSummary) -> String {
+    let mut t = if p.ok() {
+        format!(
+            "{} status samples, all within {:.2} steps of the planned path",
+            p.samples, p.max_dev_steps
+        )
+    } else {
+        format!(
+            "{} status samples, {} more than {PATH_LIMIT_STEPS} steps off the planned path \
+             (worst {:.2} steps); the first: {}",
+            p.samples,
+            p.off_path,
+            p.max_dev_steps,
+            p.first_off.as_deref().unwrap_or("?")
+        )
+    };
+    if p.during_probes > 0 {
+        let _ = write!(t, " ({} of them during probe moves)", p.during_probes);
+    }
+    if p.skipped_stale > 0 {
+        let _ = write!(t, "; {} older than one already checked, skipped", p.skipped_stale);
+    }
+    t
 }
 
 pub(super) fn err(message: impl Into<String>) -> RunError {

@@ -5,6 +5,7 @@
 use super::board::{axes_of, ready_board, seq_at_or_after, status_of, wire_config, Home};
 use super::options::RunOptions;
 use super::outputs::{peek, Outputs, Tagged, Whereabouts};
+use super::path_check::PathCheck;
 use super::report::{err, link_err, RunError, RunReport};
 use crate::convert::Program;
 use crate::job::Job;
@@ -133,6 +134,8 @@ pub(super) struct Stream<'t, 'o> {
     /// A probe move under way, and the segments probe moves dropped at their trips.
     pub(super) probing: Option<Probing>,
     pub(super) dropped: u32,
+    /// Every status report against the planned path.
+    pub(super) path: PathCheck,
 }
 
 impl<'t, 'o> Stream<'t, 'o> {
@@ -208,6 +211,8 @@ impl<'t, 'o> Stream<'t, 'o> {
         let mut feed_cmds: Vec<(u64, Command)> = program.commands.clone();
         feed_cmds.sort_by_key(|c| c.0);
         let batch_limit = opts.max_batch.clamp(1, MAX_SEGMENTS_PER_FRAME);
+        let axis_names = axes.iter().map(|a| a.0.clone()).collect();
+        let path = PathCheck::new(base.positions, axis_names, outputs.label.clone());
         let last_tx = (s.host.sent_frames, Instant::now());
         Ok(Stream {
             s,
@@ -249,6 +254,7 @@ impl<'t, 'o> Stream<'t, 'o> {
             axes,
             probing: None,
             dropped: 0,
+            path,
         })
         .and_then(|mut stream| {
             if let Some(sim) = sim_probe {
@@ -353,6 +359,7 @@ impl<'t, 'o> Stream<'t, 'o> {
                     break;
                 }
                 self.whereabouts.sent(line, &seg);
+                self.path.sent(&seg, line);
                 self.outputs.advance();
             }
             if batch.is_empty() {

@@ -68,6 +68,7 @@ impl Stream<'_, '_> {
         if probed {
             report.segments = total;
         }
+        report.path = self.path.summary();
         report.check(total);
         self.opts.csv = None;
         if self.report.ok() {
