@@ -15,7 +15,6 @@
 
 use crate::e2e::{build_motionctl, summary, wait_at_most};
 use crate::firmware::{self, Board};
-use crate::gcode_e2e::MACHINE;
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -25,6 +24,8 @@ use std::time::{Duration, Instant};
 pub const CORPUS: &str = "host/gcode/tests/corpus";
 /// The short set: files of at most this much planned machine time.
 pub const SHORT_MACHINE_S: f64 = 30.0;
+/// The machine file every corpus file runs on: travel enough for all of them.
+pub(crate) const MACHINE: &str = "motionctl/examples/corpus-machine.toml";
 /// Files the planner refuses on purpose, with a piece of the error saying why (LinuxCNC's rs274
 /// comparison in `cargo xtask test` covers which lines): spindle-synchronised motion needs
 /// spindle feedback the board does not have.

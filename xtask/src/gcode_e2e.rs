@@ -11,10 +11,10 @@
 //! stopped, must end where it was planned to.
 
 use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
+use crate::gcode_corpus::MACHINE;
 use anyhow::{bail, Result};
 use std::path::Path;
 
-pub(crate) const MACHINE: &str = "motionctl/examples/corpus-machine.toml";
 /// Short files (a few seconds of machine time each): G10 L2/L20 offsets with G53, and a
 /// helical thread mill in G91 with R-form arcs.
 const ON_SIM: [&str; 2] = ["linuxcnc-g10-l2-l20.ngc", "cncjs-helical-thread-milling.gcode"];

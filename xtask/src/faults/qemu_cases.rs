@@ -27,7 +27,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::gcode_e2e::{MACHINE, ON_QEMU};
+use crate::gcode_corpus::MACHINE;
+use crate::gcode_e2e::ON_QEMU;
 /// The journal line at which a reset or power cut is made (the file's arcs are lines 12 to 15).
 const CUT_AT_LINE: usize = 12;
 /// The journal line at which the link drops, and how long.
