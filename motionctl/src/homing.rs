@@ -4,6 +4,7 @@
 //! A machine without any `home` entry has no switches: homing it takes the axes where they stand
 //! as machine zero, which only the operator can vouch for (`runner::ZeroHere`).
 
+use motion::machine::config::MAX_HOME_TRAVEL_STEPS;
 use motion::machine::HomeAxis;
 use motion::protocol::HomingConfig;
 use motion::MAX_AXES;
@@ -106,7 +107,7 @@ pub fn check_axis(raw: &RawHome, axis: &AxisLimits) -> Result<AxisHome, FieldErr
         ));
     }
     let step_mm = 1.0 / axis.steps_per_mm;
-    let max_steps = |mm: f64| mm * axis.steps_per_mm <= MAX_HOME_STEPS as f64;
+    let max_steps = |mm: f64| mm * axis.steps_per_mm <= MAX_HOME_TRAVEL_STEPS as f64;
     let backoff_mm = finite("backoff_mm", backoff_mm)?;
     if backoff_mm < step_mm || !max_steps(backoff_mm * 2.0) {
         return Err((
@@ -121,15 +122,12 @@ pub fn check_axis(raw: &RawHome, axis: &AxisLimits) -> Result<AxisHome, FieldErr
             format!(
                 "must be more than backoff_mm ({backoff_mm}) and at most {} mm on this axis, got \
                  {max_search_mm}",
-                MAX_HOME_STEPS as f64 / axis.steps_per_mm
+                MAX_HOME_TRAVEL_STEPS as f64 / axis.steps_per_mm
             ),
         ));
     }
     Ok(AxisHome { switch: raw.switch, at_mm, search_mm_s, latch_mm_s, backoff_mm, max_search_mm })
 }
-
-/// Longest homing distance the board counts, steps (`BoardConfig::validate`'s 2^30).
-pub const MAX_HOME_STEPS: u32 = 1 << 30;
 
 /// The homing order: `order` (axis names, as `home_order` gives them) when given, else the axes
 /// with a `home` entry in file order. Every axis with a `home` entry is homed exactly once.
