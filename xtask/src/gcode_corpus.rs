@@ -8,9 +8,9 @@
 //! Without `--all` the files run whose planned machine time (`motionctl plan --json`: the host
 //! model's time plus dwells) is at most [`SHORT_MACHINE_S`]; `cargo xtask test` runs those of
 //! at most [`TEST_MACHINE_S`].
-//! With `--all` every file runs (QEMU runs in real time at best: about 45 min). Files the
+//! With `--all` every file runs (about 45 min of machine time, 1 h 45 min of QEMU). Files the
 //! planner refuses on purpose ([`REFUSED`]) are listed as refused with their first error, and do
-//! not fail the run. A table goes to stdout, the same rows to `target/gcode-corpus.json`, and
+//! not fail the run. The runs use the corpus machine at [`QEMU_TICK_HZ`] (see there). A table goes to stdout, the same rows to `target/gcode-corpus.json`, and
 //! each run's output to `target/gcode-corpus/FILE.log`. Each file runs from a copy there, so the
 //! run journal `motionctl run` keeps beside its file (`FILE.journal`) stays out of the corpus.
 
@@ -25,11 +25,18 @@ use std::time::{Duration, Instant};
 pub const CORPUS: &str = "host/gcode/tests/corpus";
 /// The short set: files of at most this much planned machine time.
 pub const SHORT_MACHINE_S: f64 = 30.0;
-/// The set `cargo xtask test` runs: QEMU with its 100 kHz tick runs about 4x slower than the
-/// board's clock on a 2-core machine, and the suite's time is CI's.
+/// The set `cargo xtask test` runs: QEMU runs slower than the board's clock (about 2.3x at
+/// [`QEMU_TICK_HZ`] on an idle 2-core machine), and the suite's time is CI's.
 pub const TEST_MACHINE_S: f64 = 10.0;
 /// The machine file every corpus file runs on: travel enough for all of them.
 pub(crate) const MACHINE: &str = "motionctl/examples/corpus-machine.toml";
+/// The tick the corpus machine runs at in QEMU. QEMU's wall time grows with the tick count:
+/// `linuxcnc-g10-l2-l20.ngc` (3.4 s of machine time) took 8.5 s at 50 kHz against 15.8 s at the
+/// file's 100 kHz on an idle host. The fastest axis (20 000 steps/s) still fits, one step per
+/// two ticks; the machine loader checks that for every axis.
+const QEMU_TICK_HZ: u32 = 50_000;
+/// Where the runs' machine file (the corpus machine at [`QEMU_TICK_HZ`]) is written.
+const QEMU_MACHINE: &str = "target/gcode-corpus/machine.toml";
 /// Files the planner refuses on purpose, with a piece of the error saying why (LinuxCNC's rs274
 /// comparison in `cargo xtask test` covers which lines): spindle-synchronised motion needs
 /// spindle feedback the board does not have.
@@ -104,6 +111,7 @@ fn run(root: &Path, select: Select) -> Result<()> {
     let elf = firmware::build(root, Board::Netduinoplus2, &["link"])?;
     let bin = build_motionctl(root)?;
     std::fs::create_dir_all(root.join(LOG_DIR))?;
+    qemu_machine(root)?;
     let mut rows = Vec::new();
     for file in &chosen {
         let mut row = plan(root, &bin, file)?;
@@ -140,6 +148,39 @@ fn run(root: &Path, select: Select) -> Result<()> {
         bail!("{} of {} corpus files failed: {}", failed.len(), rows.len(), failed.join(", "));
     }
     Ok(())
+}
+
+/// Writes [`QEMU_MACHINE`]: [`MACHINE`] with its one `tick_hz` line set to [`QEMU_TICK_HZ`],
+/// loaded back to check it is still a valid machine at that tick.
+fn qemu_machine(root: &Path) -> Result<()> {
+    let src = std::fs::read_to_string(root.join(MACHINE))
+        .with_context(|| format!("reading {MACHINE}"))?;
+    let (out, n) = with_tick(&src, QEMU_TICK_HZ);
+    if n != 1 {
+        bail!("{MACHINE}: expected one `tick_hz = ...` line, found {n}");
+    }
+    let m = motionctl::job::parse_machine_toml(&out)
+        .map_err(|e| anyhow::anyhow!("{MACHINE} at {QEMU_TICK_HZ} Hz: {e}"))?;
+    if m.tick_hz != QEMU_TICK_HZ {
+        bail!("{MACHINE}: the tick_hz line did not set the tick (read {} Hz)", m.tick_hz);
+    }
+    std::fs::write(root.join(QEMU_MACHINE), out).with_context(|| format!("writing {QEMU_MACHINE}"))
+}
+
+/// `src` with every line that sets `tick_hz` set to `tick_hz`, and how many there were.
+fn with_tick(src: &str, tick_hz: u32) -> (String, usize) {
+    let mut n = 0;
+    let mut out = String::with_capacity(src.len());
+    for line in src.lines() {
+        if line.trim_start().starts_with("tick_hz") && line.contains('=') {
+            n += 1;
+            let _ = writeln!(out, "tick_hz = {tick_hz}");
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    (out, n)
 }
 
 /// The corpus's G-code files (not its notes, nor a run journal a stopped run left), by name.
@@ -185,7 +226,7 @@ fn plan(root: &Path, bin: &Path, file: &str) -> Result<Row> {
         outcome: Outcome::ToRun,
     };
     let out = Command::new(bin)
-        .args(["plan", &path, "--machine", MACHINE, "--json"])
+        .args(["plan", &path, "--machine", QEMU_MACHINE, "--json"])
         .current_dir(root)
         .output()
         .with_context(|| format!("could not start {}", bin.display()))?;
@@ -233,10 +274,10 @@ fn run_one(root: &Path, bin: &Path, elf: &Path, row: &mut Row) -> Result<()> {
         .with_context(|| format!("creating {}", log_path.display()))?;
     let machine_s = row.machine_s.unwrap_or(0.0);
     let limit = Duration::from_secs_f64(machine_s * WALL_PER_MACHINE_S + WALL_SLACK_S);
-    println!("  $ motionctl run {path} --machine {MACHINE} --qemu --yes  ({machine_s:.1} s)");
+    println!("  $ motionctl run {path} --machine {QEMU_MACHINE} --qemu --yes  ({machine_s:.1} s)");
     let start = Instant::now();
     let mut child = Command::new(bin)
-        .args(["run", &path, "--machine", MACHINE, "--qemu", "--yes", "--firmware"])
+        .args(["run", &path, "--machine", QEMU_MACHINE, "--qemu", "--yes", "--firmware"])
         .arg(elf)
         .current_dir(root)
         .stdin(Stdio::null())
@@ -340,6 +381,15 @@ fn row_json(r: &Row) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::first_error;
+
+    #[test]
+    fn the_tick_line_is_replaced_and_counted() {
+        let (out, n) =
+            with_tick("[machine]\ntick_hz = 100_000  # note\n[[machine.axes]]\n", 50_000);
+        assert_eq!(n, 1);
+        assert_eq!(out, "[machine]\ntick_hz = 50000\n[[machine.axes]]\n");
+        assert_eq!(with_tick("[machine]\n", 50_000).1, 0);
+    }
 
     #[test]
     fn the_first_error_of_a_refused_file_is_its_line_and_reason() {
