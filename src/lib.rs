@@ -23,7 +23,7 @@ pub mod spindle;
 pub mod trace;
 pub mod trig;
 pub mod wire;
-pub mod zslide;
+pub mod turning;
 
 pub use config::{AxisLimits, ConfigError, InputFilterConfig, MachineConfig, StepTiming, MAX_AXES};
 pub use dda::{Command, Dda, StepOutput};

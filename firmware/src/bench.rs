@@ -265,10 +265,10 @@ fn zslide_kernels(c: &CycleCounter, overhead: u32) {
     use motion::spindle::encoder::QuadratureEncoder;
     use motion::spindle::resolver::Resolver;
     use motion::spindle::SpindleSource;
-    use motion::zslide::command::ZCommand;
-    use motion::zslide::douglass_table::DOUGLASS_POWER;
-    use motion::zslide::scenario::{command_config, encoder_config, resolver_config, speed_at_rpm};
-    use motion::zslide::table::{CoefficientTable, Interp, TableForm};
+    use motion::turning::command::ZCommand;
+    use motion::turning::douglass_table::DOUGLASS_POWER;
+    use motion::turning::scenario::{command_config, encoder_config, resolver_config, speed_at_rpm};
+    use motion::turning::table::{CoefficientTable, Interp, TableForm};
 
     let speed = speed_at_rpm(360);
     let mut cmd = defmt::unwrap!(ZCommand::new(&DOUGLASS_POWER, command_config(), 0).ok());

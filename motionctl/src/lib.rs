@@ -10,7 +10,7 @@ pub mod cli;
 pub mod cli_capabilities;
 pub mod convert;
 pub mod csv_log;
-pub mod fourier;
+pub mod turning;
 pub mod gcode;
 pub mod grbl;
 pub mod homing;

@@ -87,7 +87,7 @@ pub fn describe_rejection(r: &Rejection) -> String {
             format!(" [event block check {reason} failed; board expects block {expected:?}]")
         }
         // -- Z-slide job --
-        NakDetail::ZSlide { reason, expected, fault } => {
+        NakDetail::Turning { reason, expected, fault } => {
             let fault =
                 fault.map(|f| format!(", pre-start check: {}", f.name())).unwrap_or_default();
             format!(" [Z request check {reason}; board expects chunk {expected:?}{fault}]")

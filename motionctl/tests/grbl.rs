@@ -921,7 +921,7 @@ fn turning_and_wire_jobs_run_from_dollar_commands() {
     assert!(m.starts_with("[MSG:reading ") && m.contains("missing.toml"), "{m}");
     r.expect("error:61");
     r.send(b"$TURN=builtin 360 0:12.7 25.4\n");
-    r.expect("[MSG:the board runs no Z-slide jobs (CAP_ZSLIDE_JOB)]");
+    r.expect("[MSG:the board runs no turning jobs (CAP_TURNING_JOB)]");
     r.expect("error:20");
 
     // Two segments of the circle -> complex die as a wire job: `?` reports Run with X, Y, Z,

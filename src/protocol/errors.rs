@@ -115,7 +115,7 @@ coded_enum! {
             "The board failed a request that passed every check (a firmware bug). The one NAK that may have changed something: part of a QueueSegments batch may be queued; read Status."),
         // -- Z-slide job --
         InvalidTable = 16 => ("InvalidTable",
-            "A Z table upload step was refused (detail: NakDetail::ZSlide with the reason and the chunk index expected); the active table is unchanged."),
+            "A Z table upload step was refused (detail: NakDetail::Turning with the reason and the chunk index expected); the active table is unchanged."),
     }
 }
 

@@ -51,7 +51,7 @@ pub use sim::{SimForceFault, SimMillingParams, SimProbeSurface};
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
-mod tests_zslide;
+mod tests_turning;
 // -- force job --
 #[cfg(test)]
 mod force_tests;

@@ -11,7 +11,7 @@ use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
 use crate::wire::scenario::{WireJobScenario, WireStallScenario};
-use crate::zslide::scenario::{ZSlideScenario, ZSlideVariant};
+use crate::turning::scenario::{TurningScenario, TurningVariant};
 
 use crate::scenario::{Scenario, ScenarioReport};
 
@@ -27,7 +27,7 @@ pub enum AnyScenario {
     /// The machine's fault suite: each cause injected by the sim board.
     Fault(faults::FaultScenario),
     /// Non-axisymmetric turning (Douglass): the Fourier-series Z slide from encoder or resolver.
-    ZSlide(ZSlideScenario),
+    Turning(TurningScenario),
     /// The 4-axis wire manipulator (Bhatti): the whole circle -> complex job, continuous.
     WireJob(WireJobScenario),
     /// A shortened wire job with a stall injected: retrace, return, finish.
@@ -38,10 +38,10 @@ pub enum AnyScenario {
 
 /// How many scenarios [`build`] knows.
 pub const COUNT: usize =
-    2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len() + 3;
+    2 + ForceVariant::ALL.len() + faults::CASES.len() + TURNING_VARIANTS.len() + 3;
 
-const ZSLIDE_VARIANTS: [ZSlideVariant; 3] =
-    [ZSlideVariant::Encoder, ZSlideVariant::Resolver, ZSlideVariant::IndexLoss];
+const TURNING_VARIANTS: [TurningVariant; 3] =
+    [TurningVariant::Encoder, TurningVariant::Resolver, TurningVariant::IndexLoss];
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
@@ -63,10 +63,10 @@ fn build_group(mut i: usize) -> Option<AnyScenario> {
         return faults::FaultScenario::new(c).map(AnyScenario::Fault);
     }
     i -= faults::CASES.len();
-    if let Some(&v) = ZSLIDE_VARIANTS.get(i) {
-        return Some(AnyScenario::ZSlide(ZSlideScenario::new(v)));
+    if let Some(&v) = TURNING_VARIANTS.get(i) {
+        return Some(AnyScenario::Turning(TurningScenario::new(v)));
     }
-    i -= ZSLIDE_VARIANTS.len();
+    i -= TURNING_VARIANTS.len();
     match i {
         0 => WireJobScenario::new().ok().map(AnyScenario::WireJob),
         1 => WireStallScenario::new().ok().map(AnyScenario::WireStall),
@@ -82,7 +82,7 @@ macro_rules! dispatch {
             AnyScenario::PolarPlayback($s) => $e,
             AnyScenario::Force($s) => $e,
             AnyScenario::Fault($s) => $e,
-            AnyScenario::ZSlide($s) => $e,
+            AnyScenario::Turning($s) => $e,
             AnyScenario::WireJob($s) => $e,
             AnyScenario::WireStall($s) => $e,
             AnyScenario::LaneKernel($s) => $e,

@@ -100,7 +100,7 @@ mod app {
         if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::force::ADC_START_HZ).ok()) {
             link::force::ADC_SAMPLE_HZ.store(hz, Relaxed);
         }
-        let spindle_ok = link::zslide::init(&mut spindle);
+        let spindle_ok = link::turning::init(&mut spindle);
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
         // After a watchdog reset the machine boots in Fault with WatchdogReset. A stored tick
@@ -239,7 +239,7 @@ mod app {
                 StepOnly::No => None,
                 StepOnly::Z => {
                     let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
+                    cx.shared.motion.lock(|m| link::turning::step_only_tick(m, spindle))
                 }
                 StepOnly::Force => {
                     let spindle = &mut *l.spindle;
@@ -281,7 +281,7 @@ mod app {
         cx.shared.motion.lock(|m| {
             #[cfg(feature = "sim-inputs")]
             let inputs = link::sim::with_probe(m, &inputs);
-            link::zslide::sense(l.spindle, &mut m.z);
+            link::turning::sense(l.spindle, &mut m.z);
             *l.spindle_at_rest = l.spindle.at_rest();
             *l.plain = false;
             *l.step_only = StepOnly::No;
@@ -294,7 +294,7 @@ mod app {
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
                 *l.step_only = StepOnly::Wire;
                 out
-            } else if let Some(out) = link::zslide::tick(m, &inputs) {
+            } else if let Some(out) = link::turning::tick(m, &inputs) {
                 *l.step_only = StepOnly::Z;
                 out
             } else if m.machine.event_job() {

@@ -67,7 +67,7 @@ pub fn step_only_tick(m: &mut Motion, spindle: &mut crate::board::Spindle) -> Op
     if !m.machine.step_only_due() || !m.job.force().is_some_and(|j| j.is_running()) {
         return None;
     }
-    super::zslide::sense(spindle, &mut m.z);
+    super::turning::sense(spindle, &mut m.z);
     let Motion { dda, machine, job, .. } = m;
     let (step, due) = link_job::link_step_only_deferred(machine, dda, job.force_mut()?)?;
     if due {
@@ -175,7 +175,7 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
         job.source_fault(FaultCode::SensorFault);
         return;
     }
-    // The spindle encoder, read every tick (`zslide::sense`), gives the speed: a stopped
+    // The spindle encoder, read every tick (`turning::sense`), gives the speed: a stopped
     // spindle holds the feed with `SpindleStopped`.
     let tick_hz = machine.config().wire.machine.tick_hz;
     job.set_spindle_mrev_s(mrev_s_from_turn_q32_per_tick(

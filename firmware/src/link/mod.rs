@@ -32,12 +32,12 @@ use motion::machine::{BoardConfig, BootConfig, Machine, MachineState, ResetCause
 use motion::polar::playback::QUEUE_DEPTH;
 use motion::polar::playback::{Playback, SizeScale};
 use motion::protocol::WireState;
-use motion::protocol::CAP_ZSLIDE_JOB;
+use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
     CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
-use motion::zslide::link_job::ZJob;
+use motion::turning::link_job::ZJob;
 use motion::Dda;
 
 use crate::board;
@@ -58,7 +58,7 @@ mod target;
 /// Wire-manipulator jobs (`ArmWire`).
 pub mod wire;
 /// Z-slide jobs (`ZTableBegin`..`StartZ`).
-pub mod zslide;
+pub mod turning;
 
 pub use host_port::{encode, HostPort};
 pub use last_job::LastJob;
@@ -126,7 +126,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
-    | CAP_ZSLIDE_JOB
+    | CAP_TURNING_JOB
     | CAP_PROBE
     | if force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.

@@ -14,8 +14,8 @@ use motion::protocol::{
     TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
-use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
-use motion::zslide::link_requests::ZNak;
+use motion::turning::link_job::{ZJobSpec, ZTableHeader};
+use motion::turning::link_requests::ZNak;
 use motion::Dda;
 use rtic::Mutex;
 
@@ -158,7 +158,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             wire::status(m, &mut s);
-            zslide::status(m, &mut s);
+            turning::status(m, &mut s);
             copy::status(m, &self.link.teach, &mut s);
             force::status(m, &mut s);
             s
@@ -356,7 +356,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         let active = self.with(|m| m.machine.z_job());
         let table = self.link.z.end(crc, active)?;
         let copy = table.clone();
-        self.motion.get_mut().lock(|m| zslide::install(m, table))?;
+        self.motion.get_mut().lock(|m| turning::install(m, table))?;
         self.link.z.installed(copy);
         Ok(())
     }
@@ -367,9 +367,9 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             let tick_hz = m.machine.config().wire.machine.tick_hz;
             (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
         });
-        // The generator is built here, outside the lock (see `zslide`).
+        // The generator is built here, outside the lock (see `turning`).
         let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
-        self.motion.get_mut().lock(|m| zslide::start(m, empty, prepared))
+        self.motion.get_mut().lock(|m| turning::start(m, empty, prepared))
     }
 
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {

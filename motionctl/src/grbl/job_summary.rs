@@ -4,7 +4,7 @@
 
 use super::jobs::{polar_mm, turning_mm};
 use crate::cli_capabilities::WireBoardJob;
-use crate::fourier::run::{ZRunOptions, ZRunReport};
+use crate::turning::run::{ZRunOptions, ZRunReport};
 use crate::milling::run::MillingRunReport;
 use crate::polar::run::PolarReport;
 use crate::runner::fault_names;
@@ -76,8 +76,8 @@ pub fn polar_summary(name: &str, r: &PolarReport) -> Vec<String> {
 pub fn turning_summary(name: &str, o: &ZRunOptions, r: &ZRunReport) -> Vec<String> {
     let at = |x_steps: i64, z_steps: i64| {
         let mut st = Status::default();
-        st.positions[crate::fourier::run::X_AXIS as usize] = x_steps;
-        st.positions[crate::fourier::run::Z_AXIS as usize] = z_steps;
+        st.positions[crate::turning::run::X_AXIS as usize] = x_steps;
+        st.positions[crate::turning::run::Z_AXIS as usize] = z_steps;
         let v = turning_mm(&st);
         format!("X {:.4} mm, Z {:+.5} mm", v[0], v[2])
     };

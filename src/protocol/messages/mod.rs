@@ -58,7 +58,7 @@ pub const CAP_WIRE_JOB: u32 = 1 << 7;
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
 // -- Z-slide job --
 /// Z-slide jobs (`ZTableBegin`/`ZTableChunk`/`ZTableEnd`, `StartZ`) are honoured.
-pub const CAP_ZSLIDE_JOB: u32 = 1 << 9;
+pub const CAP_TURNING_JOB: u32 = 1 << 9;
 /// Most table bytes in one `ZTableChunk`.
 pub const MAX_Z_CHUNK: usize = 192;
 // -- force job --

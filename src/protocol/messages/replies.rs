@@ -86,11 +86,11 @@ pub enum NakDetail {
         reason: u8,
         expected: Option<u16>,
     },
-    // -- Z-slide job --
+    // -- turning job --
     /// A refused Z request: `reason` = `ZTableError::code` for an upload step (1 header, 2 no
     /// upload, 3 sequence, 4 too long, 5 short, 6 CRC, 7 table), 0 for a start; `expected` =
     /// the chunk index the board wanted (sequence); `fault` = what the pre-start check found.
-    ZSlide {
+    Turning {
         reason: u8,
         expected: Option<u16>,
         fault: Option<FaultCode>,

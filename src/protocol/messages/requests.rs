@@ -9,7 +9,7 @@ use crate::protocol::bounded::{BlockBytes, EventBlock, SegmentBatch};
 use crate::protocol::program_outputs::ProgramOutputs;
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
-use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
+use crate::turning::link_job::{ZJobSpec, ZTableHeader};
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -88,7 +88,7 @@ pub enum RequestBody {
     },
     /// Starts a Z job with the active table (Start column; `Ready`, nothing queued). No table
     /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
-    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::ZSlide { fault }`.
+    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::Turning { fault }`.
     StartZ(ZJobSpec),
     // -- force job --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other

@@ -11,7 +11,7 @@ use crate::protocol::bounded::FixedStr;
 use crate::protocol::errors::{ErrorCode, SegmentReason};
 use crate::protocol::messages::*;
 use crate::segment::Rate;
-use crate::zslide::link_requests::ZNak;
+use crate::turning::link_requests::ZNak;
 
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;

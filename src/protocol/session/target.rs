@@ -7,8 +7,8 @@ use crate::protocol::errors::ErrorCode;
 use crate::protocol::messages::*;
 use crate::protocol::program_outputs::ProgramOutputs;
 use crate::segment::{Rate, Segment};
-use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
-use crate::zslide::link_requests::ZNak;
+use crate::turning::link_job::{ZJobSpec, ZTableHeader};
+use crate::turning::link_requests::ZNak;
 
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
@@ -75,7 +75,7 @@ pub trait LinkTarget {
         Err(ErrorCode::Unsupported)
     }
     // -- Z-slide job --
-    /// `ZTableBegin` (see `motion::zslide::link_requests::ZRequests`). A refusal changes
+    /// `ZTableBegin` (see `motion::turning::link_requests::ZRequests`). A refusal changes
     /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
     fn z_table_begin(&mut self, _h: &ZTableHeader) -> Result<(), ZNak> {
         Err((ErrorCode::Unsupported, NakDetail::None))

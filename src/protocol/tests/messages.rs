@@ -140,7 +140,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             segments: u32::MAX,
         }),
         // -- Z-slide job --
-        RequestBody::ZTableBegin(crate::zslide::link_job::ZTableHeader {
+        RequestBody::ZTableBegin(crate::turning::link_job::ZTableHeader {
             form: u8::MAX,
             rows: u16::MAX,
             x0_in_q24: i32::MIN,
@@ -151,8 +151,8 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             bytes: BlockBytes::from_slice(&[0xFF; MAX_Z_CHUNK]).unwrap(),
         },
         RequestBody::ZTableEnd { crc: u32::MAX },
-        RequestBody::StartZ(crate::zslide::link_job::ZJobSpec {
-            output: crate::zslide::link_job::ZOutputSpec::Steps {
+        RequestBody::StartZ(crate::turning::link_job::ZJobSpec {
+            output: crate::turning::link_job::ZOutputSpec::Steps {
                 axis: u8::MAX,
                 steps_per_in: u32::MAX,
             },

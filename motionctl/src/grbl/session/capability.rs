@@ -5,7 +5,7 @@
 
 use super::{link_err, Bridge, Pending};
 use crate::cli_capabilities::WireBoardJob;
-use crate::fourier::run::{WireTable, ZRunOptions};
+use crate::turning::run::{WireTable, ZRunOptions};
 use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
@@ -15,7 +15,7 @@ use crate::polar::run::PolarRunOptions;
 use anyhow::Result;
 use motion::protocol::{
     HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_FORCE_JOB, CAP_WIRE_JOB,
-    CAP_ZSLIDE_JOB,
+    CAP_TURNING_JOB,
 };
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -51,7 +51,7 @@ enum Done {
     Mill(crate::milling::run::MillingRunReport, f64),
     Polar(crate::polar::run::PolarReport),
     /// The report, and the options it ran with.
-    Turn(crate::fourier::run::ZRunReport, ZRunOptions),
+    Turn(crate::turning::run::ZRunReport, ZRunOptions),
     /// The report, and the job it ran.
     Wire(crate::wire::run::WireRunReport, Box<WireBoardJob>),
 }
@@ -61,7 +61,7 @@ fn needs(cmd: &JobCmd) -> (u32, &'static str) {
     match cmd {
         JobCmd::Mill(_) => (CAP_FORCE_JOB, "force jobs (CAP_FORCE_JOB)"),
         JobCmd::Polar { .. } => (CAP_EVENTS, "event jobs (CAP_EVENTS)"),
-        JobCmd::Turn { .. } => (CAP_ZSLIDE_JOB, "Z-slide jobs (CAP_ZSLIDE_JOB)"),
+        JobCmd::Turn { .. } => (CAP_TURNING_JOB, "turning jobs (CAP_TURNING_JOB)"),
         JobCmd::Wire { .. } => (CAP_WIRE_JOB, "wire jobs (CAP_WIRE_JOB)"),
     }
 }
@@ -110,7 +110,7 @@ impl Bridge<'_> {
             ),
             JobCmd::Turn { name, flags } => (
                 name.clone(),
-                crate::fourier::cli::turn_job(flags).map(|(t, o)| Loaded::Turn(t, o)),
+                crate::turning::cli::turn_job(flags).map(|(t, o)| Loaded::Turn(t, o)),
             ),
             JobCmd::Wire { file, segments } => (
                 file_name(file),
@@ -168,7 +168,7 @@ impl Bridge<'_> {
                 hook.positions = Box::new(jobs::turning_mm);
                 let o = ZRunOptions { host: setup.host, home: setup.home, ..o.clone() };
                 let say = |m: &str| eprintln!("motionctl: {m}");
-                crate::fourier::run::run_with(t, table, &o, &say, &mut hook)
+                crate::turning::run::run_with(t, table, &o, &say, &mut hook)
                     .map(|r| Done::Turn(r, o))
             }
             Loaded::Wire(job) => {
