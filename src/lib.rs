@@ -9,7 +9,7 @@ pub mod cycle_histogram;
 pub mod dda;
 pub mod demo_job;
 pub mod fixed_math;
-pub mod force;
+pub mod milling;
 pub mod machine;
 pub mod model;
 pub mod planner;

@@ -329,9 +329,9 @@ fn zslide_kernels(c: &CycleCounter, overhead: u32) {
 }
 
 fn force_kernels(c: &CycleCounter, overhead: u32) {
-    use motion::force::chain::ForceChain;
-    use motion::force::control::{ControlInput, ForceController};
-    use motion::force::scenario::{chain_config, control_params, SPINDLE_MREV_S};
+    use motion::milling::chain::ForceChain;
+    use motion::milling::control::{ControlInput, ForceController};
+    use motion::milling::scenario::{chain_config, control_params, SPINDLE_MREV_S};
 
     let mut chain = defmt::unwrap!(ForceChain::new(chain_config()).ok());
     // Counts with some noise so the stuck detector never trips; every 5th call decimates.

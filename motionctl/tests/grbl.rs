@@ -818,7 +818,7 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     r.expect("ok");
     // Refusals name why: a capability the board lacks, a missing file, a bad argument.
     r.send(b"$MILL=case_a_milling.toml\n");
-    r.expect("[MSG:the board runs no force jobs (CAP_FORCE_JOB)]");
+    r.expect("[MSG:the board runs no milling jobs (CAP_MILLING_JOB)]");
     r.expect("error:20");
     r.send(b"$POLAR=missing.bin\n");
     let m = r.line();

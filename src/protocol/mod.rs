@@ -54,7 +54,7 @@ mod tests;
 mod tests_turning;
 // -- force job --
 #[cfg(test)]
-mod force_tests;
+mod tests_milling;
 #[cfg(test)]
 mod tests_copy;
 #[cfg(test)]

@@ -6,7 +6,7 @@ pub mod faults;
 pub mod override_sweep;
 
 use crate::dda::lane_kernel_check::LaneKernelCheck;
-use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
+use crate::milling::scenario::{MillingScenario, Variant as MillingVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
@@ -23,7 +23,7 @@ pub enum AnyScenario {
     /// The built-in limacon contour (Fahim) at 2x speed and 3:2 radial size.
     PolarPlayback(PolarPlayback),
     /// Constant-force milling (Elbestawi): closed-loop Case A and its fault variants.
-    Force(ForceScenario),
+    Milling(MillingScenario),
     /// The machine's fault suite: each cause injected by the sim board.
     Fault(faults::FaultScenario),
     /// Non-axisymmetric turning (Douglass): the Fourier-series Z slide from encoder or resolver.
@@ -38,7 +38,7 @@ pub enum AnyScenario {
 
 /// How many scenarios [`build`] knows.
 pub const COUNT: usize =
-    2 + ForceVariant::ALL.len() + faults::CASES.len() + TURNING_VARIANTS.len() + 3;
+    2 + MillingVariant::ALL.len() + faults::CASES.len() + TURNING_VARIANTS.len() + 3;
 
 const TURNING_VARIANTS: [TurningVariant; 3] =
     [TurningVariant::Encoder, TurningVariant::Resolver, TurningVariant::IndexLoss];
@@ -55,10 +55,10 @@ pub fn build(index: usize) -> Option<AnyScenario> {
 
 /// The scenarios after the first two, group by group.
 fn build_group(mut i: usize) -> Option<AnyScenario> {
-    if let Some(&v) = ForceVariant::ALL.get(i) {
-        return ForceScenario::new(v).ok().map(AnyScenario::Force);
+    if let Some(&v) = MillingVariant::ALL.get(i) {
+        return MillingScenario::new(v).ok().map(AnyScenario::Milling);
     }
-    i -= ForceVariant::ALL.len();
+    i -= MillingVariant::ALL.len();
     if let Some(&c) = faults::CASES.get(i) {
         return faults::FaultScenario::new(c).map(AnyScenario::Fault);
     }
@@ -80,7 +80,7 @@ macro_rules! dispatch {
         match $self {
             AnyScenario::OverrideSweep($s) => $e,
             AnyScenario::PolarPlayback($s) => $e,
-            AnyScenario::Force($s) => $e,
+            AnyScenario::Milling($s) => $e,
             AnyScenario::Fault($s) => $e,
             AnyScenario::Turning($s) => $e,
             AnyScenario::WireJob($s) => $e,

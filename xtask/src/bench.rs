@@ -44,8 +44,8 @@ const TARGETS: [(&str, Target); 13] = [
     ("gcode_plan_peak_rss_mb", Target::AtMost(64.0)),
 ];
 
-/// DDA tick rate of the force scenario, whose tick applies the override (src/force/scenario.rs).
-const FORCE_TICK_HZ: f64 = motion::force::scenario::TICK_HZ as f64;
+/// DDA tick rate of the force scenario, whose tick applies the override (src/milling/scenario.rs).
+const FORCE_TICK_HZ: f64 = motion::milling::scenario::TICK_HZ as f64;
 
 /// Capability figures derived from the kernel counts (`kernel_*`): rates at 10 % of the core,
 /// and the force path's latency from an ADC sample to the DDA acting on the new override.

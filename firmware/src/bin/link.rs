@@ -96,9 +96,9 @@ mod app {
             cycles,
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
-        // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
-        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::force::ADC_START_HZ).ok()) {
-            link::force::ADC_SAMPLE_HZ.store(hz, Relaxed);
+        // The real board's force ADC runs from boot (force jobs need its rate; see `link::milling`).
+        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::milling::ADC_START_HZ).ok()) {
+            link::milling::ADC_SAMPLE_HZ.store(hz, Relaxed);
         }
         let spindle_ok = link::turning::init(&mut spindle);
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
@@ -243,7 +243,7 @@ mod app {
                 }
                 StepOnly::Force => {
                     let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
+                    cx.shared.motion.lock(|m| link::milling::step_only_tick(m, spindle))
                 }
                 StepOnly::Wire => {
                     let stall = l.io.read().wire_stall;
@@ -288,7 +288,7 @@ mod app {
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
                 out
-            } else if let Some(out) = link::force::tick(m, &inputs) {
+            } else if let Some(out) = link::milling::tick(m, &inputs) {
                 *l.step_only = StepOnly::Force;
                 out
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
@@ -344,22 +344,22 @@ mod app {
     }
 
     /// Force ADC half buffer (real board): the force job's chain per frame, its control law
-    /// once per half, the override into the DDA (`link_force`). On the simulator board, which
+    /// once per half, the override into the DDA (`link::milling`). On the simulator board, which
     /// has no force ADC, the tick pends it for each plant sample. The tick's priority: they
     /// never preempt each other, and a pended sample runs before the next tick.
     #[task(binds = DMA2_STREAM0, priority = 3, shared = [motion], local = [force_adc])]
     fn force_dma(mut cx: force_dma::Context) {
         let Some(adc) = cx.local.force_adc.as_mut() else {
-            cx.shared.motion.lock(link::force::on_sim_sample);
+            cx.shared.motion.lock(link::milling::on_sim_sample);
             return;
         };
         match adc.on_dma_irq() {
             Some(frames) => {
-                cx.shared.motion.lock(|m| link::force::on_adc_frames(m, Some(frames), false))
+                cx.shared.motion.lock(|m| link::milling::on_adc_frames(m, Some(frames), false))
             }
             None => {
                 let overrun = adc.overrun();
-                cx.shared.motion.lock(|m| link::force::on_adc_frames::<4>(m, None, overrun))
+                cx.shared.motion.lock(|m| link::milling::on_adc_frames::<4>(m, None, overrun))
             }
         }
     }

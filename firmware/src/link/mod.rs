@@ -34,7 +34,7 @@ use motion::polar::playback::{Playback, SizeScale};
 use motion::protocol::WireState;
 use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
-    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_MILLING_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
 use motion::turning::link_job::ZJob;
@@ -47,7 +47,7 @@ use board_contract::{CopyEncoders as _, MachineIo as _};
 pub mod copy;
 mod feed;
 /// Constant-force milling jobs (`ArmForce`).
-pub mod force;
+pub mod milling;
 mod host_port;
 mod last_job;
 mod session;
@@ -128,7 +128,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_WIRE_JOB
     | CAP_TURNING_JOB
     | CAP_PROBE
-    | if force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
+    | if milling::HAS_FORCE_SOURCE { CAP_MILLING_JOB } else { 0 }
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
     | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
     | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
@@ -147,7 +147,7 @@ pub struct Motion {
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: copy::CopyState,
     /// The simulated plant the next force job samples.
-    pub force: force::ForceSlot,
+    pub force: milling::ForceSlot,
     /// The simulated probe surface (`Sim(Probe)`), evaluated from the step counters every tick.
     #[cfg(feature = "sim-inputs")]
     pub sim_probe: Option<motion::protocol::SimProbeSurface>,
@@ -181,7 +181,7 @@ impl Motion {
                 job: LastJob::None,
                 z: ZJob::new(),
                 copy: copy::CopyState::new(),
-                force: force::ForceSlot::default(),
+                force: milling::ForceSlot::default(),
                 #[cfg(feature = "sim-inputs")]
                 sim_probe: None,
             },

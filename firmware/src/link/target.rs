@@ -56,7 +56,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
         self.motion.get_mut().lock(|m| {
             wire::drop_job(m);
             copy::drop_job(m);
-            force::drop_job(m);
+            milling::drop_job(m);
             m.z.drop_run();
         });
         self.link.queue.clear();
@@ -160,7 +160,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             wire::status(m, &mut s);
             turning::status(m, &mut s);
             copy::status(m, &self.link.teach, &mut s);
-            force::status(m, &mut s);
+            milling::status(m, &mut s);
             s
         })
     }
@@ -202,11 +202,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             self.wake_feeder = true;
             return Ok(());
         }
-        if self.with(|m| force::armed(m)) {
+        if self.with(|m| milling::armed(m)) {
             // The machine's start and the force loop's in one critical section.
             let r = self.motion.get_mut().lock(|m| {
                 m.machine.command(MachineCommand::Start, &mut m.dda)?;
-                force::start(m);
+                milling::start(m);
                 Ok(())
             });
             r.map_err(|e: Refusal| e.error_code())?;
@@ -337,7 +337,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         // An armed force job owns the next segment job.
-        let empty = empty && !self.with(|m| force::live(m));
+        let empty = empty && !self.with(|m| milling::live(m));
         self.motion.get_mut().lock(|m| wire::arm(m, empty, params))
     }
 
@@ -376,7 +376,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         self.motion.get_mut().lock(|m| {
             let wire_live = wire::live(m);
-            force::arm(m, empty, wire_live, params)
+            milling::arm(m, empty, wire_live, params)
         })
     }
 
@@ -406,7 +406,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_probe(&mut self, kind: ProbeKind) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         let r = self.motion.get_mut().lock(|m| {
-            if !empty || wire::live(m) || force::live(m) || copy::live(m) {
+            if !empty || wire::live(m) || milling::live(m) || copy::live(m) {
                 return Err(ErrorCode::OutOfState);
             }
             m.machine.arm_probe(kind, &m.dda).map_err(|e| e.error_code())

@@ -14,7 +14,7 @@ use motion::protocol::Status;
 
 /// `[MSG:...]` texts summing up a milling job in the job's units.
 pub fn milling_summary(name: &str, r: &MillingRunReport, fnom_n: f64) -> Vec<String> {
-    let tick_hz = motion::force::scenario::TICK_HZ as f64;
+    let tick_hz = motion::milling::scenario::TICK_HZ as f64;
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.0} ms", v * 1e3));
     let forces: Vec<f64> = r.trace.iter().map(|p| p.force_n).collect();
     let mean =

@@ -1,6 +1,6 @@
 //! A simulated board that runs force jobs, inside motionctl, for tests of `milling run` (and its
 //! resume) without QEMU: the firmware's link state machine ([`BoardLink`]) over a
-//! [`ForceSimTarget`], behind the [`Transport`] trait.
+//! [`MillingSimTarget`], behind the [`Transport`] trait.
 //!
 //! The plain [`SimTarget`] finishes a segment at once and runs a force job as plain segments;
 //! here every segment runs tick by tick through the library's [`Dda`], and an armed force job
@@ -10,17 +10,17 @@
 //! runs at `speed` times the wall clock, and the status stream on board time.
 //!
 //! For resume tests it can lose power once the feed axis reaches a position
-//! ([`ForceSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
+//! ([`MillingSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
 //! gone) and the machine's path so far is kept.
 
 use crate::sim_wire::SimWire;
 use crate::transport::Transport;
 use motion::dda::{Command, Dda, Preparer};
-use motion::force::link_job::ForceJob;
+use motion::milling::link_job::ForceJob;
 use motion::machine::{MachineState, ProbeKind};
 use motion::protocol::{
     BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs,
-    SimRequest, SimTarget, Status, WireConfig, WireState, CAP_DDA, CAP_FORCE_JOB, CAP_HOLD_RESUME,
+    SimRequest, SimTarget, Status, WireConfig, WireState, CAP_DDA, CAP_MILLING_JOB, CAP_HOLD_RESUME,
     CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::segment::Segment;
@@ -44,7 +44,7 @@ struct Running {
 
 /// [`SimTarget`] (the command table, queue, counters) with its segments run on a DDA and its
 /// force job on the firmware's force code.
-pub struct ForceSimTarget {
+pub struct MillingSimTarget {
     pub inner: SimTarget,
     /// The queued segments, as the inner target holds them (it has no look at its front).
     queued: VecDeque<Segment>,
@@ -54,9 +54,9 @@ pub struct ForceSimTarget {
     dda_held: bool,
 }
 
-impl ForceSimTarget {
+impl MillingSimTarget {
     pub fn new(capacity: u16) -> Self {
-        ForceSimTarget {
+        MillingSimTarget {
             inner: SimTarget::new(WireConfig::UNSET, capacity),
             queued: VecDeque::new(),
             dda: None,
@@ -164,7 +164,7 @@ impl ForceSimTarget {
     }
 }
 
-impl LinkTarget for ForceSimTarget {
+impl LinkTarget for MillingSimTarget {
     fn state(&self) -> WireState {
         self.inner.state()
     }
@@ -271,9 +271,9 @@ impl LinkTarget for ForceSimTarget {
 }
 
 /// The board: link, target, the wall clock it runs on, and an optional power cut.
-pub struct ForceSimBoard {
+pub struct MillingSimBoard {
     pub board: BoardLink,
-    pub target: ForceSimTarget,
+    pub target: MillingSimTarget,
     wire: SimWire,
     last: Instant,
     budget_ticks: f64,
@@ -288,7 +288,7 @@ pub struct ForceSimBoard {
     pub path: Option<Vec<i64>>,
 }
 
-impl ForceSimBoard {
+impl MillingSimBoard {
     pub fn new(speed: f64) -> Self {
         let caps = CAP_DDA
             | CAP_STATUS_STREAM
@@ -296,10 +296,10 @@ impl ForceSimBoard {
             | CAP_HOLD_RESUME
             | CAP_SOFT_LIMITS
             | CAP_SIM_INPUTS
-            | CAP_FORCE_JOB;
-        ForceSimBoard {
+            | CAP_MILLING_JOB;
+        MillingSimBoard {
             board: BoardLink::new("motionctl-force-sim", caps),
-            target: ForceSimTarget::new(CAPACITY),
+            target: MillingSimTarget::new(CAPACITY),
             wire: SimWire::new(),
             last: Instant::now(),
             budget_ticks: 0.0,
@@ -353,7 +353,7 @@ impl ForceSimBoard {
     /// Power lost and back: a blank board; the machine stays where it stopped, which the new
     /// board does not know (it counts from zero, as after a reset).
     fn power_cut(&mut self) {
-        let fresh = ForceSimBoard::new(self.speed);
+        let fresh = MillingSimBoard::new(self.speed);
         let (path, cuts) = (self.path.take(), self.power_cuts + 1);
         *self = fresh;
         self.path = path;
@@ -361,7 +361,7 @@ impl ForceSimBoard {
     }
 }
 
-impl Transport for ForceSimBoard {
+impl Transport for MillingSimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
         self.wire.receive(bytes, &mut self.board, &mut self.target);

@@ -63,7 +63,7 @@ pub const CAP_TURNING_JOB: u32 = 1 << 9;
 pub const MAX_Z_CHUNK: usize = 192;
 // -- force job --
 /// `ArmForce` (constant-force milling jobs) is honoured; `Sim(Milling)` too with `CAP_SIM_INPUTS`.
-pub const CAP_FORCE_JOB: u32 = 1 << 10;
+pub const CAP_MILLING_JOB: u32 = 1 << 10;
 // -- copy mode --
 /// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
 pub const CAP_COPY_JOB: u32 = 1 << 11;

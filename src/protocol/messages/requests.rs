@@ -92,7 +92,7 @@ pub enum RequestBody {
     StartZ(ZJobSpec),
     // -- force job --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
-    /// job armed; needs `CAP_FORCE_JOB`): from its `Start` on, force samples run through the
+    /// job armed; needs `CAP_MILLING_JOB`): from its `Start` on, force samples run through the
     /// force chain and the control law, whose feed override drives the DDA; force faults hold
     /// the feed through the machine's fault model. Parameters out of range -> `OutOfRange` with
     /// `NakDetail::Config` naming the field.

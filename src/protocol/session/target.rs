@@ -115,7 +115,7 @@ pub trait LinkTarget {
         Err(ErrorCode::Unsupported)
     }
     /// A simulator board's test hook, only called when the board announces `CAP_SIM_INPUTS`
-    /// (and `CAP_FORCE_JOB` for `Milling`, whose parameters are checked). Only with the
+    /// (and `CAP_MILLING_JOB` for `Milling`, whose parameters are checked). Only with the
     /// `sim-inputs` feature: production targets have no hooks to implement.
     #[cfg(feature = "sim-inputs")]
     fn sim(&mut self, _req: &SimRequest) -> Result<(), ErrorCode> {

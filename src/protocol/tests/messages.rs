@@ -172,7 +172,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             min_speed_turn_q32_per_tick: u32::MAX,
         }),
         // -- force job --
-        RequestBody::ArmForce(crate::protocol::force_tests::extreme_force_params()),
+        RequestBody::ArmForce(crate::protocol::tests_milling::extreme_force_params()),
         // -- copy mode --
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
@@ -187,7 +187,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         [
             SimRequest::Inject { wire_stall: true },
             SimRequest::Spindle { rpm_milli: u32::MAX, index: true },
-            SimRequest::Milling(crate::protocol::force_tests::extreme_sim_params()),
+            SimRequest::Milling(crate::protocol::tests_milling::extreme_sim_params()),
             SimRequest::Encoders { arm_counts: i32::MIN, carriage_counts: i32::MIN },
         ]
         .map(RequestBody::Sim),

@@ -52,8 +52,8 @@ const SITUATIONS: [(&str, &[&str]); 5] = [
     (
         "capability update",
         &[
-            "force::control::",
-            "force::chain::",
+            "milling::control::",
+            "milling::chain::",
             "ForceJob::sample_due",
             "turning::command::",
             "turning::table::",

@@ -14,7 +14,7 @@ use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
 use anyhow::Result;
 use motion::protocol::{
-    HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_FORCE_JOB, CAP_WIRE_JOB,
+    HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_MILLING_JOB, CAP_WIRE_JOB,
     CAP_TURNING_JOB,
 };
 use std::path::PathBuf;
@@ -59,7 +59,7 @@ enum Done {
 /// The capability a command's job needs on the board, and what it is called.
 fn needs(cmd: &JobCmd) -> (u32, &'static str) {
     match cmd {
-        JobCmd::Mill(_) => (CAP_FORCE_JOB, "force jobs (CAP_FORCE_JOB)"),
+        JobCmd::Mill(_) => (CAP_MILLING_JOB, "milling jobs (CAP_MILLING_JOB)"),
         JobCmd::Polar { .. } => (CAP_EVENTS, "event jobs (CAP_EVENTS)"),
         JobCmd::Turn { .. } => (CAP_TURNING_JOB, "turning jobs (CAP_TURNING_JOB)"),
         JobCmd::Wire { .. } => (CAP_WIRE_JOB, "wire jobs (CAP_WIRE_JOB)"),

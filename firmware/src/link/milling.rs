@@ -1,7 +1,7 @@
-//! Constant-force milling jobs on the link firmware (`motion::force::link_job`):
+//! Constant-force milling jobs on the link firmware (`motion::milling::link_job`):
 //! `ArmForce` makes a [`ForceJob`] in [`Motion`] for the next plain segment job; `Start` starts
 //! the machine's job and the force loop in the same critical section; the tick runs the
-//! machine through `motion::force::link_job::link_tick_deferred` (the job's latched force
+//! machine through `motion::milling::link_job::link_tick_deferred` (the job's latched force
 //! faults among the sensor inputs); the force interrupt puts the controller's override into the
 //! DDA like `SetOverride`.
 //!
@@ -16,7 +16,7 @@
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::{Command, StepOutput};
-use motion::force::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
+use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 

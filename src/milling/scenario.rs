@@ -6,7 +6,7 @@
 //! saturated channel, a stuck channel, a spindle stop (5 mm into the cut) or lower the trip level
 //! below the force at the step; each must end in a feed hold with the position exact.
 //!
-//! [`ForceScenario::custom`] runs the same loop on a milling job's [`MillingSetup`] (its nominal
+//! [`MillingScenario::custom`] runs the same loop on a milling job's [`MillingSetup`] (its nominal
 //! force and thresholds, spindle speed, teeth, cutting constant, feed and move); every figure of
 //! the report is then the job's.
 
@@ -89,14 +89,14 @@ impl Variant {
 
     pub const fn name(self) -> &'static str {
         match self {
-            Variant::CaseA => "force_case_a",
-            Variant::SaturatedChannel => "force_saturated",
-            Variant::StuckChannel => "force_stuck",
-            Variant::SpindleStop => "force_spindle_stop",
-            Variant::AboveTrip => "force_trip",
-            Variant::ImpactDirect => "force_impact_direct",
-            Variant::ImpactA => "force_impact_a",
-            Variant::ImpactB => "force_impact_b",
+            Variant::CaseA => "milling_case_a",
+            Variant::SaturatedChannel => "milling_saturated",
+            Variant::StuckChannel => "milling_stuck",
+            Variant::SpindleStop => "milling_spindle_stop",
+            Variant::AboveTrip => "milling_trip",
+            Variant::ImpactDirect => "milling_impact_direct",
+            Variant::ImpactA => "milling_impact_a",
+            Variant::ImpactB => "milling_impact_b",
         }
     }
 }
@@ -259,7 +259,7 @@ struct Stats {
 }
 
 /// See the module docs.
-pub struct ForceScenario {
+pub struct MillingScenario {
     variant: Variant,
     dda: Dda,
     plant: MillingPlant,
@@ -290,7 +290,7 @@ pub struct ForceScenario {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SetupError;
 
-impl ForceScenario {
+impl MillingScenario {
     pub fn new(variant: Variant) -> Result<Self, SetupError> {
         let trip = if variant == Variant::AboveTrip { 12_000_000 } else { 18_000_000 };
         let mut params = control_params(trip);
@@ -325,7 +325,7 @@ impl ForceScenario {
         let mut prep = Preparer::new(&cfg).map_err(|_| SetupError)?;
         let p = prep.prepare(&setup.segment()).map_err(|_| SetupError)?;
         dda.push(&p).map_err(|_| SetupError)?;
-        Ok(ForceScenario {
+        Ok(MillingScenario {
             variant,
             dda,
             plant: MillingPlant::new(setup.plant).map_err(|_| SetupError)?,
@@ -446,7 +446,7 @@ impl ForceScenario {
     }
 }
 
-impl Scenario for ForceScenario {
+impl Scenario for MillingScenario {
     fn name(&self) -> &'static str {
         self.variant.name()
     }
@@ -543,7 +543,7 @@ mod impact_tests {
     use crate::scenario::run_to_end;
 
     fn contact_peak(v: Variant) -> (i64, u8) {
-        let mut s = ForceScenario::new(v).unwrap();
+        let mut s = MillingScenario::new(v).unwrap();
         let r = run_to_end(&mut s, MAX_TICKS + 1);
         (r.figure("contact_peak_mn").unwrap(), r.fault)
     }

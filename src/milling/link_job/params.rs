@@ -6,10 +6,10 @@ use crate::protocol::{
 };
 use crate::segment::Rate;
 
-use crate::force::biquad::BiquadCoeffs;
-use crate::force::chain::{ChainConfig, ChannelCal, ForceChain, DECIMATION, MAX_CHANNELS};
-use crate::force::control::{ContactStrategy, ControlParams, ForceController};
-use crate::force::plant::PlantParams;
+use crate::milling::biquad::BiquadCoeffs;
+use crate::milling::chain::{ChainConfig, ChannelCal, ForceChain, DECIMATION, MAX_CHANNELS};
+use crate::milling::control::{ContactStrategy, ControlParams, ForceController};
+use crate::milling::plant::PlantParams;
 
 /// The control law's setup from a job's parameters; `Err` names the offending field.
 pub fn control_params(p: &ForceJobParams) -> Result<ControlParams, &'static str> {
@@ -119,8 +119,8 @@ pub fn chain_config(p: &ForceJobParams) -> Result<ChainConfig, &'static str> {
 
 /// Every check `ArmForce` makes before the board sees the job; `Err` names the field.
 pub fn check_job(p: &ForceJobParams) -> Result<(), &'static str> {
-    use crate::force::chain::ChainConfigError as C;
-    use crate::force::control::ControlConfigError as K;
+    use crate::milling::chain::ChainConfigError as C;
+    use crate::milling::control::ControlConfigError as K;
     if p.axis as usize >= crate::config::MAX_AXES {
         return Err("axis");
     }
@@ -148,7 +148,7 @@ pub fn check_job(p: &ForceJobParams) -> Result<(), &'static str> {
     // The peak-hold window (one tooth period) must fit the chain's tooth clock.
     let tooth_updates =
         (ctl.control_hz as u64 * 1000) / (p.flutes as u64 * p.spindle_mrev_s as u64).max(1);
-    if tooth_updates == 0 || tooth_updates > crate::force::peak::MAX_TOOTH_UPDATES as u64 {
+    if tooth_updates == 0 || tooth_updates > crate::milling::peak::MAX_TOOTH_UPDATES as u64 {
         return Err("spindle_mrev_s");
     }
     Ok(())
@@ -271,16 +271,16 @@ pub fn sim_params(plant: &PlantParams, fault: SimForceFault, fault_at_um: u32) -
     }
 }
 
-/// The Case A job of `crate::force::scenario` (trip 18 kN) as `ArmForce` parameters.
+/// The Case A job of `crate::milling::scenario` (trip 18 kN) as `ArmForce` parameters.
 pub fn case_a_job() -> ForceJobParams {
-    let s = crate::force::scenario::control_params(18_000_000);
-    job_params(&s, &crate::force::scenario::chain_config(), 0)
+    let s = crate::milling::scenario::control_params(18_000_000);
+    job_params(&s, &crate::milling::scenario::chain_config(), 0)
 }
 
-/// The Case A plant of `crate::force::scenario` as `Sim(Milling)` parameters, with `fault` injected
+/// The Case A plant of `crate::milling::scenario` as `Sim(Milling)` parameters, with `fault` injected
 /// 5 mm into the cut (the scenario's fault variants' point).
 pub fn case_a_sim(fault: SimForceFault) -> SimMillingParams {
-    sim_params(&crate::force::scenario::plant_params(), fault, 5_000)
+    sim_params(&crate::milling::scenario::plant_params(), fault, 5_000)
 }
 
 impl SimMillingParams {

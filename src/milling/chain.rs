@@ -207,7 +207,7 @@ mod tests {
     /// The Case A chain with a round 10 N per count.
     pub(crate) fn cfg() -> ChainConfig {
         let cal = ChannelCal { zero_counts: 2048, mn_per_count_q16: 10_000 << 16 };
-        ChainConfig { cal: [cal; MAX_CHANNELS], ..crate::force::scenario::chain_config() }
+        ChainConfig { cal: [cal; MAX_CHANNELS], ..crate::milling::scenario::chain_config() }
     }
 
     fn run(

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::dda::Dda;
-use crate::force::scenario::{self as sc, ForceScenario, Variant};
+use crate::milling::scenario::{self as sc, MillingScenario, Variant};
 use crate::machine::{BoardConfig, MachineCommand};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
 use crate::protocol::{AxisScale, HomingConfig, WireConfig};
@@ -256,7 +256,7 @@ fn every_bad_parameter_is_named() {
 fn case_a_on_the_link_tick_holds_fnom() {
     let o = run(case_a_job(), case_a_sim(SimForceFault::None));
     let settle_ms = o.settle_ticks.unwrap() as f64 * 1e3 / sc::TICK_HZ as f64;
-    let mut s = ForceScenario::new(Variant::CaseA).unwrap();
+    let mut s = MillingScenario::new(Variant::CaseA).unwrap();
     let r = run_to_end(&mut s, u64::MAX);
     let scenario_ms = r.figure("settle_us").unwrap() as f64 / 1e3;
     println!(

@@ -3,9 +3,9 @@
 
 use super::tests::config;
 use super::*;
-use crate::force::link_job::case_a_job;
+use crate::milling::link_job::case_a_job;
 #[cfg(feature = "sim-inputs")]
-use crate::force::link_job::case_a_sim;
+use crate::milling::link_job::case_a_sim;
 use crate::machine::MachineState;
 use crate::segment::Rate;
 
@@ -62,7 +62,7 @@ pub(crate) fn extreme_sim_params() -> SimMillingParams {
     }
 }
 
-const CAPS: u32 = CAP_DDA | CAP_FORCE_JOB | CAP_SIM_INPUTS;
+const CAPS: u32 = CAP_DDA | CAP_MILLING_JOB | CAP_SIM_INPUTS;
 
 struct Link {
     b: BoardLink,
@@ -174,7 +174,7 @@ fn sim_milling_needs_both_capabilities_and_names_bad_fields() {
     assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::OutOfRange));
     assert_eq!(l.t, before, "refusals change nothing");
     assert_eq!(command_kind(&milling(extreme_sim_params())), None);
-    for caps in [CAP_DDA | CAP_SIM_INPUTS, CAP_DDA | CAP_FORCE_JOB] {
+    for caps in [CAP_DDA | CAP_SIM_INPUTS, CAP_DDA | CAP_MILLING_JOB] {
         let mut plain = Link::new(caps);
         let before = plain.t.clone();
         let r = plain.send(milling(case_a_sim(SimForceFault::None)));

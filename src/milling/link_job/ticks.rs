@@ -6,7 +6,7 @@ use crate::dda::{Command, Dda, StepOutput};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
 use crate::protocol::ForcePhase;
 
-use crate::force::control::Mode;
+use crate::milling::control::Mode;
 
 /// Milli-revolutions per second (the force job's spindle unit) from a spindle speed in turns
 /// (Q32) per tick at `tick_hz` (the spindle sources' unit), rounded; the direction is dropped.
