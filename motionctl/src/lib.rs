@@ -30,7 +30,7 @@ pub mod qemu;
 pub mod runner;
 pub mod sample_job;
 pub mod sim_board;
-pub mod sim_wire;
+pub mod sim_link;
 pub mod toml_run;
 pub mod transport;
 pub mod units;

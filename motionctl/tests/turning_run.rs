@@ -3,12 +3,12 @@
 //! report at the end of a QEMU run (`cargo xtask turning-e2e`).
 
 use motion::turning::douglass_table::DOUGLASS_POWER;
-use motionctl::turning::run::{self as zrun, WireTable, ZOutput, ZRunOptions};
+use motionctl::turning::run::{self as zrun, LinkTableBytes, ZOutput, ZRunOptions};
 
 fn run_model(o: &ZRunOptions, step: Option<(u64, u32)>) -> zrun::ZModel {
     let cfg = zrun::machine_config(o.tick_hz);
     let spec = zrun::job_spec(o).unwrap();
-    let table = WireTable::douglass().unwrap();
+    let table = LinkTableBytes::douglass().unwrap();
     zrun::model(&cfg, &table, &spec, o.rpm_milli, step, 10 * o.tick_hz as u64).unwrap()
 }
 
@@ -62,10 +62,10 @@ fn table_text_parses_into_the_same_wire_bytes() {
         let c = t.row(r).unwrap().map(|v| v as f64 / (1u64 << 32) as f64);
         text += &format!("{x:.9} {:.14} {:.14} {:.14} {:.14}\n", c[0], c[1], c[2], c[3]);
     }
-    let parsed = WireTable::parse("text", &text).unwrap();
-    let built_in = WireTable::douglass().unwrap();
+    let parsed = LinkTableBytes::parse("text", &text).unwrap();
+    let built_in = LinkTableBytes::douglass().unwrap();
     assert_eq!(parsed.header, built_in.header);
     assert_eq!(parsed.bytes, built_in.bytes);
-    assert!(WireTable::parse("t", "1 2 3 4 5\n").is_err());
-    assert!(WireTable::parse("t", "0 0 0 0 0\n0.1 0 0 0 0\n0.3 0 0 0 0\n").is_err());
+    assert!(LinkTableBytes::parse("t", "1 2 3 4 5\n").is_err());
+    assert!(LinkTableBytes::parse("t", "0 0 0 0 0\n0.1 0 0 0 0\n0.3 0 0 0 0\n").is_err());
 }

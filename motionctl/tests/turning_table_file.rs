@@ -1,7 +1,7 @@
 //! The Z table file (`turning table --out`, `turning run --table`): every line read, errors at
 //! file:line:column, both units, both forms.
 
-use motionctl::turning::run::WireTable;
+use motionctl::turning::run::LinkTableBytes;
 use motionctl::turning::table_file::{Form, ZTable, MAX_ROWS};
 use std::process::Command;
 
@@ -82,9 +82,9 @@ fn inch_and_mm_files_give_the_board_the_same_table() {
     let fmt = |v: f64| format!("{v:.12}");
     let inch = t.render(motionctl::turning::units::Units::In, &[], &fmt);
     let mm = t.render(motionctl::turning::units::Units::Mm, &["mm".into()], &fmt);
-    let a = WireTable::parse("in", &inch).unwrap();
-    let b = WireTable::parse("mm", &mm).unwrap();
+    let a = LinkTableBytes::parse("in", &inch).unwrap();
+    let b = LinkTableBytes::parse("mm", &mm).unwrap();
     assert_eq!((a.header, &a.bytes), (b.header, &b.bytes));
-    let csv = WireTable::parse("csv", &t.render_csv(motionctl::turning::units::Units::Mm)).unwrap();
+    let csv = LinkTableBytes::parse("csv", &t.render_csv(motionctl::turning::units::Units::Mm)).unwrap();
     assert_eq!(a.bytes, csv.bytes);
 }

@@ -5,14 +5,14 @@ use crate::dda::Dda;
 use crate::milling::scenario::{self as sc, MillingScenario, Variant};
 use crate::machine::{BoardConfig, MachineCommand};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
-use crate::protocol::{AxisScale, HomingConfig, WireConfig};
+use crate::protocol::{AxisScale, HomingConfig, LinkConfig};
 use crate::protocol::{ForceStrategy, MAX_OVERRIDE_BITS};
 use crate::scenario::run_to_end;
 
 fn board() -> BoardConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    let wire = WireConfig {
+    let wire = LinkConfig {
         machine: sc::machine(),
         scale: [scale; crate::config::MAX_AXES],
         inputs: crate::config::InputFilterConfig::DEFAULT,

@@ -10,7 +10,7 @@ use crate::machine::MachineState;
 use crate::segment::{Rate, Segment};
 use crate::turning::douglass_table::DOUGLASS_POWER;
 use crate::turning::link_job::{
-    table_wire, LinkTable, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, MAX_TABLE_BYTES,
+    table_link_bytes, LinkTable, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, MAX_TABLE_BYTES,
 };
 use crate::turning::link_requests::{self as zr, ZNak, ZRequests};
 use crate::turning::scenario as sc;
@@ -47,7 +47,7 @@ impl ZTarget {
 }
 
 impl LinkTarget for ZTarget {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         self.sim.state()
     }
     fn machine_state(&self) -> MachineState {
@@ -59,7 +59,7 @@ impl LinkTarget for ZTarget {
     fn queue_capacity(&self) -> u16 {
         self.sim.queue_capacity()
     }
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.sim.config()
     }
     fn planned_position(&self) -> [i64; MAX_AXES] {
@@ -70,7 +70,7 @@ impl LinkTarget for ZTarget {
         zr::status(&self.job, self.sim.config.machine.tick_hz, &mut s);
         s
     }
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         self.sim.set_config(cfg)
     }
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
@@ -144,7 +144,7 @@ impl LinkTarget for ZTarget {
 
 fn douglass() -> (ZTableHeader, std::vec::Vec<u8>) {
     let mut buf = std::vec![0u8; MAX_TABLE_BYTES];
-    let (h, n) = table_wire(&DOUGLASS_POWER, &mut buf).unwrap();
+    let (h, n) = table_link_bytes(&DOUGLASS_POWER, &mut buf).unwrap();
     buf.truncate(n);
     (h, buf)
 }
@@ -191,9 +191,9 @@ impl Rig {
     fn send(&mut self, body: RequestBody) -> Result<(), (ErrorCode, NakDetail)> {
         // Every request survives the wire.
         let req = Request { seq: self.seq, body };
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         let frame = encode_frame(&req, &mut buf).expect("fits a frame");
-        assert!(frame.len() <= MAX_FRAME_WIRE);
+        assert!(frame.len() <= MAX_FRAME_LINK);
         self.seq += 1;
         match self.b.handle(&req, &mut self.t) {
             Response::Ack { .. } => Ok(()),
@@ -254,7 +254,7 @@ fn new_requests_round_trip_and_fit_a_frame() {
     assert_eq!(kinds, [18, 19, 20, 21]);
     for body in bodies {
         let req = Request { seq: u32::MAX, body };
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         let frame = encode_frame(&req, &mut buf).expect("fits");
         let mut d = FrameDecoder::<MAX_FRAME>::new();
         let mut got = None;

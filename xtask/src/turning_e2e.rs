@@ -11,14 +11,14 @@
 use crate::e2e::{build_motionctl, run_motionctl, summary_ints};
 use crate::firmware::{self, Board};
 use anyhow::{bail, Result};
-use motionctl::turning::run::{self as zrun, WireTable, ZOutput, ZRunOptions};
+use motionctl::turning::run::{self as zrun, LinkTableBytes, ZOutput, ZRunOptions};
 use std::path::Path;
 
 /// The `cargo xtask test` step (also `cargo xtask turning-e2e`).
 pub fn test(root: &Path) -> Result<()> {
     let elf = firmware::build(root, Board::Netduinoplus2, &["link"])?;
     let bin = build_motionctl(root)?;
-    let table = WireTable::douglass()?;
+    let table = LinkTableBytes::douglass()?;
     let runs: [(ZOutput, Option<(f64, f64)>); 2] =
         [(ZOutput::Steps, None), (ZOutput::Dac, Some((0.25, 0.2)))];
     let mut problems = Vec::new();

@@ -35,7 +35,7 @@ mod app {
     };
     use core::sync::atomic::Ordering::Relaxed;
     use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
-    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
+    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
     use motion_firmware::link::{
         self, Link, Motion, StepOnly, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK,
@@ -476,7 +476,7 @@ mod app {
             }
             for response in responses.iter().flatten() {
                 // Encoded outside the locks: the USART task keeps running meanwhile.
-                let mut buf = [0u8; MAX_FRAME_WIRE];
+                let mut buf = [0u8; MAX_FRAME_LINK];
                 if let Some(frame) = link::encode(response, &mut buf) {
                     host_port.lock(|port| port.queue_frame(frame));
                 }

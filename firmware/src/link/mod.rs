@@ -31,7 +31,7 @@ use motion::machine::persist::SaveError;
 use motion::machine::{BoardConfig, BootConfig, Machine, MachineState, ResetCause, WatchdogGate};
 use motion::polar::playback::QUEUE_DEPTH;
 use motion::polar::playback::{Playback, SizeScale};
-use motion::protocol::WireState;
+use motion::protocol::LinkState;
 use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
     CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_MILLING_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
@@ -191,11 +191,11 @@ impl Motion {
 
     /// The state as the link reports it: started with segments still to feed counts as
     /// moving (the feeder is about to run).
-    pub(super) fn wire_state(&self) -> WireState {
+    pub(super) fn wire_state(&self) -> LinkState {
         match (self.machine.state(), self.dda.state()) {
-            (MachineState::Running, MotionState::Idle) => WireState::Moving,
+            (MachineState::Running, MotionState::Idle) => LinkState::Moving,
             (MachineState::Holding, MotionState::Idle) if self.machine.event_job() => {
-                WireState::Held
+                LinkState::Held
             }
             _ => self.machine.wire_state(&self.dda),
         }

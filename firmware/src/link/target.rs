@@ -11,7 +11,7 @@ use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
     BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs, Status,
-    TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+    TeachChunk, LinkConfig, WireJobParams, LinkState, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
 use motion::turning::link_job::{ZJobSpec, ZTableHeader};
@@ -101,7 +101,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
 }
 
 impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         self.with(|m| m.wire_state())
     }
 
@@ -117,7 +117,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         SEGMENT_QUEUE as u16
     }
 
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.with(|m| m.machine.config().wire)
     }
 
@@ -165,7 +165,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         })
     }
 
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         let homing = self.with(|m| m.machine.config().homing());
         self.install(&BoardConfig::with_homing(*cfg, &homing))
     }

@@ -48,7 +48,7 @@ pub fn milling_summary(name: &str, r: &MillingRunReport, fnom_n: f64) -> Vec<Str
 
 /// `[MSG:...]` texts summing up a polar playback.
 pub fn polar_summary(name: &str, r: &PolarReport) -> Vec<String> {
-    let tick_hz = motion::polar::job::wire_config().machine.tick_hz as f64;
+    let tick_hz = motion::polar::job::link_config().machine.tick_hz as f64;
     let at = |p: [i64; 2]| {
         let st = Status { positions: [p[0], p[1], 0, 0, 0, 0], ..Status::default() };
         let v = polar_mm(&st);

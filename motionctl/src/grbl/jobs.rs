@@ -13,7 +13,7 @@ use super::report::{Report, State};
 use crate::runner::{JobControl, JobHook};
 use motion::machine::MachineState;
 use motion::polar::playback::SizeScale;
-use motion::protocol::{ProgramOutputs, Status, WireState};
+use motion::protocol::{ProgramOutputs, Status, LinkState};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -189,7 +189,7 @@ impl SenderHook<'_> {
         let axes = self.axes.max(mpos.len());
         mpos.resize(axes, 0.0);
         let stopping = st.machine == MachineState::Running
-            || (st.machine == MachineState::Holding && st.state != WireState::Held);
+            || (st.machine == MachineState::Holding && st.state != LinkState::Held);
         Report {
             state: if self.hold { State::Hold { stopping } } else { State::Run },
             mpos,

@@ -79,7 +79,7 @@ pub struct GrblArgs {
 /// scale, soft limits and input filter (as every job runner sends it).
 pub fn board_config(
     machine: &job::Machine,
-) -> Result<(motion::MachineConfig, motion::protocol::WireConfig)> {
+) -> Result<(motion::MachineConfig, motion::protocol::LinkConfig)> {
     let cfg = convert::machine_config(machine)?;
     let program = Program {
         config: cfg,
@@ -90,7 +90,7 @@ pub fn board_config(
         skipped_moves: 0,
     };
     let job = Job { machine: machine.clone(), items: Vec::new(), feed_commands: Vec::new() };
-    Ok((cfg, runner::wire_config(&job, &program)))
+    Ok((cfg, runner::link_config(&job, &program)))
 }
 
 /// `motionctl grbl`.
@@ -160,7 +160,7 @@ fn serve(
     target: &crate::transport::LinkTarget,
     machine: &'static job::Machine,
     cfg: motion::MachineConfig,
-    wire: motion::protocol::WireConfig,
+    wire: motion::protocol::LinkConfig,
     persist: session::Persist,
 ) -> Result<()> {
     let mut s = Session::new(t, args.link.host_config(target));

@@ -24,7 +24,7 @@ use motion::milling::scenario as sc;
 use motion::machine::MachineState;
 use motion::protocol::{
     AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    SimForceFault, SimRequest, Status, WireConfig, CAP_MILLING_JOB, CAP_SIM_INPUTS,
+    SimForceFault, SimRequest, Status, LinkConfig, CAP_MILLING_JOB, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -130,10 +130,10 @@ impl MillingRunReport {
 }
 
 /// The Case A machine as the link's config: X only, 1 um per step.
-pub fn wire_config() -> WireConfig {
+pub fn link_config() -> LinkConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    WireConfig {
+    LinkConfig {
         machine: sc::machine(),
         scale: [scale; motion::MAX_AXES],
         inputs: motion::InputFilterConfig::DEFAULT,
@@ -215,7 +215,7 @@ pub fn run_resumable(
         Some(r) => r.sim_params(job),
         None => sim_params(&setup.plant, opts.fault, FAULT_AT_UM),
     };
-    let cfg = wire_config();
+    let cfg = link_config();
     let tick_hz = cfg.machine.tick_hz as f64;
     // The host model: the same force code without the link (its settling, for the report).
     let (model, _) = super::simulate::run(job)?;

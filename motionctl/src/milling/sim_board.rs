@@ -13,14 +13,14 @@
 //! ([`MillingSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
 //! gone) and the machine's path so far is kept.
 
-use crate::sim_wire::SimWire;
+use crate::sim_link::SimLink;
 use crate::transport::Transport;
 use motion::dda::{Command, Dda, Preparer};
 use motion::milling::link_job::ForceJob;
 use motion::machine::{MachineState, ProbeKind};
 use motion::protocol::{
     BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs,
-    SimRequest, SimTarget, Status, WireConfig, WireState, CAP_DDA, CAP_MILLING_JOB, CAP_HOLD_RESUME,
+    SimRequest, SimTarget, Status, LinkConfig, LinkState, CAP_DDA, CAP_MILLING_JOB, CAP_HOLD_RESUME,
     CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::segment::Segment;
@@ -57,7 +57,7 @@ pub struct MillingSimTarget {
 impl MillingSimTarget {
     pub fn new(capacity: u16) -> Self {
         MillingSimTarget {
-            inner: SimTarget::new(WireConfig::UNSET, capacity),
+            inner: SimTarget::new(LinkConfig::UNSET, capacity),
             queued: VecDeque::new(),
             dda: None,
             running: None,
@@ -165,7 +165,7 @@ impl MillingSimTarget {
 }
 
 impl LinkTarget for MillingSimTarget {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         self.inner.state()
     }
     fn machine_state(&self) -> MachineState {
@@ -177,7 +177,7 @@ impl LinkTarget for MillingSimTarget {
     fn queue_capacity(&self) -> u16 {
         self.inner.queue_capacity()
     }
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.inner.config()
     }
     fn planned_position(&self) -> [i64; MAX_AXES] {
@@ -197,7 +197,7 @@ impl LinkTarget for MillingSimTarget {
         st
     }
 
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         self.inner.set_config(cfg)?;
         self.dda = None;
         Ok(())
@@ -274,7 +274,7 @@ impl LinkTarget for MillingSimTarget {
 pub struct MillingSimBoard {
     pub board: BoardLink,
     pub target: MillingSimTarget,
-    wire: SimWire,
+    wire: SimLink,
     last: Instant,
     budget_ticks: f64,
     /// Machine time per wall time.
@@ -300,7 +300,7 @@ impl MillingSimBoard {
         MillingSimBoard {
             board: BoardLink::new("motionctl-force-sim", caps),
             target: MillingSimTarget::new(CAPACITY),
-            wire: SimWire::new(),
+            wire: SimLink::new(),
             last: Instant::now(),
             budget_ticks: 0.0,
             speed,
@@ -371,7 +371,7 @@ impl Transport for MillingSimBoard {
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
         if self.wire.is_empty() {
-            SimWire::idle_wait(timeout);
+            SimLink::idle_wait(timeout);
             self.advance();
         }
         Ok(self.wire.take())

@@ -275,7 +275,7 @@ fn turning_table(a: &TableArgs) -> Result<()> {
     let error = part::part_error(&built, ERROR_POINTS_PER_CELL, ERROR_PHI_SAMPLES);
     let (worst_x_in, worst_in) =
         error.iter().fold((0.0, 0.0), |m, p| if p.1 > m.1 { *p } else { m });
-    let board = zrun::WireTable::from_ztable(&built.table).err().map(|e| format!("{e:#}"));
+    let board = zrun::LinkTableBytes::from_ztable(&built.table).err().map(|e| format!("{e:#}"));
     let t = &built.table;
     let un = u.name();
     let gross = built
@@ -482,20 +482,20 @@ fn run_options(a: &TurningRunArgs, table: Option<&ZTable>) -> Result<ZRunOptions
 }
 
 /// `--table`'s table, else the built-in one.
-fn table_of(a: &TurningRunArgs) -> Result<(Option<ZTable>, zrun::WireTable)> {
+fn table_of(a: &TurningRunArgs) -> Result<(Option<ZTable>, zrun::LinkTableBytes)> {
     Ok(match &a.table {
         Some(p) => {
             let (t, w) = zrun::read_table(p)?;
             (Some(t), w)
         }
-        None => (None, zrun::WireTable::douglass()?),
+        None => (None, zrun::LinkTableBytes::douglass()?),
     })
 }
 
 /// A Z-slide job as `turning run` would run it with these flags (`--table`, `--rpm`,
 /// `--x-start` ...; `run`'s, without the link's): the table and the options, checked as
 /// `turning run` checks them, for a caller with its own link (the grbl bridge's `$TURN=`).
-pub fn turn_job(flags: &[String]) -> Result<(zrun::WireTable, ZRunOptions)> {
+pub fn turn_job(flags: &[String]) -> Result<(zrun::LinkTableBytes, ZRunOptions)> {
     use clap::Parser;
     #[derive(Parser)]
     struct RunOnly {

@@ -23,11 +23,11 @@ use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
     AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, SimRequest,
-    WireConfig, CAP_SIM_INPUTS, CAP_TURNING_JOB, CRC32, MAX_Z_CHUNK,
+    LinkConfig, CAP_SIM_INPUTS, CAP_TURNING_JOB, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::turning::link_job::{
-    table_wire, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, ZTableUpload, MAX_TABLE_BYTES,
+    table_link_bytes, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, ZTableUpload, MAX_TABLE_BYTES,
 };
 use motion::turning::scenario as sc;
 use std::time::{Duration, Instant};
@@ -62,14 +62,14 @@ pub enum ZOutput {
     Dac,
 }
 
-/// A table ready for the wire.
+/// A table ready for the link.
 #[derive(Clone, Debug)]
-pub struct WireTable {
+pub struct LinkTableBytes {
     pub header: ZTableHeader,
     pub bytes: Vec<u8>,
 }
 
-impl WireTable {
+impl LinkTableBytes {
     /// The checked-in Douglass table (accurate mode, 81 rows, X 0..8 in).
     pub fn douglass() -> anyhow::Result<Self> {
         Self::from_table(&motion::turning::douglass_table::DOUGLASS_POWER)
@@ -80,9 +80,9 @@ impl WireTable {
     ) -> anyhow::Result<Self> {
         let mut bytes = vec![0u8; MAX_TABLE_BYTES];
         let (header, n) =
-            table_wire(t, &mut bytes).ok_or_else(|| anyhow!("the table does not fit an upload"))?;
+            table_link_bytes(t, &mut bytes).ok_or_else(|| anyhow!("the table does not fit an upload"))?;
         bytes.truncate(n);
-        Ok(WireTable { header, bytes })
+        Ok(LinkTableBytes { header, bytes })
     }
 
     /// A table file (see [`crate::turning::table_file`]); `name` goes into the errors.
@@ -113,7 +113,7 @@ impl WireTable {
 
 /// The machine config of a Z job: `tick_hz`, axis 0 = Z, axis 1 = X (a rise every other tick
 /// at most: max rate tick_hz / 2), wide soft limits.
-pub fn machine_config(tick_hz: u32) -> WireConfig {
+pub fn machine_config(tick_hz: u32) -> LinkConfig {
     let axis =
         AxisLimits { max_rate_hz: tick_hz / 2, accel_steps_per_s2: 1_000_000, junction_jerk_hz: 0 };
     let mut axes = [AxisLimits::UNUSED; MAX_AXES];
@@ -131,7 +131,7 @@ pub fn machine_config(tick_hz: u32) -> WireConfig {
         soft_min: -1_000_000,
         soft_max: 1_000_000,
     };
-    WireConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz,
             timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },
@@ -241,8 +241,8 @@ pub struct ZModel {
 /// Runs the job on the host: the firmware's `Machine`, `ZJob`, sim spindle and encoder logic,
 /// tick by tick. `step`: (ticks after the start, rpm) of a speed step.
 pub fn model(
-    cfg: &WireConfig,
-    table: &WireTable,
+    cfg: &LinkConfig,
+    table: &LinkTableBytes,
     spec: &ZJobSpec,
     rpm_milli: u32,
     step: Option<(u64, u32)>,
@@ -344,7 +344,7 @@ impl ZRunReport {
 /// Connects, readies the board, uploads `table`, runs the job and checks it; see the module doc.
 pub fn run(
     transport: &mut dyn Transport,
-    table: &WireTable,
+    table: &LinkTableBytes,
     o: &ZRunOptions,
     say: &dyn Fn(&str),
 ) -> anyhow::Result<ZRunReport> {
@@ -355,7 +355,7 @@ pub fn run(
 /// hold the X feed, resume it or abort the job: the grbl bridge's sender does).
 pub fn run_with(
     transport: &mut dyn Transport,
-    table: &WireTable,
+    table: &LinkTableBytes,
     o: &ZRunOptions,
     say: &dyn Fn(&str),
     hook: &mut dyn runner::JobHook,
@@ -557,11 +557,11 @@ pub fn run_with(
 }
 
 /// Reads a `--table` file.
-pub fn read_table(path: &std::path::Path) -> anyhow::Result<(ZTable, WireTable)> {
+pub fn read_table(path: &std::path::Path) -> anyhow::Result<(ZTable, LinkTableBytes)> {
     let src =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let name = path.display().to_string();
     let t = ZTable::parse(&name, &src)?;
-    let wire = WireTable::from_ztable(&t).with_context(|| format!("{name}: for the board"))?;
+    let wire = LinkTableBytes::from_ztable(&t).with_context(|| format!("{name}: for the board"))?;
     Ok((t, wire))
 }

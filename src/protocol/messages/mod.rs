@@ -1,9 +1,9 @@
-//! The messages. Wire form: postcard (varints for integers, enum variants as varint indices in
+//! The messages. Link form: postcard (varints for integers, enum variants as varint indices in
 //! declaration order). Compatibility rule: new variants and fields go at the end, and anything
 //! that changes the meaning of existing bytes bumps [`PROTOCOL_VERSION`].
 //!
 //! The parts: `requests` (host -> board), `replies` (board -> host: Ack/Nak and what they
-//! carry), `status` (the status report and the board's counters), `wire_config` (the config and
+//! carry), `status` (the status report and the board's counters), `link_config` (the config and
 //! homing as set over the link), `jobs` (the force and wire jobs' parameters) and `decode`.
 //! The version, the capability bits and the sizes every part shares are here.
 
@@ -12,14 +12,14 @@ mod jobs;
 mod replies;
 mod requests;
 mod status;
-mod wire_config;
+mod link_config;
 
 pub use decode::{decode_request, decode_response, Malformed};
 pub use jobs::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy, WireJobParams};
 pub use replies::{HelloInfo, NakDetail, PanicSite, Reply, Response, TeachChunk};
 pub use requests::{Request, RequestBody, KIND_SIM};
-pub use status::{BoardCounters, Status, WireState};
-pub use wire_config::{AxisScale, HomingConfig, WireConfig};
+pub use status::{BoardCounters, Status, LinkState};
+pub use link_config::{AxisScale, HomingConfig, LinkConfig};
 
 use crate::segment::Rate;
 
@@ -45,7 +45,7 @@ pub const CAP_STATUS_STREAM: u32 = 1 << 1;
 pub const CAP_OVERRIDE: u32 = 1 << 2;
 /// `Hold` / `Resume` are honoured.
 pub const CAP_HOLD_RESUME: u32 = 1 << 3;
-/// Soft limits in [`WireConfig`] are enforced when segments are queued.
+/// Soft limits in [`LinkConfig`] are enforced when segments are queued.
 pub const CAP_SOFT_LIMITS: u32 = 1 << 4;
 /// `Status::sensors` carries real readings.
 pub const CAP_SENSORS: u32 = 1 << 5;

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::status::Status;
-use super::wire_config::WireConfig;
+use super::link_config::LinkConfig;
 use super::{FIELD_NAME_LEN, FIRMWARE_NAME_LEN, PANIC_FILE_LEN};
 use crate::machine::MachineState;
 use crate::protocol::bounded::{BlockBytes, FixedStr};
@@ -31,7 +31,7 @@ pub enum Response {
 pub enum Reply {
     None,
     Hello(HelloInfo),
-    Config(WireConfig),
+    Config(LinkConfig),
     Status(Status),
     /// The answer to `QueueEvents`: free event-block slots right after it (`T = seq`).
     EventCredits(u16),

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::jobs::{ForceJobParams, WireJobParams};
-use super::wire_config::{HomingConfig, WireConfig};
+use super::link_config::{HomingConfig, LinkConfig};
 use crate::machine::ProbeKind;
 use crate::protocol::bounded::{BlockBytes, EventBlock, SegmentBatch};
 use crate::protocol::program_outputs::ProgramOutputs;
@@ -31,7 +31,7 @@ pub enum RequestBody {
     },
     GetConfig,
     /// In `Idle`, `Ready` (loses homing) or `Fault`, with an empty queue.
-    SetConfig(WireConfig),
+    SetConfig(LinkConfig),
     /// All-or-nothing: every segment is checked (and credits counted) before any is queued.
     QueueSegments(SegmentBatch),
     Start,

@@ -16,19 +16,19 @@ use crate::protocol::sim::messages::SimRequest;
 /// What the board's link drives. Every method that returns `Err` must have changed nothing.
 pub trait LinkTarget {
     /// How the axes move.
-    fn state(&self) -> WireState;
+    fn state(&self) -> LinkState;
     /// Where the machine is in its life cycle: what the command table checks.
     fn machine_state(&self) -> MachineState;
     /// Free slots in the segment queue.
     fn credits(&self) -> u16;
     fn queue_capacity(&self) -> u16;
-    fn config(&self) -> WireConfig;
+    fn config(&self) -> LinkConfig;
     /// Position (steps) after every queued segment, for the soft-limit check.
     fn planned_position(&self) -> [i64; MAX_AXES];
     /// Current status; `BoardLink` fills in `credits` and `next_seq`.
     fn status(&self) -> Status;
     /// Called with a validated config, only while Idle with an empty queue.
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode>;
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode>;
     /// Called with checked segments, never more than `credits()`.
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode>;
     fn start(&mut self) -> Result<(), ErrorCode>;

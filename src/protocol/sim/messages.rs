@@ -1,5 +1,5 @@
-//! The simulator board's test hooks on the wire ([`SimRequest`], in `RequestBody::Sim`) and
-//! the simulated milling plant's parameters. Wire form as the other messages: postcard, variants
+//! The simulator board's test hooks on the link ([`SimRequest`], in `RequestBody::Sim`) and
+//! the simulated milling plant's parameters. Link form as the other messages: postcard, variants
 //! as varint indices in declaration order (new hooks go at the end).
 
 use serde::{Deserialize, Serialize};

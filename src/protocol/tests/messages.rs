@@ -3,8 +3,8 @@
 
 use super::*;
 
-fn extreme_config() -> WireConfig {
-    WireConfig {
+fn extreme_config() -> LinkConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: u32::MAX,
             timing: StepTiming {
@@ -32,7 +32,7 @@ fn extreme_status() -> Status {
     Status {
         tick: u64::MAX,
         positions: [i64::MIN; MAX_AXES],
-        state: WireState::Faulted,
+        state: LinkState::Faulted,
         override_bits: u32::MAX,
         queue_depth: u16::MAX,
         credits: u16::MAX,
@@ -259,19 +259,19 @@ pub(crate) fn extreme_responses() -> Vec<Response> {
 
 #[test]
 fn largest_messages_fit_the_frame_buffers() {
-    let mut out = [0u8; MAX_FRAME_WIRE];
+    let mut out = [0u8; MAX_FRAME_LINK];
     let mut largest = (0, 0);
     for r in extreme_requests() {
         let n = postcard::to_slice(&r, &mut [0u8; 1024]).unwrap().len();
         largest.0 = largest.0.max(n);
         let f = encode_frame(&r, &mut out).expect("request fits");
-        assert!(f.len() <= MAX_FRAME_WIRE);
+        assert!(f.len() <= MAX_FRAME_LINK);
     }
     for r in extreme_responses() {
         let n = postcard::to_slice(&r, &mut [0u8; 1024]).unwrap().len();
         largest.1 = largest.1.max(n);
         let f = encode_frame(&r, &mut out).expect("response fits");
-        assert!(f.len() <= MAX_FRAME_WIRE);
+        assert!(f.len() <= MAX_FRAME_LINK);
     }
     println!(
         "largest request {} / response {} bytes, MAX_MESSAGE {MAX_MESSAGE}",

@@ -36,7 +36,7 @@ pub use run::ZPrepared;
 pub use spec::{ZJobSpec, ZOutputSpec, ZStartError};
 pub use update_rate::{update_shift, Z_UPDATE_MIN_HZ};
 pub use upload::{
-    table_wire, LinkTable, ZTableError, ZTableHeader, ZTableUpload, LINK_TABLE_ROWS,
+    table_link_bytes, LinkTable, ZTableError, ZTableHeader, ZTableUpload, LINK_TABLE_ROWS,
     MAX_TABLE_BYTES,
 };
 

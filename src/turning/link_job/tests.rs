@@ -13,7 +13,7 @@ use crate::turning::douglass_table::DOUGLASS_POWER;
 use crate::turning::scenario::{self as sc, TurningScenario, TurningVariant};
 use crate::turning::table::TableError;
 
-/// The checked-in Douglass table as wire bytes and header.
+/// The checked-in Douglass table as link bytes and header.
 fn douglass_bytes() -> (ZTableHeader, std::vec::Vec<u8>) {
     let t = &DOUGLASS_POWER;
     let h = ZTableHeader {
@@ -106,7 +106,7 @@ fn spec() -> ZJobSpec {
 
 fn ready() -> (Machine, Dda) {
     let (m, dda, _) = crate::machine::homed(BoardConfig::with_homing(
-        crate::polar::job::wire_config(),
+        crate::polar::job::link_config(),
         &HomingConfig::NONE,
     ));
     (m, dda)

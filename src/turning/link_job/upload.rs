@@ -1,4 +1,4 @@
-//! The chunked table upload of the link's Z-slide job: a table's wire form ([`table_wire`], the
+//! The chunked table upload of the link's Z-slide job: a table's link form ([`table_link_bytes`], the
 //! host's side), and the board's staging buffer ([`ZTableUpload`], checked whole: byte count,
 //! CRC-32, [`CoefficientTable::try_new`]) that yields a [`LinkTable`].
 
@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 /// Rows an uploaded table may have (the Douglass table has 81).
 pub const LINK_TABLE_ROWS: usize = 96;
-/// Largest table on the wire: harmonic order 8, `LINK_TABLE_ROWS` rows, 4 bytes a coefficient.
+/// Largest table on the link: harmonic order 8, `LINK_TABLE_ROWS` rows, 4 bytes a coefficient.
 pub const MAX_TABLE_BYTES: usize = LINK_TABLE_ROWS * MAX_WIDTH * 4;
 
 /// A table's shape, sent first (`ZTableBegin`). Rows follow as little-endian `i32`
@@ -31,7 +31,7 @@ impl ZTableHeader {
             _ => None,
         }
     }
-    /// Bytes of the rows on the wire.
+    /// Bytes of the rows on the link.
     pub const fn byte_len(&self) -> usize {
         match self.table_form() {
             Some(f) => self.rows as usize * f.width() * 4,
@@ -40,10 +40,10 @@ impl ZTableHeader {
     }
 }
 
-/// A table's wire form (the host's side of an upload): its header, and its rows written into
+/// A table's link form (the host's side of an upload): its header, and its rows written into
 /// `out` as little-endian `i32`s; returns the header and the byte count, `None` if `out` is too
 /// short or the table does not fit a [`ZTableHeader`]. Harmonic tables are sent at their order.
-pub fn table_wire<const ROWS: usize, const WIDTH: usize>(
+pub fn table_link_bytes<const ROWS: usize, const WIDTH: usize>(
     t: &CoefficientTable<ROWS, WIDTH>,
     out: &mut [u8],
 ) -> Option<(ZTableHeader, usize)> {

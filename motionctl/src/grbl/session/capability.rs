@@ -5,7 +5,7 @@
 
 use super::{link_err, Bridge, Pending};
 use crate::cli_capabilities::WireBoardJob;
-use crate::turning::run::{WireTable, ZRunOptions};
+use crate::turning::run::{LinkTableBytes, ZRunOptions};
 use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
@@ -14,7 +14,7 @@ use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
 use anyhow::Result;
 use motion::protocol::{
-    HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_MILLING_JOB, CAP_WIRE_JOB,
+    HostConfig, RequestBody, SimForceFault, LinkConfig, CAP_EVENTS, CAP_MILLING_JOB, CAP_WIRE_JOB,
     CAP_TURNING_JOB,
 };
 use std::path::PathBuf;
@@ -29,7 +29,7 @@ pub struct JobSetup {
     /// The board may home after a job (a simulated or QEMU board, or `--home`).
     pub home: bool,
     /// The bridge's own config, sent again after a job.
-    pub wire: WireConfig,
+    pub wire: LinkConfig,
     /// The board's capabilities (its Hello): a job it cannot run is refused before it starts.
     pub caps: u32,
 }
@@ -41,7 +41,7 @@ const SETTLE: Duration = Duration::from_secs(5);
 enum Loaded {
     Mill(Box<crate::milling::job::MillingJob>),
     Polar { bytes: Vec<u8>, speed: f64, scale: motion::polar::playback::SizeScale },
-    Turn(WireTable, ZRunOptions),
+    Turn(LinkTableBytes, ZRunOptions),
     Wire(Box<WireBoardJob>),
 }
 

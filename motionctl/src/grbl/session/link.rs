@@ -29,7 +29,7 @@ impl Bridge<'_> {
     /// is not ready (e.g. it must be homed and may not be).
     pub(super) fn configure(
         &mut self,
-        wire: motion::protocol::WireConfig,
+        wire: motion::protocol::LinkConfig,
         home: bool,
         what: &str,
     ) -> Result<Result<(), String>> {

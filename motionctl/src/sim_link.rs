@@ -3,7 +3,7 @@
 //! bytes the host reads next (the firmware's USART task, without the USART).
 
 use motion::protocol::{
-    encode_frame, BoardLink, FrameDecoder, LinkTarget, Response, MAX_FRAME, MAX_FRAME_WIRE,
+    encode_frame, BoardLink, FrameDecoder, LinkTarget, Response, MAX_FRAME, MAX_FRAME_LINK,
 };
 use std::time::Duration;
 
@@ -12,20 +12,20 @@ use std::time::Duration;
 pub const IDLE_WAIT: Duration = Duration::from_millis(1);
 
 /// Decoder in, encoded answers out.
-pub struct SimWire {
+pub struct SimLink {
     decoder: FrameDecoder<MAX_FRAME>,
     out: Vec<u8>,
 }
 
-impl Default for SimWire {
+impl Default for SimLink {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl SimWire {
+impl SimLink {
     pub fn new() -> Self {
-        SimWire { decoder: FrameDecoder::new(), out: Vec::new() }
+        SimLink { decoder: FrameDecoder::new(), out: Vec::new() }
     }
 
     /// Every frame in `bytes` through `board` on `target`, its answer queued; the frames
@@ -53,7 +53,7 @@ impl SimWire {
     }
 
     fn encode(out: &mut Vec<u8>, resp: &Response) {
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         if let Ok(f) = encode_frame(resp, &mut buf) {
             out.extend_from_slice(f);
         }

@@ -40,7 +40,7 @@ impl AxisScale {
 
 /// The configuration as set and read over the link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct WireConfig {
+pub struct LinkConfig {
     pub machine: MachineConfig,
     pub scale: [AxisScale; MAX_AXES],
     /// How long a limit switch must hold a new level, and the e-stop stay released, before the
@@ -48,9 +48,9 @@ pub struct WireConfig {
     pub inputs: InputFilterConfig,
 }
 
-impl WireConfig {
+impl LinkConfig {
     /// A placeholder that fails validation (tick_hz 0): the board's state before any SetConfig.
-    pub const UNSET: WireConfig = WireConfig {
+    pub const UNSET: LinkConfig = LinkConfig {
         machine: MachineConfig {
             tick_hz: 0,
             timing: StepTiming { pulse_ns: 0, dir_setup_ns: 0, dir_hold_ns: 0 },
