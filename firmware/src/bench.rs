@@ -267,7 +267,9 @@ fn zslide_kernels(c: &CycleCounter, overhead: u32) {
     use motion::spindle::SpindleSource;
     use motion::turning::command::ZCommand;
     use motion::turning::douglass_table::DOUGLASS_POWER;
-    use motion::turning::scenario::{command_config, encoder_config, resolver_config, speed_at_rpm};
+    use motion::turning::scenario::{
+        command_config, encoder_config, resolver_config, speed_at_rpm,
+    };
     use motion::turning::table::{CoefficientTable, Interp, TableForm};
 
     let speed = speed_at_rpm(360);

@@ -7,7 +7,7 @@ use crate::sim_link::SimLink;
 use crate::transport::Transport;
 use motion::protocol::LinkTarget as _;
 use motion::protocol::{
-    BoardLink, SimTarget, LinkConfig, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    BoardLink, LinkConfig, SimTarget, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::{Rate, MAX_AXES};

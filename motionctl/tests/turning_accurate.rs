@@ -2,7 +2,7 @@
 
 use motionctl::turning::accurate::{harmonics_at, table, AccurateOptions, ToolNoseModel};
 use motionctl::turning::forex4::{forex4_table, format_for30, Forex4Params};
-use motionctl::turning::{TurningError, OffAxisParaboloid};
+use motionctl::turning::{OffAxisParaboloid, TurningError};
 
 /// Table 2-1 as printed (seed l.413-436): `(i, C_i, S_i)`; `S_0` is blank.
 fn table_2_1() -> Vec<(usize, f64, Option<f64>)> {

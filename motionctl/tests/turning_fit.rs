@@ -2,7 +2,7 @@
 
 use motionctl::turning::accurate::{table, AccurateOptions, ToolNoseModel};
 use motionctl::turning::fit::{dft, fit_ring, table_from_surface, GrossPath, SurfaceFitOptions};
-use motionctl::turning::{CartesianGrid, TurningError, OffAxisParaboloid, PowerRow};
+use motionctl::turning::{CartesianGrid, OffAxisParaboloid, PowerRow, TurningError};
 
 fn sharp() -> OffAxisParaboloid {
     OffAxisParaboloid::douglass_listing().with_tool_nose_radius(0.0).unwrap()

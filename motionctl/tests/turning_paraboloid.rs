@@ -2,7 +2,7 @@
 //! the motion figures of Chapter 2, tool-nose geometry, and bad input.
 
 use motionctl::turning::accurate::{z_command_in, ToolNoseModel};
-use motionctl::turning::{TurningError, OffAxisParaboloid};
+use motionctl::turning::{OffAxisParaboloid, TurningError};
 use std::f64::consts::PI;
 
 fn sharp() -> OffAxisParaboloid {

@@ -5,7 +5,7 @@ use motionctl::turning::accurate::{z_command_in, ToolNoseModel};
 use motionctl::turning::forex4::{forex4_table, Forex4Params};
 use motionctl::turning::table::InterpolationError;
 use motionctl::turning::{
-    CoefficientTable, TurningError, Interpolation, OffAxisParaboloid, PowerRow,
+    CoefficientTable, Interpolation, OffAxisParaboloid, PowerRow, TurningError,
 };
 use std::f64::consts::PI;
 

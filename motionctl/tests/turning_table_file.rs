@@ -85,6 +85,7 @@ fn inch_and_mm_files_give_the_board_the_same_table() {
     let a = LinkTableBytes::parse("in", &inch).unwrap();
     let b = LinkTableBytes::parse("mm", &mm).unwrap();
     assert_eq!((a.header, &a.bytes), (b.header, &b.bytes));
-    let csv = LinkTableBytes::parse("csv", &t.render_csv(motionctl::turning::units::Units::Mm)).unwrap();
+    let csv =
+        LinkTableBytes::parse("csv", &t.render_csv(motionctl::turning::units::Units::Mm)).unwrap();
     assert_eq!(a.bytes, csv.bytes);
 }

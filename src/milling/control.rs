@@ -357,7 +357,11 @@ mod tests {
 
     fn params(contact: ContactStrategy) -> ControlParams {
         // The Case A setup, with a shorter tare so the unit tests reach the cut sooner.
-        ControlParams { tare_ms: 10, contact, ..crate::milling::scenario::control_params(18_000_000) }
+        ControlParams {
+            tare_ms: 10,
+            contact,
+            ..crate::milling::scenario::control_params(18_000_000)
+        }
     }
 
     /// A plant at control rate: the feed moves the axis at once (no ramp), force is

@@ -2,9 +2,9 @@
 
 use super::*;
 use crate::dda::Dda;
-use crate::milling::scenario::{self as sc, MillingScenario, Variant};
 use crate::machine::{BoardConfig, MachineCommand};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
+use crate::milling::scenario::{self as sc, MillingScenario, Variant};
 use crate::protocol::{AxisScale, HomingConfig, LinkConfig};
 use crate::protocol::{ForceStrategy, MAX_OVERRIDE_BITS};
 use crate::scenario::run_to_end;

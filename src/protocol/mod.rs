@@ -54,9 +54,9 @@ mod tests;
 mod tests_turning;
 // -- force job --
 #[cfg(test)]
-mod tests_milling;
-#[cfg(test)]
 mod tests_copy;
+#[cfg(test)]
+mod tests_milling;
 #[cfg(test)]
 mod tests_outputs;
 #[cfg(test)]

@@ -3,10 +3,10 @@
 
 use super::tests::config;
 use super::*;
+use crate::machine::MachineState;
 use crate::milling::link_job::case_a_job;
 #[cfg(feature = "sim-inputs")]
 use crate::milling::link_job::case_a_sim;
-use crate::machine::MachineState;
 use crate::segment::Rate;
 
 pub(crate) fn extreme_force_params() -> ForceJobParams {

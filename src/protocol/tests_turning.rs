@@ -380,7 +380,11 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
         e,
         Err((
             ErrorCode::OutOfRange,
-            NakDetail::Turning { reason: 0, expected: None, fault: Some(FaultCode::SpindleStopped) }
+            NakDetail::Turning {
+                reason: 0,
+                expected: None,
+                fault: Some(FaultCode::SpindleStopped)
+            }
         ))
     );
     assert_eq!(r.t.sim.machine, MachineState::Ready);

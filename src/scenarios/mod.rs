@@ -10,8 +10,8 @@ use crate::milling::scenario::{MillingScenario, Variant as MillingVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
-use crate::wire::scenario::{WireJobScenario, WireStallScenario};
 use crate::turning::scenario::{TurningScenario, TurningVariant};
+use crate::wire::scenario::{WireJobScenario, WireStallScenario};
 
 use crate::scenario::{Scenario, ScenarioReport};
 

@@ -26,9 +26,10 @@ pub fn start_nak(e: ZStartError) -> ZNak {
     match e {
         ZStartError::NoTable | ZStartError::Running => (ErrorCode::OutOfState, NakDetail::None),
         ZStartError::Spec | ZStartError::Config => (ErrorCode::OutOfRange, NakDetail::None),
-        ZStartError::Fault(f) => {
-            (ErrorCode::OutOfRange, NakDetail::Turning { reason: 0, expected: None, fault: Some(f) })
-        }
+        ZStartError::Fault(f) => (
+            ErrorCode::OutOfRange,
+            NakDetail::Turning { reason: 0, expected: None, fault: Some(f) },
+        ),
     }
 }
 

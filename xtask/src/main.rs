@@ -41,8 +41,8 @@ mod polar_e2e;
 mod rs274;
 mod scenarios;
 mod setup;
-mod wire_e2e;
 mod turning_e2e;
+mod wire_e2e;
 
 use anyhow::{bail, Context, Result};
 use firmware::Board;

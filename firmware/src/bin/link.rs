@@ -97,7 +97,8 @@ mod app {
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
         // The real board's force ADC runs from boot (force jobs need its rate; see `link::milling`).
-        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::milling::ADC_START_HZ).ok()) {
+        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::milling::ADC_START_HZ).ok())
+        {
             link::milling::ADC_SAMPLE_HZ.store(hz, Relaxed);
         }
         let spindle_ok = link::turning::init(&mut spindle);

@@ -16,8 +16,8 @@
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::{Command, StepOutput};
-use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::machine::{Inputs, MachineState, TickOut};
+use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 
 use super::{LastJob, Motion};

@@ -34,7 +34,7 @@ use motion::polar::playback::{Playback, SizeScale};
 use motion::protocol::LinkState;
 use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
-    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_MILLING_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_MILLING_JOB, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
 use motion::turning::link_job::ZJob;
@@ -46,19 +46,19 @@ use board_contract::{CopyEncoders as _, MachineIo as _};
 /// Copy-mode jobs (`StartCopy`, `ReadTeach`).
 pub mod copy;
 mod feed;
-/// Constant-force milling jobs (`ArmForce`).
-pub mod milling;
 mod host_port;
 mod last_job;
+/// Constant-force milling jobs (`ArmForce`).
+pub mod milling;
 mod session;
 /// The simulator board's test hooks (`Sim` requests).
 #[cfg(feature = "sim-inputs")]
 pub mod sim;
 mod target;
-/// Wire-manipulator jobs (`ArmWire`).
-pub mod wire;
 /// Z-slide jobs (`ZTableBegin`..`StartZ`).
 pub mod turning;
+/// Wire-manipulator jobs (`ArmWire`).
+pub mod wire;
 
 pub use host_port::{encode, HostPort};
 pub use last_job::LastJob;

@@ -10,8 +10,8 @@ use motion::machine::{BoardConfig, MachineCommand, MachineState, ProbeKind, Refu
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs, Status,
-    TeachChunk, LinkConfig, WireJobParams, LinkState, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkConfig, LinkState, LinkTarget,
+    ProgramOutputs, Status, TeachChunk, WireJobParams, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
 use motion::turning::link_job::{ZJobSpec, ZTableHeader};

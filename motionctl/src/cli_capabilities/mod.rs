@@ -6,8 +6,8 @@ mod board_run;
 mod plan_args;
 mod report;
 
-pub use crate::turning::cli::{run_turning, TurningCmd};
 pub use crate::milling::cli::{run_milling, MillingCmd};
+pub use crate::turning::cli::{run_turning, TurningCmd};
 pub use board_run::{wire_board_job, WireBoardJob};
 pub use plan_args::{DrawingArgs, WirePlanArgs};
 

@@ -4,10 +4,10 @@
 
 use super::jobs::{polar_mm, turning_mm};
 use crate::cli_capabilities::WireBoardJob;
-use crate::turning::run::{ZRunOptions, ZRunReport};
 use crate::milling::run::MillingRunReport;
 use crate::polar::run::PolarReport;
 use crate::runner::fault_names;
+use crate::turning::run::{ZRunOptions, ZRunReport};
 use crate::units::MM_PER_IN;
 use crate::wire::run::WireRunReport;
 use motion::protocol::Status;

@@ -13,7 +13,7 @@ use super::report::{Report, State};
 use crate::runner::{JobControl, JobHook};
 use motion::machine::MachineState;
 use motion::polar::playback::SizeScale;
-use motion::protocol::{ProgramOutputs, Status, LinkState};
+use motion::protocol::{LinkState, ProgramOutputs, Status};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -19,12 +19,12 @@ use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use anyhow::{anyhow, bail};
+use motion::machine::MachineState;
 use motion::milling::link_job::{job_params, sim_params};
 use motion::milling::scenario as sc;
-use motion::machine::MachineState;
 use motion::protocol::{
-    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    SimForceFault, SimRequest, Status, LinkConfig, CAP_MILLING_JOB, CAP_SIM_INPUTS,
+    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
+    SegmentBatch, SimForceFault, SimRequest, Status, CAP_MILLING_JOB, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};

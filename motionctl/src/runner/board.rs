@@ -8,7 +8,7 @@ use crate::job::Job;
 use crate::link::{describe_rejection, Session};
 use motion::machine::MachineState;
 use motion::protocol::{
-    AxisScale, FaultCode, HomingConfig, Reply, RequestBody, Status, LinkConfig,
+    AxisScale, FaultCode, HomingConfig, LinkConfig, Reply, RequestBody, Status,
 };
 use motion::MAX_AXES;
 use std::time::Duration;

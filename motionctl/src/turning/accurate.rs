@@ -7,7 +7,7 @@
 use super::fit::{dft, Harmonics};
 use super::paraboloid::OffAxisParaboloid;
 use super::table::CoefficientTable;
-use super::{positive, TurningError, Result};
+use super::{positive, Result, TurningError};
 use std::f64::consts::PI;
 
 /// How the tool-nose radius enters the command.

@@ -401,9 +401,9 @@ fn write_outputs(
             );
         }
         let acc = firmware_table::douglass_accurate()?;
-        let fixed = firmware_table::power_table::<{ motion::turning::douglass_table::DOUGLASS_ROWS }>(
-            &acc.table,
-        )?;
+        let fixed = firmware_table::power_table::<
+            { motion::turning::douglass_table::DOUGLASS_ROWS },
+        >(&acc.table)?;
         write(p, &firmware_table::render_power_table(&fixed))?;
         eprintln!("motionctl: wrote {}", p.display());
     }

@@ -10,7 +10,7 @@
 //! `REALPL(0., P, X) = X / (1 + P s)`, `CMPLXPL(0., 0., ZETA, W, X) = X / (s^2 + 2 ZETA W s + W^2)`,
 //! `INTGRL(0., X) = X / s`, and a gain.
 
-use super::{finite, positive, TurningError, Result};
+use super::{finite, positive, Result, TurningError};
 
 /// One CSMP block (all initial conditions zero, as in every run of Appendix C).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,7 +7,7 @@ use super::fit::Harmonics;
 use super::paraboloid::OffAxisParaboloid;
 use super::table::CoefficientTable as F64Table;
 use super::table_file::{Form, ZTable};
-use super::{TurningError, Result};
+use super::{Result, TurningError};
 use motion::turning::table::{CoefficientTable, TableForm, MAX_ORDER};
 use std::fmt::Write;
 

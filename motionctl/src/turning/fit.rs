@@ -11,7 +11,7 @@
 //! rectangular grid ([`CartesianGrid`], bicubic interpolation).
 
 use super::table::{CoefficientTable, PowerRow};
-use super::{finite, positive, TurningError, Result};
+use super::{finite, positive, Result, TurningError};
 use std::f64::consts::PI;
 
 /// Fourier coefficients of one revolution: `cos_in[i] = Ci`, `sin_in[i] = Si` (`S0 = 0`), in.

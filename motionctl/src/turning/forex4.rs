@@ -12,7 +12,7 @@
 //! [`Forex4Params::single_precision_literals`] gives the other reading; both print Table 2-2.
 
 use super::table::{CoefficientTable, PowerRow};
-use super::{non_negative, positive, TurningError, Result};
+use super::{non_negative, positive, Result, TurningError};
 
 /// FORIF's value of pi (`CONST=3.141593*COEF`), kept on purpose: it is part of the listing.
 #[allow(clippy::approx_constant)]

@@ -31,7 +31,7 @@
 //! `X1 = X R0 / (R0 - RT)` ([`Self::contact_radius_gross_arc_in`]). The exact envelope of the
 //! nose circle along each meridian (`phi` fixed) is [`Self::z_tool_centre_envelope_in`].
 
-use super::{non_negative, positive, TurningError, Result};
+use super::{non_negative, positive, Result, TurningError};
 use std::f64::consts::PI;
 
 /// The off-axis paraboloid sector and the tool that cuts it.

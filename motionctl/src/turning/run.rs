@@ -12,18 +12,18 @@
 //! largest following error near the model's (the spindle's angle at the start is the board's:
 //! it differs from the model's, so that figure is compared with a tolerance).
 
-use crate::turning::table_file::{Form, ZTable};
 use crate::link::{describe_rejection, LinkFailure, Session};
 use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
+use crate::turning::table_file::{Form, ZTable};
 use anyhow::{anyhow, bail, Context};
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
-    AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, Reply, RequestBody, SimRequest,
-    LinkConfig, CAP_SIM_INPUTS, CAP_TURNING_JOB, CRC32, MAX_Z_CHUNK,
+    AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
+    SimRequest, CAP_SIM_INPUTS, CAP_TURNING_JOB, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::turning::link_job::{
@@ -79,8 +79,8 @@ impl LinkTableBytes {
         t: &motion::turning::CoefficientTable<R, W>,
     ) -> anyhow::Result<Self> {
         let mut bytes = vec![0u8; MAX_TABLE_BYTES];
-        let (header, n) =
-            table_link_bytes(t, &mut bytes).ok_or_else(|| anyhow!("the table does not fit an upload"))?;
+        let (header, n) = table_link_bytes(t, &mut bytes)
+            .ok_or_else(|| anyhow!("the table does not fit an upload"))?;
         bytes.truncate(n);
         Ok(LinkTableBytes { header, bytes })
     }
@@ -562,6 +562,7 @@ pub fn read_table(path: &std::path::Path) -> anyhow::Result<(ZTable, LinkTableBy
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let name = path.display().to_string();
     let t = ZTable::parse(&name, &src)?;
-    let wire = LinkTableBytes::from_ztable(&t).with_context(|| format!("{name}: for the board"))?;
-    Ok((t, wire))
+    let bytes =
+        LinkTableBytes::from_ztable(&t).with_context(|| format!("{name}: for the board"))?;
+    Ok((t, bytes))
 }

@@ -6,7 +6,7 @@
 //! `C0 + S1 sin(phi) + C2 cos(2 phi) + S3 sin(3 phi) = C00 + C01 s + C02 s^2 + C03 s^3` with
 //! `C00 = C0 + C2`, `C01 = S1 + 3 S3`, `C02 = -2 C2`, `C03 = -4 S3`.
 
-use super::{finite, positive, TurningError, Result};
+use super::{finite, positive, Result, TurningError};
 use std::f64::consts::PI;
 
 /// One row of the table: the coefficients of eq 2-19 at one `X`, in inches.

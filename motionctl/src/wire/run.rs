@@ -17,7 +17,7 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, SimRequest, LinkConfig, WireJobParams,
+    HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch, SimRequest, WireJobParams,
     CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;

@@ -9,17 +9,17 @@
 
 mod decode;
 mod jobs;
+mod link_config;
 mod replies;
 mod requests;
 mod status;
-mod link_config;
 
 pub use decode::{decode_request, decode_response, Malformed};
 pub use jobs::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy, WireJobParams};
+pub use link_config::{AxisScale, HomingConfig, LinkConfig};
 pub use replies::{HelloInfo, NakDetail, PanicSite, Reply, Response, TeachChunk};
 pub use requests::{Request, RequestBody, KIND_SIM};
-pub use status::{BoardCounters, Status, LinkState};
-pub use link_config::{AxisScale, HomingConfig, LinkConfig};
+pub use status::{BoardCounters, LinkState, Status};
 
 use crate::segment::Rate;
 

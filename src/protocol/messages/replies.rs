@@ -2,8 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::status::Status;
 use super::link_config::LinkConfig;
+use super::status::Status;
 use super::{FIELD_NAME_LEN, FIRMWARE_NAME_LEN, PANIC_FILE_LEN};
 use crate::machine::MachineState;
 use crate::protocol::bounded::{BlockBytes, FixedStr};

@@ -22,7 +22,7 @@ use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::protocol::errors::{ErrorCode, FaultCode};
 use crate::protocol::messages::{
-    BoardCounters, ForceJobParams, HomingConfig, Status, LinkConfig, WireJobParams, LinkState,
+    BoardCounters, ForceJobParams, HomingConfig, LinkConfig, LinkState, Status, WireJobParams,
 };
 use crate::protocol::program_outputs::ProgramOutputs;
 use crate::protocol::session::LinkTarget;

@@ -5,17 +5,17 @@
 
 use super::{link_err, Bridge, Pending};
 use crate::cli_capabilities::WireBoardJob;
-use crate::turning::run::{LinkTableBytes, ZRunOptions};
 use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
 use crate::grbl::settings;
 use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
+use crate::turning::run::{LinkTableBytes, ZRunOptions};
 use anyhow::Result;
 use motion::protocol::{
-    HostConfig, RequestBody, SimForceFault, LinkConfig, CAP_EVENTS, CAP_MILLING_JOB, CAP_WIRE_JOB,
-    CAP_TURNING_JOB,
+    HostConfig, LinkConfig, RequestBody, SimForceFault, CAP_EVENTS, CAP_MILLING_JOB,
+    CAP_TURNING_JOB, CAP_WIRE_JOB,
 };
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -29,7 +29,7 @@ pub struct JobSetup {
     /// The board may home after a job (a simulated or QEMU board, or `--home`).
     pub home: bool,
     /// The bridge's own config, sent again after a job.
-    pub wire: LinkConfig,
+    pub link_cfg: LinkConfig,
     /// The board's capabilities (its Hello): a job it cannot run is refused before it starts.
     pub caps: u32,
 }
@@ -265,7 +265,7 @@ impl Bridge<'_> {
             let _ = self.s.request(RequestBody::Abort).map_err(link_err)?;
             let _ = self.s.request(RequestBody::ClearFault).map_err(link_err)?;
         }
-        if let Err(e) = self.configure(setup.wire, setup.home, "machine file")? {
+        if let Err(e) = self.configure(setup.link_cfg, setup.home, "machine file")? {
             eprintln!("motionctl: {e}; '$H' homes");
             self.alarm = Some(alarm::HOMING_REQUIRED);
         }

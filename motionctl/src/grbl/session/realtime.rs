@@ -8,7 +8,7 @@ use crate::grbl::report::{Report, State};
 use crate::grbl::settings;
 use anyhow::Result;
 use motion::machine::MachineState;
-use motion::protocol::{ProgramOutputs, RequestBody, LinkState, MAX_OVERRIDE_BITS};
+use motion::protocol::{LinkState, ProgramOutputs, RequestBody, MAX_OVERRIDE_BITS};
 use motion_gcode::canon::Units;
 
 impl Bridge<'_> {

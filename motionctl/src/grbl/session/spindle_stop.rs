@@ -8,7 +8,7 @@
 use super::Bridge;
 use crate::grbl::report::State;
 use anyhow::Result;
-use motion::protocol::{ProgramOutputs, SpindleDir, LinkState};
+use motion::protocol::{LinkState, ProgramOutputs, SpindleDir};
 use std::time::{Duration, Instant};
 
 /// Spin-up time after the stopped spindle is switched on again before motion resumes (the

@@ -7,7 +7,7 @@ use crate::grbl::protocol::WELCOME;
 use crate::grbl::settings;
 use anyhow::{bail, Result};
 use motion::machine::MachineState;
-use motion::protocol::{ProgramOutputs, RequestBody, LinkState};
+use motion::protocol::{LinkState, ProgramOutputs, RequestBody};
 use std::time::{Duration, Instant};
 
 /// Longest wait for a hold to stop the machine before a reset drops its queue.
