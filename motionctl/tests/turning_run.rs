@@ -52,7 +52,7 @@ fn model_handles_the_20_percent_speed_step_and_the_dac_output() {
 }
 
 #[test]
-fn table_text_parses_into_the_same_wire_bytes() {
+fn table_text_parses_into_the_same_link_bytes() {
     // The checked-in table printed as `X C00 C01 C02 C03` (inches) and parsed back: the same
     // fixed-point rows (the Q32 values survive a 12-digit print).
     let t = &DOUGLASS_POWER;
