@@ -265,10 +265,12 @@ fn zslide_kernels(c: &CycleCounter, overhead: u32) {
     use motion::spindle::encoder::QuadratureEncoder;
     use motion::spindle::resolver::Resolver;
     use motion::spindle::SpindleSource;
-    use motion::zslide::command::ZCommand;
-    use motion::zslide::douglass_table::DOUGLASS_POWER;
-    use motion::zslide::scenario::{command_config, encoder_config, resolver_config, speed_at_rpm};
-    use motion::zslide::table::{CoefficientTable, Interp, TableForm};
+    use motion::turning::command::ZCommand;
+    use motion::turning::douglass_table::DOUGLASS_POWER;
+    use motion::turning::scenario::{
+        command_config, encoder_config, resolver_config, speed_at_rpm,
+    };
+    use motion::turning::table::{CoefficientTable, Interp, TableForm};
 
     let speed = speed_at_rpm(360);
     let mut cmd = defmt::unwrap!(ZCommand::new(&DOUGLASS_POWER, command_config(), 0).ok());
@@ -329,9 +331,9 @@ fn zslide_kernels(c: &CycleCounter, overhead: u32) {
 }
 
 fn force_kernels(c: &CycleCounter, overhead: u32) {
-    use motion::force::chain::ForceChain;
-    use motion::force::control::{ControlInput, ForceController};
-    use motion::force::scenario::{chain_config, control_params, SPINDLE_MREV_S};
+    use motion::milling::chain::ForceChain;
+    use motion::milling::control::{ControlInput, ForceController};
+    use motion::milling::scenario::{chain_config, control_params, SPINDLE_MREV_S};
 
     let mut chain = defmt::unwrap!(ForceChain::new(chain_config()).ok());
     // Counts with some noise so the stuck detector never trips; every 5th call decimates.

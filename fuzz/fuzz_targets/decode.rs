@@ -8,8 +8,8 @@ use libfuzzer_sys::fuzz_target;
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::protocol::*;
 
-fn config() -> WireConfig {
-    WireConfig {
+fn config() -> LinkConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: 100_000,
             timing: StepTiming {
@@ -38,7 +38,7 @@ fuzz_target!(|data: &[u8]| {
     let mut board = BoardLink::new("fuzz", CAP_DDA);
     let mut host = HostLink::new(HostConfig::default());
     host.connect(0);
-    let mut out = [0u8; MAX_FRAME_WIRE];
+    let mut out = [0u8; MAX_FRAME_LINK];
     // Open a session at seq 0 so requests starting with seq 1 execute.
     let hello = Request {
         seq: 0,
@@ -57,7 +57,7 @@ fuzz_target!(|data: &[u8]| {
         {
             panic!("internal error: {resp:?}");
         }
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         let f = encode_frame(&resp, &mut buf).expect("answers always fit");
         let mut d = FrameDecoder::<MAX_FRAME>::new();
         for &b in f {

@@ -35,8 +35,8 @@ impl Rng {
     }
 }
 
-fn config() -> WireConfig {
-    WireConfig {
+fn config() -> LinkConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: 100_000,
             timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 12_000 },
@@ -84,7 +84,7 @@ impl Message for Response {
 }
 
 fn frame(msg: &impl Message) -> Vec<u8> {
-    let mut buf = [0u8; MAX_FRAME_WIRE];
+    let mut buf = [0u8; MAX_FRAME_LINK];
     msg.encode(&mut buf).expect("message fits a frame").to_vec()
 }
 
@@ -153,7 +153,7 @@ fn all_responses() -> Vec<Response> {
     let status = Status {
         tick: u64::MAX,
         positions: [i64::MIN, -1, 0, 1, i64::MAX, 42],
-        state: WireState::Stopping,
+        state: LinkState::Stopping,
         override_bits: MAX_OVERRIDE_BITS,
         queue_depth: 3,
         credits: 13,
@@ -404,7 +404,7 @@ fn run_lossy(seed: u64, n_segments: u32, frame_loss: f64, byte_noise: f64) -> Si
     while done_ids.len() < n_segments as usize || host.in_flight() > 0 {
         now += 1;
         assert!(now < 2_000_000, "seed {seed}: stuck at {} segments", done_ids.len());
-        // Host: new work, then whatever is due on the wire.
+        // Host: new work, then whatever is due on the link.
         if host.is_connected() {
             if !setup_sent {
                 host.send(RequestBody::SetStatusPeriod { ms: 20 }).unwrap();
@@ -611,7 +611,7 @@ fn refusals_in_every_state_change_nothing() {
         exchange(&mut board, &mut t, next(), RequestBody::Start),
         Response::Ack { .. }
     ));
-    assert_eq!(t.state(), WireState::Moving);
+    assert_eq!(t.state(), LinkState::Moving);
     assert_refused(&mut board, &mut t, next(), RequestBody::Start, OutOfState);
     assert_refused(&mut board, &mut t, next(), RequestBody::Resume, OutOfState);
     assert_refused(&mut board, &mut t, next(), RequestBody::SetConfig(config()), OutOfState);
@@ -633,7 +633,7 @@ fn refusals_in_every_state_change_nothing() {
         exchange(&mut board, &mut t, next(), RequestBody::ClearFault),
         Response::Ack { .. }
     ));
-    assert_eq!(t.state(), WireState::Idle);
+    assert_eq!(t.state(), LinkState::Idle);
     // Idle again: an invalid config names its field.
     let r = exchange(&mut board, &mut t, next(), RequestBody::SetConfig(big));
     let before = t.clone();
@@ -787,7 +787,7 @@ fn board_survives_a_million_hostile_inputs() {
     let mut host = HostLink::new(HostConfig::default());
     host.connect(3);
     let mut host_rx = FrameDecoder::<MAX_FRAME>::new();
-    let mut out = [0u8; MAX_FRAME_WIRE];
+    let mut out = [0u8; MAX_FRAME_LINK];
     let mut recent: Vec<Vec<u8>> = vec![frame(&hello(0))];
     let (mut frames_ok, mut frame_errors, mut acks, mut naks) = (0u64, 0u64, 0u64, 0u64);
     let mut input = Vec::with_capacity(1024);

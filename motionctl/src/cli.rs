@@ -61,7 +61,7 @@ pub enum Cmd {
     /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables and turning jobs
     /// (also `fourier`, its older name).
     #[command(subcommand, visible_alias = "fourier")]
-    Turning(crate::cli_capabilities::FourierCmd),
+    Turning(crate::cli_capabilities::TurningCmd),
     /// Constant-force milling (Elbestawi): simulate a milling job's force loop, plot it.
     #[command(subcommand)]
     Milling(crate::cli_capabilities::MillingCmd),
@@ -436,7 +436,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
         Cmd::Grbl(args) => crate::grbl::run(args),
         Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
-        Cmd::Turning(cmd) => crate::cli_capabilities::run_fourier(cmd),
+        Cmd::Turning(cmd) => crate::cli_capabilities::run_turning(cmd),
         Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),
         Cmd::Milling(cmd) => crate::cli_capabilities::run_milling(cmd),
         Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),

@@ -7,7 +7,7 @@
 use crate::transport::Transport;
 use motion::protocol::{
     encode_frame, ErrorCode, FrameDecoder, HelloInfo, HostConfig, HostEvent, HostLink, NakDetail,
-    Rejection, Reply, RequestBody, SendError, MAX_FRAME, MAX_FRAME_WIRE, PROTOCOL_VERSION,
+    Rejection, Reply, RequestBody, SendError, MAX_FRAME, MAX_FRAME_LINK, PROTOCOL_VERSION,
 };
 use std::collections::{HashMap, VecDeque};
 use std::fmt;
@@ -87,7 +87,7 @@ pub fn describe_rejection(r: &Rejection) -> String {
             format!(" [event block check {reason} failed; board expects block {expected:?}]")
         }
         // -- Z-slide job --
-        NakDetail::ZSlide { reason, expected, fault } => {
+        NakDetail::Turning { reason, expected, fault } => {
             let fault =
                 fault.map(|f| format!(", pre-start check: {}", f.name())).unwrap_or_default();
             format!(" [Z request check {reason}; board expects chunk {expected:?}{fault}]")
@@ -379,7 +379,7 @@ impl<'a> Session<'a> {
     /// Transmits what is due, receives for at most `max_wait`, and files what arrived.
     pub fn pump(&mut self, max_wait: Duration) -> Result<(), LinkFailure> {
         let now = self.rto.now_ms();
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         while let Some(req) = self.host.poll_transmit(now) {
             self.rto.transmitted(req.seq);
             let Ok(frame) = encode_frame(&req, &mut buf) else { continue };

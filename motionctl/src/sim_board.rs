@@ -3,11 +3,11 @@
 //! by `speed`), and the periodic status stream runs on the wall clock. For tests of the runner,
 //! and for `motionctl run --sim` (hidden) to try a job without hardware.
 
-use crate::sim_wire::SimWire;
+use crate::sim_link::SimLink;
 use crate::transport::Transport;
 use motion::protocol::LinkTarget as _;
 use motion::protocol::{
-    BoardLink, SimTarget, WireConfig, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    BoardLink, LinkConfig, SimTarget, CAP_DDA, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::{Rate, MAX_AXES};
@@ -30,7 +30,7 @@ pub struct SimTrouble {
 pub struct SimBoard {
     pub board: BoardLink,
     pub target: SimTarget,
-    wire: SimWire,
+    wire: SimLink,
     start: Instant,
     last: Instant,
     /// Machine ticks owed to the running queue.
@@ -62,8 +62,8 @@ impl SimBoard {
         let now = Instant::now();
         SimBoard {
             board: BoardLink::new("motionctl-sim", caps),
-            target: SimTarget::new(WireConfig::UNSET, capacity),
-            wire: SimWire::new(),
+            target: SimTarget::new(LinkConfig::UNSET, capacity),
+            wire: SimLink::new(),
             start: now,
             last: now,
             budget_ticks: 0.0,
@@ -165,7 +165,7 @@ impl Transport for SimBoard {
             self.wire.clear();
         }
         if self.wire.is_empty() {
-            SimWire::idle_wait(timeout);
+            SimLink::idle_wait(timeout);
             self.advance();
             if self.silent() {
                 self.wire.clear();

@@ -16,6 +16,7 @@ fn run_into_closed_pipe(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn listings_end_quietly_on_a_closed_pipe() {
+    // `fourier` is `turning`'s older name, kept for scripts that still type it.
     for args in [&["fourier", "table"][..], &["polar", "dump", "--help"][..]] {
         let out = run_into_closed_pipe(args);
         let stderr = String::from_utf8_lossy(&out.stderr);

@@ -818,7 +818,7 @@ fn capability_jobs_run_from_dollar_commands_and_answer_real_time_bytes() {
     r.expect("ok");
     // Refusals name why: a capability the board lacks, a missing file, a bad argument.
     r.send(b"$MILL=case_a_milling.toml\n");
-    r.expect("[MSG:the board runs no force jobs (CAP_FORCE_JOB)]");
+    r.expect("[MSG:the board runs no milling jobs (CAP_MILLING_JOB)]");
     r.expect("error:20");
     r.send(b"$POLAR=missing.bin\n");
     let m = r.line();
@@ -921,7 +921,7 @@ fn turning_and_wire_jobs_run_from_dollar_commands() {
     assert!(m.starts_with("[MSG:reading ") && m.contains("missing.toml"), "{m}");
     r.expect("error:61");
     r.send(b"$TURN=builtin 360 0:12.7 25.4\n");
-    r.expect("[MSG:the board runs no Z-slide jobs (CAP_ZSLIDE_JOB)]");
+    r.expect("[MSG:the board runs no turning jobs (CAP_TURNING_JOB)]");
     r.expect("error:20");
 
     // Two segments of the circle -> complex die as a wire job: `?` reports Run with X, Y, Z,

@@ -5,7 +5,7 @@
 
 use motion::protocol::{
     decode_request, encode_frame, ErrorCode, FrameDecoder, HostConfig, NakDetail, Response,
-    MAX_FRAME, MAX_FRAME_WIRE,
+    MAX_FRAME, MAX_FRAME_LINK,
 };
 use motionctl::convert::{self, Program};
 use motionctl::job::{self, Job};
@@ -139,7 +139,7 @@ impl Transport for OtherVersion {
                     code: ErrorCode::Version,
                     detail: NakDetail::None,
                 };
-                let mut buf = [0u8; MAX_FRAME_WIRE];
+                let mut buf = [0u8; MAX_FRAME_LINK];
                 self.out.extend_from_slice(encode_frame(&nak, &mut buf).unwrap());
             }
         }

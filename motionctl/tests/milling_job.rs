@@ -1,7 +1,7 @@
 //! Milling jobs: parsing, the simulation against the Case A scenario, CSV and plot output,
 //! refusals naming the field and its range.
 
-use motion::force::scenario::{ForceScenario, Variant};
+use motion::milling::scenario::{MillingScenario, Variant};
 use motion::scenario::run_to_end;
 use motionctl::milling::{job, simulate};
 
@@ -11,7 +11,7 @@ const CASE_A: &str = include_str!("../examples/case_a_milling.toml");
 fn the_case_a_job_is_the_case_a_scenario() {
     let j = job::parse(CASE_A).unwrap();
     let (report, trace) = simulate::run(&j).unwrap();
-    let mut s = ForceScenario::new(Variant::CaseA).unwrap();
+    let mut s = MillingScenario::new(Variant::CaseA).unwrap();
     let want = run_to_end(&mut s, u64::MAX);
     // Same parameters, same code: every figure and the trace hash agree.
     assert_eq!((report.figures.clone(), report.hash, report.fault), (want.figures, want.hash, 0));

@@ -12,7 +12,7 @@ use motionctl::journal;
 use motionctl::milling::job::{self, MillingJob};
 use motionctl::milling::resume::MillingResume;
 use motionctl::milling::run::{self, BoardPoint, MillingRunOptions, MillingRunReport};
-use motionctl::milling::sim_board::ForceSimBoard;
+use motionctl::milling::sim_board::MillingSimBoard;
 use motionctl::runner::Unattended;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -50,7 +50,7 @@ fn options() -> MillingRunOptions {
 fn run_job(
     file: &Path,
     resume: bool,
-    board: &mut ForceSimBoard,
+    board: &mut MillingSimBoard,
 ) -> Result<MillingRunReport, String> {
     let job = job::read(file).unwrap();
     let plan = if resume {
@@ -64,8 +64,8 @@ fn run_job(
         .map_err(|e| format!("{e:#}"))
 }
 
-fn board(cut_at_steps: Option<i64>) -> ForceSimBoard {
-    let mut b = ForceSimBoard::new(SPEED);
+fn board(cut_at_steps: Option<i64>) -> MillingSimBoard {
+    let mut b = MillingSimBoard::new(SPEED);
     b.power_cut_at_steps = cut_at_steps;
     b.path = Some(Vec::new());
     b

@@ -1,11 +1,11 @@
 //! Closed-loop Case A and its fault variants, run through `motion::scenario::run_to_end`.
 
-use motion::force::scenario::{ForceScenario, Variant, FNOM_MN};
+use motion::milling::scenario::{MillingScenario, Variant, FNOM_MN};
 use motion::protocol::errors::FaultCode;
 use motion::scenario::{run_to_end, ScenarioReport, MAX_FIGURES};
 
-fn run(v: Variant) -> (ScenarioReport, ForceScenario) {
-    let mut s = ForceScenario::new(v).expect("scenario setup");
+fn run(v: Variant) -> (ScenarioReport, MillingScenario) {
+    let mut s = MillingScenario::new(v).expect("scenario setup");
     let r = run_to_end(&mut s, 10_000_000);
     r.write_lines(|l| println!("{l}"));
     assert!(r.figures.len() < MAX_FIGURES, "a figure was dropped");

@@ -258,9 +258,9 @@ fn switch_debounce_is_the_machine_files_or_the_default() {
     assert_eq!(job.machine.input_filter().switch_debounce_us, 5_500);
     // Through the config the board gets: 5.5 ms at 100 kHz.
     let program = convert::convert(&job).unwrap();
-    let wire = motionctl::runner::wire_config(&job, &program);
-    assert_eq!(wire.inputs.debounce_ticks(wire.machine.tick_hz), 550);
-    assert!(wire.validate().is_ok());
+    let link_cfg = motionctl::runner::link_config(&job, &program);
+    assert_eq!(link_cfg.inputs.debounce_ticks(link_cfg.machine.tick_hz), 550);
+    assert!(link_cfg.validate().is_ok());
     let e = error_after("tick_hz = 100_000", "tick_hz = 100_000\nswitch_debounce_ms = 60");
     assert!(e.contains("machine.switch_debounce_ms") && e.contains("<= 50"), "{e}");
 }

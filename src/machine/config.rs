@@ -1,9 +1,9 @@
-//! The board configuration the machine runs with and persists: the link's [`WireConfig`] (step
+//! The board configuration the machine runs with and persists: the link's [`LinkConfig`] (step
 //! timing, axis limits, scale and soft limits) plus the homing parameters of each axis.
 
 use super::following::FollowingConfig;
 use crate::config::{AxisLimits, ConfigError, MachineConfig, StepTiming, MAX_AXES};
-use crate::protocol::{AxisScale, WireConfig};
+use crate::protocol::{AxisScale, LinkConfig};
 
 /// How one axis homes: seek its switch at `search_hz`, back off `backoff_steps`, approach again
 /// at `latch_hz` and call the point where the switch closes `home_pos_steps`.
@@ -34,7 +34,7 @@ impl HomeAxis {
 /// Everything the machine needs to run, persisted as one record.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct BoardConfig {
-    pub wire: WireConfig,
+    pub wire: LinkConfig,
     /// Axes homed, in order (the polar machine: arm against its stop, then the carriage at
     /// minimum radius). The first `home_count` entries count; 0 = no switches, home where it is.
     pub home_order: [u8; MAX_AXES],
@@ -60,7 +60,7 @@ impl BoardConfig {
         const SCALE: AxisScale =
             AxisScale { steps_per_unit_milli: 1_000, soft_min: 0, soft_max: 0 };
         BoardConfig {
-            wire: WireConfig {
+            wire: LinkConfig {
                 machine: MachineConfig {
                     tick_hz: 50_000,
                     timing: StepTiming {
@@ -83,7 +83,7 @@ impl BoardConfig {
 
     /// `wire` with the homing parameters of `h` and no following-error check (validate before
     /// use).
-    pub fn with_homing(wire: WireConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
+    pub fn with_homing(wire: LinkConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
         BoardConfig {
             wire,
             home_order: h.order,
@@ -107,7 +107,7 @@ impl BoardConfig {
         }
     }
 
-    /// Every check of [`WireConfig::validate`] plus the homing parameters; the error names the
+    /// Every check of [`LinkConfig::validate`] plus the homing parameters; the error names the
     /// field (and axis).
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.wire.validate()?;

@@ -23,7 +23,7 @@ use super::state::{cell, event_allowed, Cell, CommandKind, MachineState};
 use crate::config::{ConfigError, MAX_AXES};
 use crate::dda::{Command, Dda, MotionState, Preparer, StepOutput, READY_DEPTH};
 use crate::planner::Planner;
-use crate::protocol::{ErrorCode, FaultCode, WireState};
+use crate::protocol::{ErrorCode, FaultCode, LinkState};
 use crate::segment::{Segment, SegmentError};
 
 mod command;
@@ -295,10 +295,10 @@ impl Machine {
     }
 
     /// The state as the link reports it.
-    pub fn wire_state(&self, dda: &Dda) -> WireState {
+    pub fn wire_state(&self, dda: &Dda) -> LinkState {
         match self.state {
-            MachineState::Fault => WireState::Faulted,
-            MachineState::Boot | MachineState::Idle | MachineState::Ready => WireState::Idle,
+            MachineState::Fault => LinkState::Faulted,
+            MachineState::Boot | MachineState::Idle | MachineState::Ready => LinkState::Idle,
             _ => dda.state().into(),
         }
     }

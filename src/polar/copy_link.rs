@@ -426,7 +426,7 @@ mod tests {
     #[test]
     fn copy_source_holds_without_taking_counts() {
         let mut c = CopyMode::new([0, 0], SizeScale::ONE, false);
-        let mut dda = Dda::new(&crate::polar::job::wire_config().machine).unwrap();
+        let mut dda = Dda::new(&crate::polar::job::link_config().machine).unwrap();
         let mut src = CopySource { copy: &mut c, counts: [5, -3] };
         for _ in 0..20 {
             src.tick(&mut dda, true);
@@ -449,7 +449,7 @@ mod tests {
         use crate::protocol::HomingConfig;
         // The rig has no switches: home where it stands (the real machine:
         // `polar::job::homing_config`).
-        let cfg = BoardConfig::with_homing(crate::polar::job::wire_config(), &HomingConfig::NONE);
+        let cfg = BoardConfig::with_homing(crate::polar::job::link_config(), &HomingConfig::NONE);
         let (mut m, mut dda, mut prep) = crate::machine::homed(cfg);
         m.command(MachineCommand::StartCopy, &mut dda).unwrap();
         assert_eq!(m.state(), MachineState::Running);

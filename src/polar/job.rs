@@ -4,7 +4,7 @@
 use super::scenario::TICK_HZ;
 use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use crate::machine::{BoardConfig, HomeAxis};
-use crate::protocol::{AxisScale, HomingConfig, WireConfig};
+use crate::protocol::{AxisScale, HomingConfig, LinkConfig};
 
 /// Steps per revolution of the arm (dTheta = 2 pi / 16000, the thesis's resolution).
 pub const THETA_STEPS_PER_REV: u32 = 16_000;
@@ -19,7 +19,7 @@ pub const R_SPAN_STEPS: i64 = 10_000;
 /// The polar machine's link config: `TICK_HZ` (the stream's time quantum), one-tick DIR setup
 /// and hold (what `StepPins` guarantees: DIR a tick before a reversed rise, never in the tick of
 /// a rise), at most one rise per axis every other tick (50 kHz).
-pub fn wire_config() -> WireConfig {
+pub fn link_config() -> LinkConfig {
     let axis =
         AxisLimits { max_rate_hz: TICK_HZ / 2, accel_steps_per_s2: 1_000_000, junction_jerk_hz: 0 };
     let mut axes = [AxisLimits::UNUSED; MAX_AXES];
@@ -37,7 +37,7 @@ pub fn wire_config() -> WireConfig {
         soft_min: -R_SPAN_STEPS,
         soft_max: R_SPAN_STEPS,
     };
-    WireConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: TICK_HZ,
             timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },
@@ -78,9 +78,9 @@ pub fn homing_config() -> HomingConfig {
     HomingConfig { order: [0, 1, 0, 0, 0, 0], count: 2, axes }
 }
 
-/// The polar machine's board config: [`wire_config`] with [`homing_config`].
+/// The polar machine's board config: [`link_config`] with [`homing_config`].
 pub fn board_config() -> BoardConfig {
-    BoardConfig::with_homing(wire_config(), &homing_config())
+    BoardConfig::with_homing(link_config(), &homing_config())
 }
 
 #[cfg(test)]
@@ -104,7 +104,7 @@ mod tests {
     /// switches in the fault suite's `fault_homing_polar`.
     fn ready() -> (Machine, Dda) {
         let (m, dda, _) =
-            crate::machine::homed(BoardConfig::with_homing(wire_config(), &HomingConfig::NONE));
+            crate::machine::homed(BoardConfig::with_homing(link_config(), &HomingConfig::NONE));
         (m, dda)
     }
 

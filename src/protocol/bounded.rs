@@ -143,7 +143,7 @@ impl<'de> Deserialize<'de> for SegmentBatch {
     }
 }
 
-/// Most bytes of one step-event block on the wire ([`crate::polar::stream::MAX_BLOCK`]).
+/// Most bytes of one step-event block on the link ([`crate::polar::stream::MAX_BLOCK`]).
 pub const MAX_EVENT_BLOCK: usize = crate::polar::stream::MAX_BLOCK;
 
 /// The bytes of one step-event stream block (v1, `src/polar/stream.rs`): postcard bytes

@@ -6,7 +6,7 @@
 
 use crate::segment::SegmentError;
 
-/// Defines a `#[repr(u8)]` enum whose wire form is its code byte, plus its documentation table.
+/// Defines a `#[repr(u8)]` enum whose link form is its code byte, plus its documentation table.
 macro_rules! coded_enum {
     (
         $(#[$meta:meta])*
@@ -29,7 +29,7 @@ macro_rules! coded_enum {
             /// Every variant, in code order.
             pub const ALL: &'static [$Name] = &[$($Name::$Var,)+];
 
-            /// The code byte sent on the wire.
+            /// The code byte sent on the link.
             pub const fn code(self) -> u8 {
                 self as u8
             }
@@ -100,7 +100,7 @@ coded_enum! {
         InvalidSegment = 8 => ("InvalidSegment",
             "A segment failed its checks (detail: index in the batch, SegmentReason, axis); none of the batch was queued."),
         InvalidConfig = 9 => ("InvalidConfig",
-            "SetConfig failed validation (detail: field name and axis; WireConfig::validate on the host gives the reason); config unchanged."),
+            "SetConfig failed validation (detail: field name and axis; LinkConfig::validate on the host gives the reason); config unchanged."),
         OutOfState = 10 => ("OutOfState",
             "The request is not allowed in the current motion state (detail: the state); nothing changed."),
         OutOfRange = 11 => ("OutOfRange",
@@ -115,7 +115,7 @@ coded_enum! {
             "The board failed a request that passed every check (a firmware bug). The one NAK that may have changed something: part of a QueueSegments batch may be queued; read Status."),
         // -- Z-slide job --
         InvalidTable = 16 => ("InvalidTable",
-            "A Z table upload step was refused (detail: NakDetail::ZSlide with the reason and the chunk index expected); the active table is unchanged."),
+            "A Z table upload step was refused (detail: NakDetail::Turning with the reason and the chunk index expected); the active table is unchanged."),
     }
 }
 

@@ -32,10 +32,10 @@ pub const fn cobs_max_len(n: usize) -> usize {
     }
 }
 
-/// Longest frame on the wire, without the 0x00 delimiter: size receive buffers with this.
+/// Longest frame on the link, without the 0x00 delimiter: size receive buffers with this.
 pub const MAX_FRAME: usize = cobs_max_len(MAX_MESSAGE + CRC_LEN);
-/// Longest frame on the wire including the 0x00 delimiter: size transmit buffers with this.
-pub const MAX_FRAME_WIRE: usize = MAX_FRAME + 1;
+/// Longest frame on the link including the 0x00 delimiter: size transmit buffers with this.
+pub const MAX_FRAME_LINK: usize = MAX_FRAME + 1;
 
 /// Why a frame could not be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,7 +43,7 @@ pub const MAX_FRAME_WIRE: usize = MAX_FRAME + 1;
 pub enum EncodeError {
     /// The message encodes to more than [`MAX_MESSAGE`] bytes (or postcard refused it).
     TooLarge,
-    /// The output buffer is too small; [`MAX_FRAME_WIRE`] always suffices.
+    /// The output buffer is too small; [`MAX_FRAME_LINK`] always suffices.
     BufferTooSmall,
 }
 
@@ -207,7 +207,7 @@ mod tests {
             cases.push(vec![0; n]);
         }
         for c in cases {
-            let mut out = [0xAA; MAX_FRAME_WIRE];
+            let mut out = [0xAA; MAX_FRAME_LINK];
             let f = encode_payload_frame(&c, &mut out).unwrap().to_vec();
             assert!(f.len() <= cobs_max_len(c.len() + CRC_LEN) + 1, "len {}", c.len());
             assert_eq!(f.iter().position(|&b| b == 0), Some(f.len() - 1), "len {}", c.len());
@@ -224,7 +224,7 @@ mod tests {
 
     #[test]
     fn frames_round_trip_and_resync() {
-        let mut out = [0u8; MAX_FRAME_WIRE];
+        let mut out = [0u8; MAX_FRAME_LINK];
         let f = encode_payload_frame(&[1, 0, 2, 3], &mut out).unwrap().to_vec();
         let mut d = FrameDecoder::<MAX_FRAME>::new();
         let mut stream = vec![0, 0, 7, 7, 0];

@@ -251,7 +251,7 @@ impl HostLink {
         Ok(seq)
     }
 
-    /// The next request to put on the wire, if any: queued ones first, then (after `rto_ms`
+    /// The next request to put on the link, if any: queued ones first, then (after `rto_ms`
     /// without an answer) the whole unanswered window again. Call until it returns `None`.
     pub fn poll_transmit(&mut self, now_ms: u64) -> Option<Request> {
         let rto = self.cfg.rto_ms;

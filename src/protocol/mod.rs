@@ -34,7 +34,7 @@ pub use bounded::{
 pub use errors::{markdown_table, ErrorCode, FaultCode, SegmentReason};
 pub use frame::{
     encode_frame, encode_payload_frame, EncodeError, FrameDecoder, FrameError, CRC32, MAX_FRAME,
-    MAX_FRAME_WIRE, MAX_MESSAGE,
+    MAX_FRAME_LINK, MAX_MESSAGE,
 };
 pub use host::{HostConfig, HostEvent, HostLink, Rejection, SendError};
 pub use messages::*;
@@ -51,12 +51,12 @@ pub use sim::{SimForceFault, SimMillingParams, SimProbeSurface};
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
-mod tests_zslide;
+mod tests_turning;
 // -- force job --
 #[cfg(test)]
-mod force_tests;
-#[cfg(test)]
 mod tests_copy;
+#[cfg(test)]
+mod tests_milling;
 #[cfg(test)]
 mod tests_outputs;
 #[cfg(test)]

@@ -99,7 +99,7 @@ fn an_estop_switches_everything_off_and_refuses_switching_on() {
 fn a_target_without_program_outputs_refuses_them_as_unsupported() {
     struct Plain(SimTarget);
     impl LinkTarget for Plain {
-        fn state(&self) -> WireState {
+        fn state(&self) -> LinkState {
             self.0.state()
         }
         fn machine_state(&self) -> MachineState {
@@ -111,7 +111,7 @@ fn a_target_without_program_outputs_refuses_them_as_unsupported() {
         fn queue_capacity(&self) -> u16 {
             self.0.queue_capacity()
         }
-        fn config(&self) -> WireConfig {
+        fn config(&self) -> LinkConfig {
             self.0.config()
         }
         fn planned_position(&self) -> [i64; crate::config::MAX_AXES] {
@@ -120,7 +120,7 @@ fn a_target_without_program_outputs_refuses_them_as_unsupported() {
         fn status(&self) -> Status {
             self.0.status()
         }
-        fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+        fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
             self.0.set_config(cfg)
         }
         fn queue_segment(&mut self, seg: &crate::segment::Segment) -> Result<(), ErrorCode> {

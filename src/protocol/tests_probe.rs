@@ -1,4 +1,4 @@
-//! Probe moves on the wire: `ArmProbe` and the `Status` probe fields round-trip, the session
+//! Probe moves on the link: `ArmProbe` and the `Status` probe fields round-trip, the session
 //! checks (`CAP_PROBE`, state), and a probe move over [`SimTarget`] against a simulated
 //! surface: the trip latches and stops there, the rest of the move is dropped, a miss of an
 //! error kind and a wrong initial state are faults.

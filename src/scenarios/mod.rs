@@ -6,12 +6,12 @@ pub mod faults;
 pub mod override_sweep;
 
 use crate::dda::lane_kernel_check::LaneKernelCheck;
-use crate::force::scenario::{ForceScenario, Variant as ForceVariant};
+use crate::milling::scenario::{MillingScenario, Variant as MillingVariant};
 use crate::polar::playback::SizeScale;
 use crate::polar::scenario::PolarPlayback;
 use crate::segment::Rate;
+use crate::turning::scenario::{TurningScenario, TurningVariant};
 use crate::wire::scenario::{WireJobScenario, WireStallScenario};
-use crate::zslide::scenario::{ZSlideScenario, ZSlideVariant};
 
 use crate::scenario::{Scenario, ScenarioReport};
 
@@ -23,11 +23,11 @@ pub enum AnyScenario {
     /// The built-in limacon contour (Fahim) at 2x speed and 3:2 radial size.
     PolarPlayback(PolarPlayback),
     /// Constant-force milling (Elbestawi): closed-loop Case A and its fault variants.
-    Force(ForceScenario),
+    Milling(MillingScenario),
     /// The machine's fault suite: each cause injected by the sim board.
     Fault(faults::FaultScenario),
     /// Non-axisymmetric turning (Douglass): the Fourier-series Z slide from encoder or resolver.
-    ZSlide(ZSlideScenario),
+    Turning(TurningScenario),
     /// The 4-axis wire manipulator (Bhatti): the whole circle -> complex job, continuous.
     WireJob(WireJobScenario),
     /// A shortened wire job with a stall injected: retrace, return, finish.
@@ -38,10 +38,10 @@ pub enum AnyScenario {
 
 /// How many scenarios [`build`] knows.
 pub const COUNT: usize =
-    2 + ForceVariant::ALL.len() + faults::CASES.len() + ZSLIDE_VARIANTS.len() + 3;
+    2 + MillingVariant::ALL.len() + faults::CASES.len() + TURNING_VARIANTS.len() + 3;
 
-const ZSLIDE_VARIANTS: [ZSlideVariant; 3] =
-    [ZSlideVariant::Encoder, ZSlideVariant::Resolver, ZSlideVariant::IndexLoss];
+const TURNING_VARIANTS: [TurningVariant; 3] =
+    [TurningVariant::Encoder, TurningVariant::Resolver, TurningVariant::IndexLoss];
 
 /// Scenario `index` (0..[`COUNT`]), freshly built; `None` past the end.
 pub fn build(index: usize) -> Option<AnyScenario> {
@@ -55,18 +55,18 @@ pub fn build(index: usize) -> Option<AnyScenario> {
 
 /// The scenarios after the first two, group by group.
 fn build_group(mut i: usize) -> Option<AnyScenario> {
-    if let Some(&v) = ForceVariant::ALL.get(i) {
-        return ForceScenario::new(v).ok().map(AnyScenario::Force);
+    if let Some(&v) = MillingVariant::ALL.get(i) {
+        return MillingScenario::new(v).ok().map(AnyScenario::Milling);
     }
-    i -= ForceVariant::ALL.len();
+    i -= MillingVariant::ALL.len();
     if let Some(&c) = faults::CASES.get(i) {
         return faults::FaultScenario::new(c).map(AnyScenario::Fault);
     }
     i -= faults::CASES.len();
-    if let Some(&v) = ZSLIDE_VARIANTS.get(i) {
-        return Some(AnyScenario::ZSlide(ZSlideScenario::new(v)));
+    if let Some(&v) = TURNING_VARIANTS.get(i) {
+        return Some(AnyScenario::Turning(TurningScenario::new(v)));
     }
-    i -= ZSLIDE_VARIANTS.len();
+    i -= TURNING_VARIANTS.len();
     match i {
         0 => WireJobScenario::new().ok().map(AnyScenario::WireJob),
         1 => WireStallScenario::new().ok().map(AnyScenario::WireStall),
@@ -80,9 +80,9 @@ macro_rules! dispatch {
         match $self {
             AnyScenario::OverrideSweep($s) => $e,
             AnyScenario::PolarPlayback($s) => $e,
-            AnyScenario::Force($s) => $e,
+            AnyScenario::Milling($s) => $e,
             AnyScenario::Fault($s) => $e,
-            AnyScenario::ZSlide($s) => $e,
+            AnyScenario::Turning($s) => $e,
             AnyScenario::WireJob($s) => $e,
             AnyScenario::WireStall($s) => $e,
             AnyScenario::LaneKernel($s) => $e,

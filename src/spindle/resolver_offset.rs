@@ -91,7 +91,7 @@ mod tests {
     #[test]
     fn sim_resolver_through_the_adc_path() {
         const TICK_HZ: u32 = 50_000;
-        let cfg = crate::zslide::scenario::resolver_config();
+        let cfg = crate::turning::scenario::resolver_config();
         let amp = cfg.amplitude_lsb as i32;
         let off = ResolverOffset::new(1990, 2105).unwrap();
         let mut r = Resolver::new(cfg).unwrap();
@@ -117,7 +117,7 @@ mod tests {
 
     #[test]
     fn missing_samples_count_as_signal_loss() {
-        let cfg = crate::zslide::scenario::resolver_config();
+        let cfg = crate::turning::scenario::resolver_config();
         let mut r = Resolver::new(cfg).unwrap();
         let o = ResolverOffset::MID_SCALE;
         for _ in 0..cfg.loss_ticks {

@@ -315,7 +315,7 @@ pub fn tick(
 mod tests {
     use super::*;
     use crate::machine::{BoardConfig, MachineCommand, Refusal};
-    use crate::protocol::{AxisScale, HomingConfig, WireConfig};
+    use crate::protocol::{AxisScale, HomingConfig, LinkConfig};
     use crate::trace::StepRecorder;
     use crate::wire::circle_complex_job as table;
     use crate::wire::controller::WireController;
@@ -326,7 +326,7 @@ mod tests {
     fn board() -> BoardConfig {
         let scale =
             AxisScale { steps_per_unit_milli: 1_000, soft_min: i64::MIN, soft_max: i64::MAX };
-        let wire = WireConfig {
+        let wire = LinkConfig {
             machine: machine::config(),
             scale: [scale; MAX_AXES],
             inputs: crate::config::InputFilterConfig::DEFAULT,

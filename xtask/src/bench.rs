@@ -44,8 +44,8 @@ const TARGETS: [(&str, Target); 13] = [
     ("gcode_plan_peak_rss_mb", Target::AtMost(64.0)),
 ];
 
-/// DDA tick rate of the force scenario, whose tick applies the override (src/force/scenario.rs).
-const FORCE_TICK_HZ: f64 = motion::force::scenario::TICK_HZ as f64;
+/// DDA tick rate of the milling scenario, whose tick applies the override (src/milling/scenario.rs).
+const MILLING_TICK_HZ: f64 = motion::milling::scenario::TICK_HZ as f64;
 
 /// Capability figures derived from the kernel counts (`kernel_*`): rates at 10 % of the core,
 /// and the force path's latency from an ADC sample to the DDA acting on the new override.
@@ -66,7 +66,7 @@ fn derive_capability_figures(f: &mut BTreeMap<String, f64>) {
         // The decimating sample and the control update run in the same tick (one cycle per
         // instruction at 168 MHz); the DDA uses the override from the next tick on.
         let work_us = (s + c) / 168.0;
-        let us = work_us + 1e6 / FORCE_TICK_HZ;
+        let us = work_us + 1e6 / MILLING_TICK_HZ;
         f.insert("force_sample_to_dda_us".into(), (us * 10.0).round() / 10.0);
     }
 }

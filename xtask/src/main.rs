@@ -8,7 +8,7 @@
 //! | `polar-e2e` | `motionctl polar run` plays the limacon event stream on the link firmware in QEMU (speed 2, size 3:2) and checks it against the host model |
 //! | `copy-e2e` | `motionctl polar copy --qemu` copies a limacon template at 3:2 with teach on the link firmware in QEMU (simulated encoders), checks it against the host model, and replays the taught stream with `polar run` at speed 2 |
 //! | `wire-e2e` | `motionctl wire run --qemu` runs 4 segments of the circle -> complex die as a wire job on the link firmware in QEMU with one injected wire stall, and checks the stall, retrace, return and exact final position |
-//! | `zslide-e2e` | `motionctl turning run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
+//! | `turning-e2e` | `motionctl turning run --qemu` runs the Douglass table as a Z-slide job on the link firmware in QEMU (360 rpm; steps, then DAC with a +20 % speed step) and checks it against the host model |
 //! | `grbl-e2e` | `motionctl grbl --qemu --pty` with the link firmware in QEMU behind it: a third-party sender (grbl-streamer) streams a corpus file with a hold, a resume, a feed override, a jog and its cancel, ending at its programmed end; then `$MILL=`, `$TURN=` and `$WIRE=` from the same port, each ending as the host model |
 //! | `milling-e2e` | `motionctl milling run --qemu` runs Case A and a 1500 N job of other numbers as force jobs on the link firmware in QEMU (simulated plant), then Case A with a stuck force channel, and checks settling to each job's Fnom, final position and the fault hold |
 //! | `faults` | the fault-injection suite: board faults on the host model, reset, power cut, link drop and USART overrun bursts on the link firmware in QEMU, the config record, every bad-input class of `motionctl`; writes `target/faults.json` |
@@ -41,8 +41,8 @@ mod polar_e2e;
 mod rs274;
 mod scenarios;
 mod setup;
+mod turning_e2e;
 mod wire_e2e;
-mod zslide_e2e;
 
 use anyhow::{bail, Context, Result};
 use firmware::Board;
@@ -61,7 +61,7 @@ commands:
   polar-e2e                                             play the limacon event stream on the link firmware in QEMU, check it
   copy-e2e                                              copy a template in QEMU with teach, check it, replay the taught stream
   wire-e2e                                              run a wire job with an injected stall on the link firmware in QEMU, check it
-  zslide-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
+  turning-e2e                                            run Z-slide jobs (steps; DAC + 20 % speed step) on the link firmware in QEMU, check them
   milling-e2e                                           run Case A as a force job on the link firmware in QEMU (+ a stuck channel), check it
   faults [--only scenarios|tests|inputs|qemu]...        the fault-injection suite (host model, simulated board, QEMU,
                                                         motionctl's bad inputs); counts in target/faults.json
@@ -154,10 +154,10 @@ fn run() -> Result<()> {
             setup::ensure(&root)?;
             wire_e2e::test(&root)
         }
-        "zslide-e2e" => {
+        "turning-e2e" => {
             no_args(cmd, rest)?;
             setup::ensure(&root)?;
-            zslide_e2e::test(&root)
+            turning_e2e::test(&root)
         }
         "milling-e2e" => {
             no_args(cmd, rest)?;
@@ -446,7 +446,7 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ),
         (
             "end to end: motionctl runs Z-slide jobs on QEMU (360 rpm, 20 % speed step)",
-            Box::new(|| zslide_e2e::test(root)),
+            Box::new(|| turning_e2e::test(root)),
         ),
         (
             "end to end: motionctl runs Case A as a force job on QEMU (+ a stuck channel)",

@@ -1,6 +1,6 @@
 //! The capability sensors and the cycle counter.
 
-use motion::force::sample_timer::SampleRateError;
+use motion::milling::sample_timer::SampleRateError;
 use motion::spindle::encoder::{EncoderConfig, EncoderConfigError};
 use motion::spindle::SpindleSource;
 

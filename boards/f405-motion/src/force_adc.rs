@@ -1,15 +1,15 @@
 //! Force sensors: ADC1 scans the force channels (pins.rs `FORCE_CHANNELS`) once per TIM8 update
 //! (TRGO), DMA2 stream 0 channel 0 moves each conversion into a circular double buffer, and the
 //! `DMA2_STREAM0` interrupt (half transfer, transfer complete) hands out the half just filled.
-//! The flag logic (which half, what was lost) is `motion::force::dma_frames`; the timer math is
-//! `motion::force::sample_timer`. Registers only here.
+//! The flag logic (which half, what was lost) is `motion::milling::dma_frames`; the timer math is
+//! `motion::milling::sample_timer`. Registers only here.
 
 use super::pins::FORCE_CHANNELS;
 use crate::pac;
 use core::sync::atomic::{compiler_fence, Ordering};
-use motion::force::chain::DECIMATION;
-use motion::force::dma_frames::{DmaFlags, FrameOverrun, HalfTracker, STREAM0_FLAG_BITS};
-use motion::force::sample_timer::{max_scan_hz, sample_timing, SampleRateError, SampleTiming};
+use motion::milling::chain::DECIMATION;
+use motion::milling::dma_frames::{DmaFlags, FrameOverrun, HalfTracker, STREAM0_FLAG_BITS};
+use motion::milling::sample_timer::{max_scan_hz, sample_timing, SampleRateError, SampleTiming};
 
 use board_contract::{ForceFrame, FORCE_CHANNEL_COUNT};
 

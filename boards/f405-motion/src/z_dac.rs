@@ -1,11 +1,11 @@
 //! Z-slide command on DAC channel 1 (PA4 = DAC_OUT1): 12-bit right-aligned, output buffer on
 //! (drives the amplifier input directly), no trigger (each write reaches the pin one APB1 clock
-//! later). The range check is `motion::zslide::dac_code`; registers only here.
+//! later). The range check is `motion::turning::dac_code`; registers only here.
 
 use crate::pac;
 use motion::machine::Z_DAC_MID_SCALE;
 use motion::protocol::errors::FaultCode;
-use motion::zslide::dac_code::dac_register_value;
+use motion::turning::dac_code::dac_register_value;
 
 /// DAC channel 1.
 pub struct ZDac {
@@ -23,7 +23,7 @@ impl ZDac {
         ZDac { dac }
     }
 
-    /// Writes a code from `motion::zslide::DacScale::code`. A code above 4095 is refused:
+    /// Writes a code from `motion::turning::DacScale::code`. A code above 4095 is refused:
     /// mid-scale is written and `ZSlideLimit` returned. Bounded, no division.
     #[inline]
     pub fn write(&mut self, code: u16) -> Result<(), FaultCode> {

@@ -35,7 +35,7 @@ mod app {
     };
     use core::sync::atomic::Ordering::Relaxed;
     use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
-    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_WIRE};
+    use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
     use motion_firmware::link::{
         self, Link, Motion, StepOnly, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK,
@@ -96,11 +96,12 @@ mod app {
             cycles,
             ..
         } = board::init(cx.device, &mut cx.core, default_hz);
-        // The real board's force ADC runs from boot (force jobs need its rate; see link_force).
-        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::force::ADC_START_HZ).ok()) {
-            link::force::ADC_SAMPLE_HZ.store(hz, Relaxed);
+        // The real board's force ADC runs from boot (force jobs need its rate; see `link::milling`).
+        if let Some(hz) = force_adc.as_mut().and_then(|a| a.start(link::milling::ADC_START_HZ).ok())
+        {
+            link::milling::ADC_SAMPLE_HZ.store(hz, Relaxed);
         }
-        let spindle_ok = link::zslide::init(&mut spindle);
+        let spindle_ok = link::turning::init(&mut spindle);
         // The stored config (the real board's flash); none under QEMU, whose flash is ROM: then
         // the machine boots in Fault with ConfigMissing and safe defaults until the host sends one.
         // After a watchdog reset the machine boots in Fault with WatchdogReset. A stored tick
@@ -239,11 +240,11 @@ mod app {
                 StepOnly::No => None,
                 StepOnly::Z => {
                     let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::zslide::step_only_tick(m, spindle))
+                    cx.shared.motion.lock(|m| link::turning::step_only_tick(m, spindle))
                 }
                 StepOnly::Force => {
                     let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::force::step_only_tick(m, spindle))
+                    cx.shared.motion.lock(|m| link::milling::step_only_tick(m, spindle))
                 }
                 StepOnly::Wire => {
                     let stall = l.io.read().wire_stall;
@@ -281,20 +282,20 @@ mod app {
         cx.shared.motion.lock(|m| {
             #[cfg(feature = "sim-inputs")]
             let inputs = link::sim::with_probe(m, &inputs);
-            link::zslide::sense(l.spindle, &mut m.z);
+            link::turning::sense(l.spindle, &mut m.z);
             *l.spindle_at_rest = l.spindle.at_rest();
             *l.plain = false;
             *l.step_only = StepOnly::No;
             // The copy tick first: it also records the encoder counts for Status.
             let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
                 out
-            } else if let Some(out) = link::force::tick(m, &inputs) {
+            } else if let Some(out) = link::milling::tick(m, &inputs) {
                 *l.step_only = StepOnly::Force;
                 out
             } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
                 *l.step_only = StepOnly::Wire;
                 out
-            } else if let Some(out) = link::zslide::tick(m, &inputs) {
+            } else if let Some(out) = link::turning::tick(m, &inputs) {
                 *l.step_only = StepOnly::Z;
                 out
             } else if m.machine.event_job() {
@@ -344,22 +345,22 @@ mod app {
     }
 
     /// Force ADC half buffer (real board): the force job's chain per frame, its control law
-    /// once per half, the override into the DDA (`link_force`). On the simulator board, which
+    /// once per half, the override into the DDA (`link::milling`). On the simulator board, which
     /// has no force ADC, the tick pends it for each plant sample. The tick's priority: they
     /// never preempt each other, and a pended sample runs before the next tick.
     #[task(binds = DMA2_STREAM0, priority = 3, shared = [motion], local = [force_adc])]
     fn force_dma(mut cx: force_dma::Context) {
         let Some(adc) = cx.local.force_adc.as_mut() else {
-            cx.shared.motion.lock(link::force::on_sim_sample);
+            cx.shared.motion.lock(link::milling::on_sim_sample);
             return;
         };
         match adc.on_dma_irq() {
             Some(frames) => {
-                cx.shared.motion.lock(|m| link::force::on_adc_frames(m, Some(frames), false))
+                cx.shared.motion.lock(|m| link::milling::on_adc_frames(m, Some(frames), false))
             }
             None => {
                 let overrun = adc.overrun();
-                cx.shared.motion.lock(|m| link::force::on_adc_frames::<4>(m, None, overrun))
+                cx.shared.motion.lock(|m| link::milling::on_adc_frames::<4>(m, None, overrun))
             }
         }
     }
@@ -476,7 +477,7 @@ mod app {
             }
             for response in responses.iter().flatten() {
                 // Encoded outside the locks: the USART task keeps running meanwhile.
-                let mut buf = [0u8; MAX_FRAME_WIRE];
+                let mut buf = [0u8; MAX_FRAME_LINK];
                 if let Some(frame) = link::encode(response, &mut buf) {
                     host_port.lock(|port| port.queue_frame(frame));
                 }

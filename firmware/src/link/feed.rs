@@ -7,7 +7,7 @@ use motion::machine::BoardConfig;
 use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 use motion::polar::feed::{EventFeed, EVENT_QUEUE_BLOCKS};
 use motion::segment::Segment;
-use motion::zslide::link_requests::ZRequests;
+use motion::turning::link_requests::ZRequests;
 
 use super::SEGMENT_QUEUE;
 use crate::board;

@@ -1,7 +1,7 @@
 //! [`HostPort`]: the serial driver and the transmit byte queue.
 
 use heapless::Deque;
-use motion::protocol::{encode_frame, Response, MAX_FRAME_WIRE};
+use motion::protocol::{encode_frame, Response, MAX_FRAME_LINK};
 
 use crate::board;
 use board_contract::HostSerial as _;
@@ -24,7 +24,7 @@ impl HostPort {
 
     /// Encodes and queues one response; false if it was dropped.
     pub fn send(&mut self, resp: &Response) -> bool {
-        let mut buf = [0u8; MAX_FRAME_WIRE];
+        let mut buf = [0u8; MAX_FRAME_LINK];
         match encode_frame(resp, &mut buf) {
             Ok(frame) => self.queue_frame(frame),
             Err(_) => {
@@ -63,6 +63,6 @@ impl HostPort {
 }
 
 /// Encodes `resp` into `buf` for [`HostPort::queue_frame`]; outside any lock.
-pub fn encode<'b>(resp: &Response, buf: &'b mut [u8; MAX_FRAME_WIRE]) -> Option<&'b [u8]> {
+pub fn encode<'b>(resp: &Response, buf: &'b mut [u8; MAX_FRAME_LINK]) -> Option<&'b [u8]> {
     encode_frame(resp, buf).ok()
 }

@@ -3,7 +3,7 @@
 //! either and the board's RAM pays for the larger only. The job stays for its counts in Status
 //! until the next `ArmWire` or `ArmForce` replaces it.
 
-use motion::force::link_job::ForceJob;
+use motion::milling::link_job::ForceJob;
 use motion::wire::link_job::WireJob;
 
 // The variants' sizes differ on purpose: one slot for the larger job is the point of the type.

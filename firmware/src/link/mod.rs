@@ -31,13 +31,13 @@ use motion::machine::persist::SaveError;
 use motion::machine::{BoardConfig, BootConfig, Machine, MachineState, ResetCause, WatchdogGate};
 use motion::polar::playback::QUEUE_DEPTH;
 use motion::polar::playback::{Playback, SizeScale};
-use motion::protocol::WireState;
-use motion::protocol::CAP_ZSLIDE_JOB;
+use motion::protocol::LinkState;
+use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
-    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_FORCE_JOB, CAP_HOLD_RESUME, CAP_OVERRIDE, CAP_PROBE,
+    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_MILLING_JOB, CAP_OVERRIDE, CAP_PROBE,
     CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
 };
-use motion::zslide::link_job::ZJob;
+use motion::turning::link_job::ZJob;
 use motion::Dda;
 
 use crate::board;
@@ -46,19 +46,19 @@ use board_contract::{CopyEncoders as _, MachineIo as _};
 /// Copy-mode jobs (`StartCopy`, `ReadTeach`).
 pub mod copy;
 mod feed;
-/// Constant-force milling jobs (`ArmForce`).
-pub mod force;
 mod host_port;
 mod last_job;
+/// Constant-force milling jobs (`ArmForce`).
+pub mod milling;
 mod session;
 /// The simulator board's test hooks (`Sim` requests).
 #[cfg(feature = "sim-inputs")]
 pub mod sim;
 mod target;
+/// Z-slide jobs (`ZTableBegin`..`StartZ`).
+pub mod turning;
 /// Wire-manipulator jobs (`ArmWire`).
 pub mod wire;
-/// Z-slide jobs (`ZTableBegin`..`StartZ`).
-pub mod zslide;
 
 pub use host_port::{encode, HostPort};
 pub use last_job::LastJob;
@@ -126,9 +126,9 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_SOFT_LIMITS
     | CAP_EVENTS
     | CAP_WIRE_JOB
-    | CAP_ZSLIDE_JOB
+    | CAP_TURNING_JOB
     | CAP_PROBE
-    | if force::HAS_FORCE_SOURCE { CAP_FORCE_JOB } else { 0 }
+    | if milling::HAS_FORCE_SOURCE { CAP_MILLING_JOB } else { 0 }
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
     | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
     | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
@@ -147,7 +147,7 @@ pub struct Motion {
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: copy::CopyState,
     /// The simulated plant the next force job samples.
-    pub force: force::ForceSlot,
+    pub force: milling::ForceSlot,
     /// The simulated probe surface (`Sim(Probe)`), evaluated from the step counters every tick.
     #[cfg(feature = "sim-inputs")]
     pub sim_probe: Option<motion::protocol::SimProbeSurface>,
@@ -181,7 +181,7 @@ impl Motion {
                 job: LastJob::None,
                 z: ZJob::new(),
                 copy: copy::CopyState::new(),
-                force: force::ForceSlot::default(),
+                force: milling::ForceSlot::default(),
                 #[cfg(feature = "sim-inputs")]
                 sim_probe: None,
             },
@@ -191,11 +191,11 @@ impl Motion {
 
     /// The state as the link reports it: started with segments still to feed counts as
     /// moving (the feeder is about to run).
-    pub(super) fn wire_state(&self) -> WireState {
+    pub(super) fn wire_state(&self) -> LinkState {
         match (self.machine.state(), self.dda.state()) {
-            (MachineState::Running, MotionState::Idle) => WireState::Moving,
+            (MachineState::Running, MotionState::Idle) => LinkState::Moving,
             (MachineState::Holding, MotionState::Idle) if self.machine.event_job() => {
-                WireState::Held
+                LinkState::Held
             }
             _ => self.machine.wire_state(&self.dda),
         }

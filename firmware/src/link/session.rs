@@ -11,7 +11,7 @@ use motion::polar::feed::EventFeed;
 use motion::polar::StepEvent;
 use motion::protocol::{BoardLink, FaultCode, FrameError, Response};
 use motion::segment::SegmentError;
-use motion::zslide::link_requests::ZRequests;
+use motion::turning::link_requests::ZRequests;
 use rtic::Mutex;
 
 use crate::board;

@@ -8,7 +8,7 @@ use motion::machine::Inputs;
 use motion::protocol::{ErrorCode, SimMillingParams, SimRequest};
 use rtic::Mutex;
 
-use super::{force, Motion};
+use super::{milling, Motion};
 use crate::board;
 use board_contract::{CopyEncoders as _, MachineIo as _, SpindleEncoder as _};
 
@@ -67,7 +67,7 @@ fn spindle(tick_hz: u32, rpm_milli: u32, index: bool) -> Result<(), ErrorCode> {
 
 /// `Milling`: the plant the next armed force job samples (a tick-sampled board only).
 fn milling(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
-    if !force::TICK_SAMPLED {
+    if !milling::TICK_SAMPLED {
         return Err(ErrorCode::Unsupported);
     }
     m.force.sim = Some(*p);

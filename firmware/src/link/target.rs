@@ -10,12 +10,12 @@ use motion::machine::{BoardConfig, MachineCommand, MachineState, ProbeKind, Refu
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
 use motion::protocol::{
-    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs, Status,
-    TeachChunk, WireConfig, WireJobParams, WireState, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkConfig, LinkState, LinkTarget,
+    ProgramOutputs, Status, TeachChunk, WireJobParams, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
-use motion::zslide::link_job::{ZJobSpec, ZTableHeader};
-use motion::zslide::link_requests::ZNak;
+use motion::turning::link_job::{ZJobSpec, ZTableHeader};
+use motion::turning::link_requests::ZNak;
 use motion::Dda;
 use rtic::Mutex;
 
@@ -56,7 +56,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
         self.motion.get_mut().lock(|m| {
             wire::drop_job(m);
             copy::drop_job(m);
-            force::drop_job(m);
+            milling::drop_job(m);
             m.z.drop_run();
         });
         self.link.queue.clear();
@@ -101,7 +101,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
 }
 
 impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         self.with(|m| m.wire_state())
     }
 
@@ -117,7 +117,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         SEGMENT_QUEUE as u16
     }
 
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.with(|m| m.machine.config().wire)
     }
 
@@ -158,14 +158,14 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 ..Status::default()
             };
             wire::status(m, &mut s);
-            zslide::status(m, &mut s);
+            turning::status(m, &mut s);
             copy::status(m, &self.link.teach, &mut s);
-            force::status(m, &mut s);
+            milling::status(m, &mut s);
             s
         })
     }
 
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         let homing = self.with(|m| m.machine.config().homing());
         self.install(&BoardConfig::with_homing(*cfg, &homing))
     }
@@ -202,11 +202,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             self.wake_feeder = true;
             return Ok(());
         }
-        if self.with(|m| force::armed(m)) {
+        if self.with(|m| milling::armed(m)) {
             // The machine's start and the force loop's in one critical section.
             let r = self.motion.get_mut().lock(|m| {
                 m.machine.command(MachineCommand::Start, &mut m.dda)?;
-                force::start(m);
+                milling::start(m);
                 Ok(())
             });
             r.map_err(|e: Refusal| e.error_code())?;
@@ -337,7 +337,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         // An armed force job owns the next segment job.
-        let empty = empty && !self.with(|m| force::live(m));
+        let empty = empty && !self.with(|m| milling::live(m));
         self.motion.get_mut().lock(|m| wire::arm(m, empty, params))
     }
 
@@ -356,7 +356,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         let active = self.with(|m| m.machine.z_job());
         let table = self.link.z.end(crc, active)?;
         let copy = table.clone();
-        self.motion.get_mut().lock(|m| zslide::install(m, table))?;
+        self.motion.get_mut().lock(|m| turning::install(m, table))?;
         self.link.z.installed(copy);
         Ok(())
     }
@@ -367,16 +367,16 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             let tick_hz = m.machine.config().wire.machine.tick_hz;
             (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
         });
-        // The generator is built here, outside the lock (see `zslide`).
+        // The generator is built here, outside the lock (see `turning`).
         let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
-        self.motion.get_mut().lock(|m| zslide::start(m, empty, prepared))
+        self.motion.get_mut().lock(|m| turning::start(m, empty, prepared))
     }
 
     fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         self.motion.get_mut().lock(|m| {
             let wire_live = wire::live(m);
-            force::arm(m, empty, wire_live, params)
+            milling::arm(m, empty, wire_live, params)
         })
     }
 
@@ -406,7 +406,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_probe(&mut self, kind: ProbeKind) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         let r = self.motion.get_mut().lock(|m| {
-            if !empty || wire::live(m) || force::live(m) || copy::live(m) {
+            if !empty || wire::live(m) || milling::live(m) || copy::live(m) {
                 return Err(ErrorCode::OutOfState);
             }
             m.machine.arm_probe(kind, &m.dda).map_err(|e| e.error_code())

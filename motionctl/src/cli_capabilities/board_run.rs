@@ -87,7 +87,7 @@ pub struct WireBoardJob {
     /// Segments of the whole job (`segments` may be a part of it).
     pub job_segments: usize,
     pub segments: Vec<motion::segment::Segment>,
-    pub cfg: motion::protocol::WireConfig,
+    pub cfg: motion::protocol::LinkConfig,
     pub params: motion::protocol::WireJobParams,
     /// The host model's final X, Y, beta, alpha steps from the start, and its duration, ticks.
     pub expected: [i64; 4],
@@ -131,7 +131,7 @@ pub fn wire_board_job(
         fr_mm2_per_min: prm.fr_mm2_per_min,
         job_segments,
         params: stall_params(job.segments.len()),
-        cfg: crate::runner::wire_config(&parsed, &program),
+        cfg: crate::runner::link_config(&parsed, &program),
         segments: job.segments,
         expected,
         model_ticks: report.ticks,
@@ -162,7 +162,7 @@ pub(super) fn run_wire_job(
     };
     let mut expected = [0i64; 4];
     expected.copy_from_slice(&model.positions[..4]);
-    let cfg = crate::runner::wire_config(parsed, program);
+    let cfg = crate::runner::link_config(parsed, program);
     let result = crate::wire::run::run(&mut *t, cfg, segments, expected, model.ticks, &opts);
     let r = crate::qemu::finish(qemu_guard, result)?;
     if json {

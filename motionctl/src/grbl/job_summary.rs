@@ -4,17 +4,17 @@
 
 use super::jobs::{polar_mm, turning_mm};
 use crate::cli_capabilities::WireBoardJob;
-use crate::fourier::run::{ZRunOptions, ZRunReport};
 use crate::milling::run::MillingRunReport;
 use crate::polar::run::PolarReport;
 use crate::runner::fault_names;
+use crate::turning::run::{ZRunOptions, ZRunReport};
 use crate::units::MM_PER_IN;
 use crate::wire::run::WireRunReport;
 use motion::protocol::Status;
 
 /// `[MSG:...]` texts summing up a milling job in the job's units.
 pub fn milling_summary(name: &str, r: &MillingRunReport, fnom_n: f64) -> Vec<String> {
-    let tick_hz = motion::force::scenario::TICK_HZ as f64;
+    let tick_hz = motion::milling::scenario::TICK_HZ as f64;
     let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.0} ms", v * 1e3));
     let forces: Vec<f64> = r.trace.iter().map(|p| p.force_n).collect();
     let mean =
@@ -48,7 +48,7 @@ pub fn milling_summary(name: &str, r: &MillingRunReport, fnom_n: f64) -> Vec<Str
 
 /// `[MSG:...]` texts summing up a polar playback.
 pub fn polar_summary(name: &str, r: &PolarReport) -> Vec<String> {
-    let tick_hz = motion::polar::job::wire_config().machine.tick_hz as f64;
+    let tick_hz = motion::polar::job::link_config().machine.tick_hz as f64;
     let at = |p: [i64; 2]| {
         let st = Status { positions: [p[0], p[1], 0, 0, 0, 0], ..Status::default() };
         let v = polar_mm(&st);
@@ -76,8 +76,8 @@ pub fn polar_summary(name: &str, r: &PolarReport) -> Vec<String> {
 pub fn turning_summary(name: &str, o: &ZRunOptions, r: &ZRunReport) -> Vec<String> {
     let at = |x_steps: i64, z_steps: i64| {
         let mut st = Status::default();
-        st.positions[crate::fourier::run::X_AXIS as usize] = x_steps;
-        st.positions[crate::fourier::run::Z_AXIS as usize] = z_steps;
+        st.positions[crate::turning::run::X_AXIS as usize] = x_steps;
+        st.positions[crate::turning::run::Z_AXIS as usize] = z_steps;
         let v = turning_mm(&st);
         format!("X {:.4} mm, Z {:+.5} mm", v[0], v[2])
     };

@@ -1,7 +1,7 @@
 //! The thesis capabilities as named `$` commands (grblHAL names its own `$` commands too):
 //! `$MILL=JOB.toml` (a force-controlled milling job), `$POLAR=STREAM.bin [SPEED [M:K]]` (polar
 //! playback of a step-event stream), `$TURN=TABLE [RPM [X0:X1 [FEED]]]` (a Z-slide turning job,
-//! mm and mm/s; `TABLE` a `fourier table` file or `builtin`) and `$WIRE=JOB.toml [FROM..TO]` (a
+//! mm and mm/s; `TABLE` a `turning table` file or `builtin`) and `$WIRE=JOB.toml [FROM..TO]` (a
 //! 4-axis wire job, only segments FROM..TO if given). Each runs its runner on the bridge's link
 //! while a [`SenderHook`] keeps answering the sender's real-time bytes: `?` (`Run` or `Hold`,
 //! the job's position), `!`, `~`, Ctrl-X (abort); line bytes wait in the receive buffer until
@@ -13,7 +13,7 @@ use super::report::{Report, State};
 use crate::runner::{JobControl, JobHook};
 use motion::machine::MachineState;
 use motion::polar::playback::SizeScale;
-use motion::protocol::{ProgramOutputs, Status, WireState};
+use motion::protocol::{LinkState, ProgramOutputs, Status};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -26,14 +26,14 @@ pub enum JobCmd {
     Mill(PathBuf),
     /// `$POLAR=STREAM.bin [SPEED [M:K]]`.
     Polar { file: PathBuf, speed: f64, scale: SizeScale },
-    /// `$TURN=TABLE [RPM [X0:X1 [FEED]]]`, as `fourier run`'s flags (`--table` an absolute
+    /// `$TURN=TABLE [RPM [X0:X1 [FEED]]]`, as `turning run`'s flags (`--table` an absolute
     /// path; lengths in mm).
     Turn { name: String, flags: Vec<String> },
     /// `$WIRE=JOB.toml [FROM..TO]`.
     Wire { file: PathBuf, segments: Option<std::ops::Range<usize>> },
 }
 
-/// The word `$TURN=` takes for `fourier run`'s built-in table (the thesis's Douglass table).
+/// The word `$TURN=` takes for `turning run`'s built-in table (the thesis's Douglass table).
 pub const BUILTIN_TABLE: &str = "builtin";
 
 /// The `$` names, with what each runs (the `$` help lists them).
@@ -75,7 +75,7 @@ pub fn parse(line: &str, jobs: &Path) -> Option<Result<JobCmd, String>> {
         }
         "$TURN" => {
             let Some(table) = arg.split_whitespace().next() else {
-                return Some(Err(need_file("Z-slide table (`fourier table --out`, or builtin)")));
+                return Some(Err(need_file("Z-slide table (`turning table --out`, or builtin)")));
             };
             turn_flags(table, jobs, words).map(|flags| JobCmd::Turn { name: table.into(), flags })
         }
@@ -98,7 +98,7 @@ pub fn parse(line: &str, jobs: &Path) -> Option<Result<JobCmd, String>> {
     })
 }
 
-/// `$TURN=`'s words after the table as `fourier run` flags in mm: RPM, X0:X1, FEED (mm/s).
+/// `$TURN=`'s words after the table as `turning run` flags in mm: RPM, X0:X1, FEED (mm/s).
 fn turn_flags<'a>(
     table: &str,
     jobs: &Path,
@@ -148,7 +148,7 @@ pub fn polar_mm(st: &Status) -> Vec<f64> {
 
 /// The Z-slide machine's X (the radial feed) and Z (the slide), mm, as grbl's X, Y, Z.
 pub fn turning_mm(st: &Status) -> Vec<f64> {
-    use crate::fourier::run::{X_AXIS, X_STEPS_PER_IN, Z_AXIS, Z_STEPS_PER_IN};
+    use crate::turning::run::{X_AXIS, X_STEPS_PER_IN, Z_AXIS, Z_STEPS_PER_IN};
     use crate::units::MM_PER_IN;
     vec![
         st.positions[X_AXIS as usize] as f64 * MM_PER_IN / X_STEPS_PER_IN as f64,
@@ -189,7 +189,7 @@ impl SenderHook<'_> {
         let axes = self.axes.max(mpos.len());
         mpos.resize(axes, 0.0);
         let stopping = st.machine == MachineState::Running
-            || (st.machine == MachineState::Holding && st.state != WireState::Held);
+            || (st.machine == MachineState::Holding && st.state != LinkState::Held);
         Report {
             state: if self.hold { State::Hold { stopping } } else { State::Run },
             mpos,

@@ -75,11 +75,11 @@ pub struct GrblArgs {
     pub sim_probe: Option<crate::board_link::SimProbeSpec>,
 }
 
-/// The machine as the board's config: steps-space config and the wire config with the axes'
+/// The machine as the board's config: steps-space config and the link config with the axes'
 /// scale, soft limits and input filter (as every job runner sends it).
 pub fn board_config(
     machine: &job::Machine,
-) -> Result<(motion::MachineConfig, motion::protocol::WireConfig)> {
+) -> Result<(motion::MachineConfig, motion::protocol::LinkConfig)> {
     let cfg = convert::machine_config(machine)?;
     let program = Program {
         config: cfg,
@@ -90,7 +90,7 @@ pub fn board_config(
         skipped_moves: 0,
     };
     let job = Job { machine: machine.clone(), items: Vec::new(), feed_commands: Vec::new() };
-    Ok((cfg, runner::wire_config(&job, &program)))
+    Ok((cfg, runner::link_config(&job, &program)))
 }
 
 /// `motionctl grbl`.
@@ -120,7 +120,7 @@ pub fn run(args: GrblArgs) -> Result<()> {
             args.machine.display()
         );
     }
-    let (cfg, wire) = board_config(&machine)?;
+    let (cfg, link_cfg) = board_config(&machine)?;
     // A bad --sim-probe is said before any link is opened (serve sets it once connected).
     if let Some(p) = &args.sim_probe {
         p.resolve(&machine)?;
@@ -150,7 +150,7 @@ pub fn run(args: GrblArgs) -> Result<()> {
     } else {
         args.link.open()?
     };
-    let result = serve(&args, &mut t, &target, machine, cfg, wire, persist);
+    let result = serve(&args, &mut t, &target, machine, cfg, link_cfg, persist);
     crate::qemu::finish(guard, result)
 }
 
@@ -160,7 +160,7 @@ fn serve(
     target: &crate::transport::LinkTarget,
     machine: &'static job::Machine,
     cfg: motion::MachineConfig,
-    wire: motion::protocol::WireConfig,
+    link_cfg: motion::protocol::LinkConfig,
     persist: session::Persist,
 ) -> Result<()> {
     let mut s = Session::new(t, args.link.host_config(target));
@@ -180,7 +180,7 @@ fn serve(
         allowed: home_ok,
         zero_here: &|_: &str| true,
     };
-    let alarm = match runner::ready_board(&mut s, wire, home, "machine file", &say) {
+    let alarm = match runner::ready_board(&mut s, link_cfg, home, "machine file", &say) {
         Ok(_) => None,
         Err(e) => {
             let st = runner::ask_status(&mut s)?;
@@ -223,7 +223,7 @@ fn serve(
         dir: args.jobs.clone(),
         host: args.link.host_config(target),
         home: home_ok,
-        wire,
+        link_cfg,
         caps: info.capabilities,
     };
     let mut bridge =

@@ -32,7 +32,7 @@ pub enum MillingCmd {
         #[arg(long)]
         json: bool,
     },
-    /// Run a milling job on the board as a force job (needs CAP_FORCE_JOB): the board's force
+    /// Run a milling job on the board as a force job (needs CAP_MILLING_JOB): the board's force
     /// chain and control law hold the force; on a simulator board (QEMU) its milling plant
     /// cuts. Logs force, override and feed vs board time, prints the summary and a
     /// `milling-summary k=v ...` line, and checks against the host model.
@@ -102,7 +102,7 @@ fn milling_simulate(
 ) -> Result<()> {
     let job = job::read(path)?;
     let (report, trace) = simulate::run(&job)?;
-    let s = SimSummary::new(&report, motion::force::scenario::TICK_HZ);
+    let s = SimSummary::new(&report, motion::milling::scenario::TICK_HZ);
     if let Some(p) = &csv {
         simulate::write_csv(p, &trace)?;
         eprintln!("motionctl: wrote {}", p.display());
@@ -146,7 +146,7 @@ fn milling_board(
     // The plain simulated board runs no force jobs: `--sim` gets the one that does.
     let (mut t, qemu_guard) = if link.sim {
         let board: Box<dyn crate::transport::Transport> =
-            Box::new(super::sim_board::ForceSimBoard::new(1.0));
+            Box::new(super::sim_board::MillingSimBoard::new(1.0));
         (board, None)
     } else {
         link.open()?
@@ -180,7 +180,7 @@ fn milling_board(
         figure::write(&fig, p)?;
     }
     let ms = |v: Option<f64>| v.map(|v| v * 1e3);
-    let board_s = r.board_ticks as f64 / motion::force::scenario::TICK_HZ as f64;
+    let board_s = r.board_ticks as f64 / motion::milling::scenario::TICK_HZ as f64;
     let fault_names = crate::runner::fault_names(r.faults);
     if as_json {
         let mut m = job_json(&job);

@@ -29,12 +29,12 @@
 //! step_at_mm = 10        # penetration where it steps
 //! ```
 //!
-//! The machine is the Case A scenario's (`motion::force::scenario`): one X axis, 1 um per step,
+//! The machine is the Case A scenario's (`motion::milling::scenario`): one X axis, 1 um per step,
 //! 500 mm/s^2, the tool starting 2 mm before the wall; the force chain is its 3-channel 12-bit
 //! dynamometer (9.77 N per count) at 10 kHz, the control law at 2 kHz.
 
-use motion::force::control::{ContactStrategy, ControlParams};
-use motion::force::scenario::{
+use motion::milling::control::{ContactStrategy, ControlParams};
+use motion::milling::scenario::{
     chain_config, control_params, plant_params, MillingSetup, TICK_HZ, WALL_STEPS,
 };
 use motion::segment::Rate;
@@ -201,7 +201,7 @@ fn check(
 fn contact_strategy(name: &str) -> Result<ContactStrategy, MillingJobError> {
     Ok(match name {
         "direct" => ContactStrategy::Direct,
-        // The thesis's settings (src/force/scenario.rs).
+        // The thesis's settings (src/milling/scenario.rs).
         "a" => ContactStrategy::SlowHold { slow: Rate::lit("0.01"), hold_ms: 100 },
         "b" => ContactStrategy::StopReduced {
             stop_ms: 40,
@@ -308,7 +308,7 @@ pub fn parse(src: &str) -> Result<MillingJob, MillingJobError> {
     let mrev_s = |r: f64| (r * 1000.0 / 60.0).round() as u32;
     let feed_steps_per_s = (feed / 60.0 * 1000.0).round() as u32;
     let control = control(&f.force, feed_steps_per_s, mrev_s(min_rpm))?;
-    let chain = motion::force::chain::ChainConfig {
+    let chain = motion::milling::chain::ChainConfig {
         teeth,
         nominal_spindle_mrev_s: mrev_s(rpm),
         ..chain_config()

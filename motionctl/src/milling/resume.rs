@@ -18,8 +18,8 @@ use super::job::MillingJob;
 use crate::link::Session;
 use crate::runner::{ask, ask_status, fault_names};
 use anyhow::{bail, Result};
-use motion::force::scenario::{segment_for, RAPID_STEPS_PER_S};
 use motion::machine::MachineState;
+use motion::milling::scenario::{segment_for, RAPID_STEPS_PER_S};
 use motion::protocol::{
     ProgramOutputs, RequestBody, SegmentBatch, SimForceFault, SimMillingParams, SpindleDir,
 };

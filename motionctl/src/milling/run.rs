@@ -1,4 +1,4 @@
-//! `motionctl milling run` on a board with force jobs (`CAP_FORCE_JOB`): the milling job's move
+//! `motionctl milling run` on a board with force jobs (`CAP_MILLING_JOB`): the milling job's move
 //! (the Case A machine: one X axis, 1 um per step, 500 mm/s^2; the job's programmed feed) runs
 //! as a force job through the board's force chain and control law, with the job's nominal
 //! force, thresholds, gains, teeth and spindle speed.
@@ -7,7 +7,7 @@
 //! board: the job's cut, and an injected fault if asked) -> status stream -> `ArmForce` -> the
 //! move -> `Start` -> the status stream logged (force, override, feed vs board time) until the
 //! job ends (Ready) or a fault holds it -> checks against the host model (the same library
-//! code: `motion::force::scenario`): without a fault, the final position exact, the force back
+//! code: `motion::milling::scenario`): without a fault, the final position exact, the force back
 //! within +-10 % of Fnom within 150 ms of the depth step and never above the trip level; with
 //! an injected fault, the hold with that fault's code and the position the board counted.
 
@@ -19,12 +19,12 @@ use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use anyhow::{anyhow, bail};
-use motion::force::link_job::{job_params, sim_params};
-use motion::force::scenario as sc;
 use motion::machine::MachineState;
+use motion::milling::link_job::{job_params, sim_params};
+use motion::milling::scenario as sc;
 use motion::protocol::{
-    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, Reply, RequestBody, SegmentBatch,
-    SimForceFault, SimRequest, Status, WireConfig, CAP_FORCE_JOB, CAP_SIM_INPUTS,
+    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
+    SegmentBatch, SimForceFault, SimRequest, Status, CAP_MILLING_JOB, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -130,10 +130,10 @@ impl MillingRunReport {
 }
 
 /// The Case A machine as the link's config: X only, 1 um per step.
-pub fn wire_config() -> WireConfig {
+pub fn link_config() -> LinkConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    WireConfig {
+    LinkConfig {
         machine: sc::machine(),
         scale: [scale; motion::MAX_AXES],
         inputs: motion::InputFilterConfig::DEFAULT,
@@ -209,21 +209,21 @@ pub fn run_resumable(
     };
     let setup = &job.setup;
     let params = job_params(&setup.control, &setup.chain, 0);
-    motion::force::link_job::check_job(&params)
+    motion::milling::link_job::check_job(&params)
         .map_err(|f| anyhow!("the milling job's force setup is out of range: {f}"))?;
     let sim = match resume {
         Some(r) => r.sim_params(job),
         None => sim_params(&setup.plant, opts.fault, FAULT_AT_UM),
     };
-    let cfg = wire_config();
+    let cfg = link_config();
     let tick_hz = cfg.machine.tick_hz as f64;
     // The host model: the same force code without the link (its settling, for the report).
     let (model, _) = super::simulate::run(job)?;
     let mut s = Session::new(transport, opts.host);
     let link = |e: LinkFailure| anyhow!("{e}");
     let info = s.connect().map_err(link)?;
-    if info.capabilities & CAP_FORCE_JOB == 0 {
-        bail!("the board ({:?}) runs no force jobs (no CAP_FORCE_JOB)", info.firmware.as_str());
+    if info.capabilities & CAP_MILLING_JOB == 0 {
+        bail!("the board ({:?}) runs no milling jobs (no CAP_MILLING_JOB)", info.firmware.as_str());
     }
     let simulated = info.capabilities & CAP_SIM_INPUTS != 0;
     if opts.fault != SimForceFault::None && !simulated {

@@ -1,6 +1,6 @@
 //! A simulated board that runs force jobs, inside motionctl, for tests of `milling run` (and its
 //! resume) without QEMU: the firmware's link state machine ([`BoardLink`]) over a
-//! [`ForceSimTarget`], behind the [`Transport`] trait.
+//! [`MillingSimTarget`], behind the [`Transport`] trait.
 //!
 //! The plain [`SimTarget`] finishes a segment at once and runs a force job as plain segments;
 //! here every segment runs tick by tick through the library's [`Dda`], and an armed force job
@@ -10,18 +10,18 @@
 //! runs at `speed` times the wall clock, and the status stream on board time.
 //!
 //! For resume tests it can lose power once the feed axis reaches a position
-//! ([`ForceSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
+//! ([`MillingSimBoard::power_cut_at_steps`]): the board restarts blank (no config, queue and job
 //! gone) and the machine's path so far is kept.
 
-use crate::sim_wire::SimWire;
+use crate::sim_link::SimLink;
 use crate::transport::Transport;
 use motion::dda::{Command, Dda, Preparer};
-use motion::force::link_job::ForceJob;
 use motion::machine::{MachineState, ProbeKind};
+use motion::milling::link_job::ForceJob;
 use motion::protocol::{
-    BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkTarget, ProgramOutputs,
-    SimRequest, SimTarget, Status, WireConfig, WireState, CAP_DDA, CAP_FORCE_JOB, CAP_HOLD_RESUME,
-    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
+    BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkConfig, LinkState,
+    LinkTarget, ProgramOutputs, SimRequest, SimTarget, Status, CAP_DDA, CAP_HOLD_RESUME,
+    CAP_MILLING_JOB, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::segment::Segment;
 use motion::{Rate, MAX_AXES};
@@ -44,7 +44,7 @@ struct Running {
 
 /// [`SimTarget`] (the command table, queue, counters) with its segments run on a DDA and its
 /// force job on the firmware's force code.
-pub struct ForceSimTarget {
+pub struct MillingSimTarget {
     pub inner: SimTarget,
     /// The queued segments, as the inner target holds them (it has no look at its front).
     queued: VecDeque<Segment>,
@@ -54,10 +54,10 @@ pub struct ForceSimTarget {
     dda_held: bool,
 }
 
-impl ForceSimTarget {
+impl MillingSimTarget {
     pub fn new(capacity: u16) -> Self {
-        ForceSimTarget {
-            inner: SimTarget::new(WireConfig::UNSET, capacity),
+        MillingSimTarget {
+            inner: SimTarget::new(LinkConfig::UNSET, capacity),
             queued: VecDeque::new(),
             dda: None,
             running: None,
@@ -164,8 +164,8 @@ impl ForceSimTarget {
     }
 }
 
-impl LinkTarget for ForceSimTarget {
-    fn state(&self) -> WireState {
+impl LinkTarget for MillingSimTarget {
+    fn state(&self) -> LinkState {
         self.inner.state()
     }
     fn machine_state(&self) -> MachineState {
@@ -177,7 +177,7 @@ impl LinkTarget for ForceSimTarget {
     fn queue_capacity(&self) -> u16 {
         self.inner.queue_capacity()
     }
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.inner.config()
     }
     fn planned_position(&self) -> [i64; MAX_AXES] {
@@ -197,7 +197,7 @@ impl LinkTarget for ForceSimTarget {
         st
     }
 
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         self.inner.set_config(cfg)?;
         self.dda = None;
         Ok(())
@@ -271,10 +271,10 @@ impl LinkTarget for ForceSimTarget {
 }
 
 /// The board: link, target, the wall clock it runs on, and an optional power cut.
-pub struct ForceSimBoard {
+pub struct MillingSimBoard {
     pub board: BoardLink,
-    pub target: ForceSimTarget,
-    wire: SimWire,
+    pub target: MillingSimTarget,
+    wire: SimLink,
     last: Instant,
     budget_ticks: f64,
     /// Machine time per wall time.
@@ -288,7 +288,7 @@ pub struct ForceSimBoard {
     pub path: Option<Vec<i64>>,
 }
 
-impl ForceSimBoard {
+impl MillingSimBoard {
     pub fn new(speed: f64) -> Self {
         let caps = CAP_DDA
             | CAP_STATUS_STREAM
@@ -296,11 +296,11 @@ impl ForceSimBoard {
             | CAP_HOLD_RESUME
             | CAP_SOFT_LIMITS
             | CAP_SIM_INPUTS
-            | CAP_FORCE_JOB;
-        ForceSimBoard {
+            | CAP_MILLING_JOB;
+        MillingSimBoard {
             board: BoardLink::new("motionctl-force-sim", caps),
-            target: ForceSimTarget::new(CAPACITY),
-            wire: SimWire::new(),
+            target: MillingSimTarget::new(CAPACITY),
+            wire: SimLink::new(),
             last: Instant::now(),
             budget_ticks: 0.0,
             speed,
@@ -353,7 +353,7 @@ impl ForceSimBoard {
     /// Power lost and back: a blank board; the machine stays where it stopped, which the new
     /// board does not know (it counts from zero, as after a reset).
     fn power_cut(&mut self) {
-        let fresh = ForceSimBoard::new(self.speed);
+        let fresh = MillingSimBoard::new(self.speed);
         let (path, cuts) = (self.path.take(), self.power_cuts + 1);
         *self = fresh;
         self.path = path;
@@ -361,7 +361,7 @@ impl ForceSimBoard {
     }
 }
 
-impl Transport for ForceSimBoard {
+impl Transport for MillingSimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
         self.wire.receive(bytes, &mut self.board, &mut self.target);
@@ -371,7 +371,7 @@ impl Transport for ForceSimBoard {
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
         if self.wire.is_empty() {
-            SimWire::idle_wait(timeout);
+            SimLink::idle_wait(timeout);
             self.advance();
         }
         Ok(self.wire.take())

@@ -2,7 +2,7 @@
 //! the job's setup) and keeps a trace per control update for the CSV and the plot.
 
 use super::job::MillingJob;
-use motion::force::scenario::{ForceScenario, TICK_HZ};
+use motion::milling::scenario::{MillingScenario, TICK_HZ};
 use motion::scenario::{Scenario, ScenarioReport};
 use std::path::Path;
 
@@ -25,7 +25,7 @@ const STEPS_PER_MM: f64 = 1000.0;
 
 /// Runs the job to its end; the scenario's report and the trace.
 pub fn run(job: &MillingJob) -> anyhow::Result<(ScenarioReport, Vec<TracePoint>)> {
-    let mut s = ForceScenario::custom(&job.setup).map_err(|_| {
+    let mut s = MillingScenario::custom(&job.setup).map_err(|_| {
         anyhow::anyhow!("the milling job's setup was refused by the force loop (a bug: the job file's checks passed)")
     })?;
     let mut trace = Vec::new();

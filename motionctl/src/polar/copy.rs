@@ -193,7 +193,7 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
             eprintln!("motionctl: {m}");
         }
     };
-    let cfg = motion::polar::job::wire_config();
+    let cfg = motion::polar::job::link_config();
     let mut s = Session::new(transport, opts.host);
     let link = |e: LinkFailure| anyhow!("{e}");
     let info = s.connect().map_err(link)?;

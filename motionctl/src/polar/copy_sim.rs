@@ -3,7 +3,7 @@
 //! `TeachRecorder` and simulated-encoder slew), ticked on the wall clock `speed` times faster
 //! than real time.
 
-use crate::sim_wire::SimWire;
+use crate::sim_link::SimLink;
 use crate::transport::Transport;
 use motion::protocol::{
     BoardLink, CopySim, SimTarget, CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME,
@@ -25,7 +25,7 @@ const CAPS: u32 = CAP_DDA
 pub struct CopySimBoard {
     pub board: BoardLink,
     pub target: CopySim,
-    wire: SimWire,
+    wire: SimLink,
     start: Instant,
     last: Instant,
     owed_ticks: f64,
@@ -37,8 +37,8 @@ impl CopySimBoard {
         let now = Instant::now();
         CopySimBoard {
             board: BoardLink::new("motionctl-copy-sim", CAPS),
-            target: CopySim::new(SimTarget::new(motion::polar::job::wire_config(), 32)),
-            wire: SimWire::new(),
+            target: CopySim::new(SimTarget::new(motion::polar::job::link_config(), 32)),
+            wire: SimLink::new(),
             start: now,
             last: now,
             owed_ticks: 0.0,
@@ -72,7 +72,7 @@ impl Transport for CopySimBoard {
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
         if self.wire.is_empty() {
-            SimWire::idle_wait(timeout);
+            SimLink::idle_wait(timeout);
             self.advance();
         }
         Ok(self.wire.take())

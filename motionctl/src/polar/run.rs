@@ -2,7 +2,7 @@
 //! event job and checks what it did.
 //!
 //! Hello -> the board idle (only `ConfigMissing` may be latched: it is cleared after the config)
-//! -> the polar machine's config (`motion::polar::job::wire_config`, at the stream's tick rate)
+//! -> the polar machine's config (`motion::polar::job::link_config`, at the stream's tick rate)
 //! -> Home if needed (and allowed) -> `SetOverride` (the speed scale) -> the stream's blocks in
 //! `QueueEvents` requests as event credits allow (the last one marked) -> `StartPlayback` once
 //! the board's block queue is full or the whole stream is queued -> wait until the job is done
@@ -203,7 +203,7 @@ pub fn run_with(
     let speed = Rate::from_num(opts.speed);
     let blocks = blocks(bytes)?;
     let model = model(bytes, speed, opts.scale)?;
-    let cfg = motion::polar::job::wire_config();
+    let cfg = motion::polar::job::link_config();
     say(&format!(
         "{} blocks, {} events; host model at speed {} and size {}:{}: {} ticks ({:.2} s), \
          final (theta, r) = {:?} steps",

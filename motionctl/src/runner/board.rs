@@ -8,14 +8,14 @@ use crate::job::Job;
 use crate::link::{describe_rejection, Session};
 use motion::machine::MachineState;
 use motion::protocol::{
-    AxisScale, FaultCode, HomingConfig, Reply, RequestBody, Status, WireConfig,
+    AxisScale, FaultCode, HomingConfig, LinkConfig, Reply, RequestBody, Status,
 };
 use motion::MAX_AXES;
 use std::time::Duration;
 
-/// The job's machine as the board's `WireConfig`: the step-space config plus per-axis scale and
+/// The job's machine as the board's `LinkConfig`: the step-space config plus per-axis scale and
 /// soft limits (rounded to steps the same way move targets are).
-pub fn wire_config(job: &Job, program: &Program) -> WireConfig {
+pub fn link_config(job: &Job, program: &Program) -> LinkConfig {
     let mut scale = [AxisScale::UNUSED; MAX_AXES];
     for (s, a) in scale.iter_mut().zip(&job.machine.axes) {
         *s = AxisScale {
@@ -24,7 +24,7 @@ pub fn wire_config(job: &Job, program: &Program) -> WireConfig {
             soft_max: (a.max_mm * a.steps_per_mm).round() as i64,
         };
     }
-    WireConfig { machine: program.config, scale, inputs: job.machine.input_filter() }
+    LinkConfig { machine: program.config, scale, inputs: job.machine.input_filter() }
 }
 
 /// (name, steps per mm) of the job's axes.
@@ -101,7 +101,7 @@ impl Home<'_> {
 /// messages. Returns the board's status from before the config was sent.
 pub fn ready_board(
     s: &mut Session,
-    cfg: WireConfig,
+    cfg: LinkConfig,
     home: Home<'_>,
     what: &str,
     say: &dyn Fn(&str),

@@ -34,7 +34,7 @@ mod verify;
 mod watch;
 
 pub use board::{
-    ask, ask_status, axes_of, fault_names, home, ready_board, seq_at_or_after, wire_config, Home,
+    ask, ask_status, axes_of, fault_names, home, link_config, ready_board, seq_at_or_after, Home,
     HOMING_BOARD_SECONDS, HOMING_STUCK,
 };
 pub use hook::{JobControl, JobHook, Steer, Unattended};

@@ -2,7 +2,7 @@
 //! segments as credits allow, starts the board, keeps the link alive and schedules the feed
 //! commands, until everything sent is done; then the checks.
 
-use super::board::{axes_of, ready_board, seq_at_or_after, status_of, wire_config, Home};
+use super::board::{axes_of, link_config, ready_board, seq_at_or_after, status_of, Home};
 use super::options::RunOptions;
 use super::outputs::{peek, Outputs, Tagged, Whereabouts};
 use super::path_check::PathCheck;
@@ -168,7 +168,7 @@ impl<'t, 'o> Stream<'t, 'o> {
                 info.max_window
             ),
         );
-        let want = wire_config(job, program);
+        let want = link_config(job, program);
         let homing = job.machine.homing();
         let zero_here = |why: &str| progress.suspend(|| opts.zero_here.confirm(why));
         let home = Home::Switches { homing: &homing, allowed: opts.home, zero_here: &zero_here };

@@ -17,7 +17,7 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    HostConfig, HostEvent, Reply, RequestBody, SegmentBatch, SimRequest, WireConfig, WireJobParams,
+    HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch, SimRequest, WireJobParams,
     CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
@@ -90,7 +90,7 @@ enum Pending {
 /// host model's duration in board ticks.
 pub fn run(
     transport: &mut dyn Transport,
-    cfg: WireConfig,
+    cfg: LinkConfig,
     segments: &[Segment],
     expected: [i64; 4],
     model_ticks: u64,
@@ -103,7 +103,7 @@ pub fn run(
 /// hold, resume or abort it: the grbl bridge's sender does).
 pub fn run_with(
     transport: &mut dyn Transport,
-    cfg: WireConfig,
+    cfg: LinkConfig,
     segments: &[Segment],
     expected: [i64; 4],
     model_ticks: u64,

@@ -22,7 +22,7 @@ pub enum MachineCommand<'a> {
     /// admitted events through [`Machine::tick_with`].
     StartEvents,
     /// Start a Z-slide job (the table's Start column): the caller's step source
-    /// (`motion::zslide::link_job::ZJob`) steps X and Z through [`Machine::tick_with`]; the job
+    /// (`motion::turning::link_job::ZJob`) steps X and Z through [`Machine::tick_with`]; the job
     /// ends when the source is idle. Refused while segments or events are queued.
     StartZ,
     /// Admit one segment for a wire job (the table's Queue column): checked like `Queue`

@@ -1,9 +1,9 @@
-//! The jobs' parameters on the wire: the force job's (and its phase in the status), the wire job's.
+//! The jobs' parameters on the link: the force job's (and its phase in the status), the wire job's.
 
 use serde::{Deserialize, Serialize};
 
 // -- force job --
-/// Contact strategy of a force job (`motion::force::control::ContactStrategy`).
+/// Contact strategy of a force job (`motion::milling::control::ContactStrategy`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ForceStrategy {
     /// Straight into the PI.
@@ -14,7 +14,7 @@ pub enum ForceStrategy {
     StopReduced { stop_ms: u16, reduced_ms: u16, reduced_gain_q16: u32 },
 }
 
-/// One force channel's calibration on the wire (`motion::force::chain::ChannelCal`).
+/// One force channel's calibration on the link (`motion::milling::chain::ChannelCal`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ForceCal {
     /// ADC counts at zero force (the first guess; the chain tares it while cutting air).

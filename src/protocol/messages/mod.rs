@@ -1,25 +1,25 @@
-//! The messages. Wire form: postcard (varints for integers, enum variants as varint indices in
+//! The messages. Link form: postcard (varints for integers, enum variants as varint indices in
 //! declaration order). Compatibility rule: new variants and fields go at the end, and anything
 //! that changes the meaning of existing bytes bumps [`PROTOCOL_VERSION`].
 //!
 //! The parts: `requests` (host -> board), `replies` (board -> host: Ack/Nak and what they
-//! carry), `status` (the status report and the board's counters), `wire_config` (the config and
+//! carry), `status` (the status report and the board's counters), `link_config` (the config and
 //! homing as set over the link), `jobs` (the force and wire jobs' parameters) and `decode`.
 //! The version, the capability bits and the sizes every part shares are here.
 
 mod decode;
 mod jobs;
+mod link_config;
 mod replies;
 mod requests;
 mod status;
-mod wire_config;
 
 pub use decode::{decode_request, decode_response, Malformed};
 pub use jobs::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy, WireJobParams};
+pub use link_config::{AxisScale, HomingConfig, LinkConfig};
 pub use replies::{HelloInfo, NakDetail, PanicSite, Reply, Response, TeachChunk};
 pub use requests::{Request, RequestBody, KIND_SIM};
-pub use status::{BoardCounters, Status, WireState};
-pub use wire_config::{AxisScale, HomingConfig, WireConfig};
+pub use status::{BoardCounters, LinkState, Status};
 
 use crate::segment::Rate;
 
@@ -45,7 +45,7 @@ pub const CAP_STATUS_STREAM: u32 = 1 << 1;
 pub const CAP_OVERRIDE: u32 = 1 << 2;
 /// `Hold` / `Resume` are honoured.
 pub const CAP_HOLD_RESUME: u32 = 1 << 3;
-/// Soft limits in [`WireConfig`] are enforced when segments are queued.
+/// Soft limits in [`LinkConfig`] are enforced when segments are queued.
 pub const CAP_SOFT_LIMITS: u32 = 1 << 4;
 /// `Status::sensors` carries real readings.
 pub const CAP_SENSORS: u32 = 1 << 5;
@@ -58,12 +58,12 @@ pub const CAP_WIRE_JOB: u32 = 1 << 7;
 pub const CAP_SIM_INPUTS: u32 = 1 << 8;
 // -- Z-slide job --
 /// Z-slide jobs (`ZTableBegin`/`ZTableChunk`/`ZTableEnd`, `StartZ`) are honoured.
-pub const CAP_ZSLIDE_JOB: u32 = 1 << 9;
+pub const CAP_TURNING_JOB: u32 = 1 << 9;
 /// Most table bytes in one `ZTableChunk`.
 pub const MAX_Z_CHUNK: usize = 192;
 // -- force job --
 /// `ArmForce` (constant-force milling jobs) is honoured; `Sim(Milling)` too with `CAP_SIM_INPUTS`.
-pub const CAP_FORCE_JOB: u32 = 1 << 10;
+pub const CAP_MILLING_JOB: u32 = 1 << 10;
 // -- copy mode --
 /// `StartCopy` / `ReadTeach` (copy mode from two encoders, teach recording) are honoured.
 pub const CAP_COPY_JOB: u32 = 1 << 11;

@@ -2,8 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::link_config::LinkConfig;
 use super::status::Status;
-use super::wire_config::WireConfig;
 use super::{FIELD_NAME_LEN, FIRMWARE_NAME_LEN, PANIC_FILE_LEN};
 use crate::machine::MachineState;
 use crate::protocol::bounded::{BlockBytes, FixedStr};
@@ -31,7 +31,7 @@ pub enum Response {
 pub enum Reply {
     None,
     Hello(HelloInfo),
-    Config(WireConfig),
+    Config(LinkConfig),
     Status(Status),
     /// The answer to `QueueEvents`: free event-block slots right after it (`T = seq`).
     EventCredits(u16),
@@ -86,11 +86,11 @@ pub enum NakDetail {
         reason: u8,
         expected: Option<u16>,
     },
-    // -- Z-slide job --
+    // -- turning job --
     /// A refused Z request: `reason` = `ZTableError::code` for an upload step (1 header, 2 no
     /// upload, 3 sequence, 4 too long, 5 short, 6 CRC, 7 table), 0 for a start; `expected` =
     /// the chunk index the board wanted (sequence); `fault` = what the pre-start check found.
-    ZSlide {
+    Turning {
         reason: u8,
         expected: Option<u16>,
         fault: Option<FaultCode>,

@@ -3,13 +3,13 @@
 use serde::{Deserialize, Serialize};
 
 use super::jobs::{ForceJobParams, WireJobParams};
-use super::wire_config::{HomingConfig, WireConfig};
+use super::link_config::{HomingConfig, LinkConfig};
 use crate::machine::ProbeKind;
 use crate::protocol::bounded::{BlockBytes, EventBlock, SegmentBatch};
 use crate::protocol::program_outputs::ProgramOutputs;
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
-use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
+use crate::turning::link_job::{ZJobSpec, ZTableHeader};
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -31,7 +31,7 @@ pub enum RequestBody {
     },
     GetConfig,
     /// In `Idle`, `Ready` (loses homing) or `Fault`, with an empty queue.
-    SetConfig(WireConfig),
+    SetConfig(LinkConfig),
     /// All-or-nothing: every segment is checked (and credits counted) before any is queued.
     QueueSegments(SegmentBatch),
     Start,
@@ -88,11 +88,11 @@ pub enum RequestBody {
     },
     /// Starts a Z job with the active table (Start column; `Ready`, nothing queued). No table
     /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
-    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::ZSlide { fault }`.
+    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::Turning { fault }`.
     StartZ(ZJobSpec),
     // -- force job --
     /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
-    /// job armed; needs `CAP_FORCE_JOB`): from its `Start` on, force samples run through the
+    /// job armed; needs `CAP_MILLING_JOB`): from its `Start` on, force samples run through the
     /// force chain and the control law, whose feed override drives the DDA; force faults hold
     /// the feed through the machine's fault model. Parameters out of range -> `OutOfRange` with
     /// `NakDetail::Config` naming the field.

@@ -40,10 +40,10 @@ impl BoardCounters {
     }
 }
 
-/// Motion state on the wire.
+/// Motion state on the link.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum WireState {
+pub enum LinkState {
     #[default]
     Idle,
     Moving,
@@ -54,13 +54,13 @@ pub enum WireState {
     Faulted,
 }
 
-impl From<MotionState> for WireState {
+impl From<MotionState> for LinkState {
     fn from(s: MotionState) -> Self {
         match s {
-            MotionState::Idle => WireState::Idle,
-            MotionState::Moving => WireState::Moving,
-            MotionState::Stopping => WireState::Stopping,
-            MotionState::Held => WireState::Held,
+            MotionState::Idle => LinkState::Idle,
+            MotionState::Moving => LinkState::Moving,
+            MotionState::Stopping => LinkState::Stopping,
+            MotionState::Held => LinkState::Held,
         }
     }
 }
@@ -71,7 +71,7 @@ pub struct Status {
     pub tick: u64,
     /// Steps, per axis.
     pub positions: [i64; MAX_AXES],
-    pub state: WireState,
+    pub state: LinkState,
     /// Feed override, `Rate` bits.
     pub override_bits: u32,
     /// Segments queued, not yet finished.

@@ -11,7 +11,7 @@ use crate::protocol::bounded::FixedStr;
 use crate::protocol::errors::{ErrorCode, SegmentReason};
 use crate::protocol::messages::*;
 use crate::segment::Rate;
-use crate::zslide::link_requests::ZNak;
+use crate::turning::link_requests::ZNak;
 
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
@@ -197,10 +197,10 @@ impl BoardLink {
             }
             // -- force job --
             RequestBody::ArmForce(p) => {
-                if self.capabilities & CAP_FORCE_JOB == 0 {
+                if self.capabilities & CAP_MILLING_JOB == 0 {
                     return Err(plain(ErrorCode::Unsupported));
                 }
-                crate::force::link_job::check_job(p).map_err(range_nak)?;
+                crate::milling::link_job::check_job(p).map_err(range_nak)?;
                 t.config().validate().map_err(config_nak)?;
                 t.arm_force(p).map_err(|code| match code {
                     ErrorCode::OutOfState => (code, NakDetail::State(machine)),
@@ -254,7 +254,7 @@ fn sim(
     t: &mut impl LinkTarget,
 ) -> Result<(), (ErrorCode, NakDetail)> {
     let needs = match req {
-        SimRequest::Milling(_) => CAP_SIM_INPUTS | CAP_FORCE_JOB,
+        SimRequest::Milling(_) => CAP_SIM_INPUTS | CAP_MILLING_JOB,
         SimRequest::Probe { .. } => CAP_SIM_INPUTS | CAP_PROBE,
         _ => CAP_SIM_INPUTS,
     };
@@ -262,7 +262,7 @@ fn sim(
         return Err((ErrorCode::Unsupported, NakDetail::None));
     }
     if let SimRequest::Milling(p) = req {
-        crate::force::link_job::check_sim(p).map_err(range_nak)?;
+        crate::milling::link_job::check_sim(p).map_err(range_nak)?;
     }
     t.sim(req).map_err(|code| (code, NakDetail::None))
 }

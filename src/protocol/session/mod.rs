@@ -35,14 +35,14 @@
 //! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
 //! | QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
 //! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
-//! | ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::ZSlide`) |
+//! | ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::Turning`) |
 //! | StartZ (Start column) | a table (`OutOfState`), nothing queued, a spec in range and the pre-start check (`OutOfRange`) |
 //! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
 //! | ReadTeach (not a command) | nothing |
-//! | ArmForce (Start column) | `CAP_FORCE_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
+//! | ArmForce (Start column) | `CAP_MILLING_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
 //! | SetProgramOutputs (not a command) | no e-stop latched or pressed (`OutOfState`) |
 //! | ArmProbe (Start column) | `CAP_PROBE` (`Unsupported`), nothing queued, no other job armed, motion at rest (`OutOfState`) |
-//! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_FORCE_JOB`, for `Probe` also `CAP_PROBE` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
+//! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_MILLING_JOB`, for `Probe` also `CAP_PROBE` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
 //!
 //! A board built without the `sim-inputs` feature cannot decode `Sim`; it answers it
 //! `Unsupported` (seq consumed) as a board with the feature but without `CAP_SIM_INPUTS` does.

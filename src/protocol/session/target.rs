@@ -7,8 +7,8 @@ use crate::protocol::errors::ErrorCode;
 use crate::protocol::messages::*;
 use crate::protocol::program_outputs::ProgramOutputs;
 use crate::segment::{Rate, Segment};
-use crate::zslide::link_job::{ZJobSpec, ZTableHeader};
-use crate::zslide::link_requests::ZNak;
+use crate::turning::link_job::{ZJobSpec, ZTableHeader};
+use crate::turning::link_requests::ZNak;
 
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
@@ -16,19 +16,19 @@ use crate::protocol::sim::messages::SimRequest;
 /// What the board's link drives. Every method that returns `Err` must have changed nothing.
 pub trait LinkTarget {
     /// How the axes move.
-    fn state(&self) -> WireState;
+    fn state(&self) -> LinkState;
     /// Where the machine is in its life cycle: what the command table checks.
     fn machine_state(&self) -> MachineState;
     /// Free slots in the segment queue.
     fn credits(&self) -> u16;
     fn queue_capacity(&self) -> u16;
-    fn config(&self) -> WireConfig;
+    fn config(&self) -> LinkConfig;
     /// Position (steps) after every queued segment, for the soft-limit check.
     fn planned_position(&self) -> [i64; MAX_AXES];
     /// Current status; `BoardLink` fills in `credits` and `next_seq`.
     fn status(&self) -> Status;
     /// Called with a validated config, only while Idle with an empty queue.
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode>;
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode>;
     /// Called with checked segments, never more than `credits()`.
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode>;
     fn start(&mut self) -> Result<(), ErrorCode>;
@@ -75,7 +75,7 @@ pub trait LinkTarget {
         Err(ErrorCode::Unsupported)
     }
     // -- Z-slide job --
-    /// `ZTableBegin` (see `motion::zslide::link_requests::ZRequests`). A refusal changes
+    /// `ZTableBegin` (see `motion::turning::link_requests::ZRequests`). A refusal changes
     /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
     fn z_table_begin(&mut self, _h: &ZTableHeader) -> Result<(), ZNak> {
         Err((ErrorCode::Unsupported, NakDetail::None))
@@ -115,7 +115,7 @@ pub trait LinkTarget {
         Err(ErrorCode::Unsupported)
     }
     /// A simulator board's test hook, only called when the board announces `CAP_SIM_INPUTS`
-    /// (and `CAP_FORCE_JOB` for `Milling`, whose parameters are checked). Only with the
+    /// (and `CAP_MILLING_JOB` for `Milling`, whose parameters are checked). Only with the
     /// `sim-inputs` feature: production targets have no hooks to implement.
     #[cfg(feature = "sim-inputs")]
     fn sim(&mut self, _req: &SimRequest) -> Result<(), ErrorCode> {

@@ -106,9 +106,9 @@ impl CopySim {
 }
 
 impl LinkTarget for CopySim {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         match self.inner.state() {
-            WireState::Idle if self.copy_running => WireState::Moving,
+            LinkState::Idle if self.copy_running => LinkState::Moving,
             s => s,
         }
     }
@@ -121,7 +121,7 @@ impl LinkTarget for CopySim {
     fn queue_capacity(&self) -> u16 {
         self.inner.queue_capacity()
     }
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.inner.config()
     }
     fn planned_position(&self) -> [i64; MAX_AXES] {
@@ -138,7 +138,7 @@ impl LinkTarget for CopySim {
             ..self.inner.status()
         }
     }
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         self.inner.set_config(cfg)?;
         self.stop_copy();
         Ok(())

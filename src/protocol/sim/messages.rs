@@ -1,5 +1,5 @@
-//! The simulator board's test hooks on the wire ([`SimRequest`], in `RequestBody::Sim`) and
-//! the simulated milling plant's parameters. Wire form as the other messages: postcard, variants
+//! The simulator board's test hooks on the link ([`SimRequest`], in `RequestBody::Sim`) and
+//! the simulated milling plant's parameters. Link form as the other messages: postcard, variants
 //! as varint indices in declaration order (new hooks go at the end).
 
 use serde::{Deserialize, Serialize};
@@ -17,7 +17,7 @@ pub enum SimRequest {
     /// The simulated spindle's speed from the next tick on (thousandths of rpm, >= 0) and
     /// whether its encoder gives index pulses.
     Spindle { rpm_milli: u32, index: bool },
-    /// The simulated milling plant the force samples come from (also needs `CAP_FORCE_JOB`);
+    /// The simulated milling plant the force samples come from (also needs `CAP_MILLING_JOB`);
     /// used by the next `ArmForce` job's start. Out of range -> `OutOfRange` naming the field.
     Milling(SimMillingParams),
     /// The counts the simulated arm and carriage encoders slew to, one count per

@@ -3,7 +3,7 @@
 //! * [`messages`]: [`SimRequest`], the test hooks a simulator board (QEMU's netduinoplus2,
 //!   `CAP_SIM_INPUTS`) takes in `RequestBody::Sim`, and the simulated milling plant's
 //!   parameters ([`SimMillingParams`], [`SimForceFault`]). The plant types are always compiled:
-//!   the force job's simulated sample source (`crate::force::link_job`) is built from them.
+//!   the force job's simulated sample source (`crate::milling::link_job`) is built from them.
 //! * [`SimTarget`] and [`CopySim`]: hardware-free `LinkTarget`s for tests, fuzzing and
 //!   `motionctl`'s loopback boards.
 //!

@@ -22,7 +22,7 @@ use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::protocol::errors::{ErrorCode, FaultCode};
 use crate::protocol::messages::{
-    BoardCounters, ForceJobParams, HomingConfig, Status, WireConfig, WireJobParams, WireState,
+    BoardCounters, ForceJobParams, HomingConfig, LinkConfig, LinkState, Status, WireJobParams,
 };
 use crate::protocol::program_outputs::ProgramOutputs;
 use crate::protocol::session::LinkTarget;
@@ -36,7 +36,7 @@ pub const SIM_EVENT_BLOCKS: usize = crate::polar::feed::EVENT_QUEUE_BLOCKS;
 /// Fake machine: queued segments complete when the test calls [`SimTarget::complete_one`].
 #[derive(Clone, Debug)]
 pub struct SimTarget {
-    pub config: WireConfig,
+    pub config: LinkConfig,
     pub homing: HomingConfig,
     pub machine: MachineState,
     pub homed: bool,
@@ -112,7 +112,7 @@ impl PartialEq for SimTarget {
 impl SimTarget {
     /// Homed and `Ready` (the state after SetConfig and Home); `capacity` is clamped to
     /// [`SIM_QUEUE_MAX`].
-    pub fn new(config: WireConfig, capacity: u16) -> Self {
+    pub fn new(config: LinkConfig, capacity: u16) -> Self {
         SimTarget {
             config,
             homing: HomingConfig::NONE,
@@ -318,15 +318,15 @@ impl SimTarget {
 }
 
 impl LinkTarget for SimTarget {
-    fn state(&self) -> WireState {
+    fn state(&self) -> LinkState {
         if self.faults != 0 {
-            WireState::Faulted
+            LinkState::Faulted
         } else if self.held {
-            WireState::Held
+            LinkState::Held
         } else if self.running && (!self.queue.is_empty() || self.event_job) {
-            WireState::Moving
+            LinkState::Moving
         } else {
-            WireState::Idle
+            LinkState::Idle
         }
     }
 
@@ -342,7 +342,7 @@ impl LinkTarget for SimTarget {
         self.capacity
     }
 
-    fn config(&self) -> WireConfig {
+    fn config(&self) -> LinkConfig {
         self.config
     }
 
@@ -379,7 +379,7 @@ impl LinkTarget for SimTarget {
         }
     }
 
-    fn set_config(&mut self, cfg: &WireConfig) -> Result<(), ErrorCode> {
+    fn set_config(&mut self, cfg: &LinkConfig) -> Result<(), ErrorCode> {
         self.config = *cfg;
         self.take(CommandKind::SetConfig);
         Ok(())

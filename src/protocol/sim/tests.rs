@@ -1,4 +1,4 @@
-//! The `Sim` variant on the wire, with and without the `sim-inputs` feature: it is the last
+//! The `Sim` variant on the link, with and without the `sim-inputs` feature: it is the last
 //! request variant (compiled out, it shifts no other index), and a board without the hooks
 //! answers it as a board without `CAP_SIM_INPUTS` does.
 

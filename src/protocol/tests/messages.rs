@@ -3,8 +3,8 @@
 
 use super::*;
 
-fn extreme_config() -> WireConfig {
-    WireConfig {
+fn extreme_config() -> LinkConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: u32::MAX,
             timing: StepTiming {
@@ -32,7 +32,7 @@ fn extreme_status() -> Status {
     Status {
         tick: u64::MAX,
         positions: [i64::MIN; MAX_AXES],
-        state: WireState::Faulted,
+        state: LinkState::Faulted,
         override_bits: u32::MAX,
         queue_depth: u16::MAX,
         credits: u16::MAX,
@@ -140,7 +140,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             segments: u32::MAX,
         }),
         // -- Z-slide job --
-        RequestBody::ZTableBegin(crate::zslide::link_job::ZTableHeader {
+        RequestBody::ZTableBegin(crate::turning::link_job::ZTableHeader {
             form: u8::MAX,
             rows: u16::MAX,
             x0_in_q24: i32::MIN,
@@ -151,8 +151,8 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             bytes: BlockBytes::from_slice(&[0xFF; MAX_Z_CHUNK]).unwrap(),
         },
         RequestBody::ZTableEnd { crc: u32::MAX },
-        RequestBody::StartZ(crate::zslide::link_job::ZJobSpec {
-            output: crate::zslide::link_job::ZOutputSpec::Steps {
+        RequestBody::StartZ(crate::turning::link_job::ZJobSpec {
+            output: crate::turning::link_job::ZOutputSpec::Steps {
                 axis: u8::MAX,
                 steps_per_in: u32::MAX,
             },
@@ -172,7 +172,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             min_speed_turn_q32_per_tick: u32::MAX,
         }),
         // -- force job --
-        RequestBody::ArmForce(crate::protocol::force_tests::extreme_force_params()),
+        RequestBody::ArmForce(crate::protocol::tests_milling::extreme_force_params()),
         // -- copy mode --
         RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
         RequestBody::ReadTeach { block: u16::MAX },
@@ -187,7 +187,7 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
         [
             SimRequest::Inject { wire_stall: true },
             SimRequest::Spindle { rpm_milli: u32::MAX, index: true },
-            SimRequest::Milling(crate::protocol::force_tests::extreme_sim_params()),
+            SimRequest::Milling(crate::protocol::tests_milling::extreme_sim_params()),
             SimRequest::Encoders { arm_counts: i32::MIN, carriage_counts: i32::MIN },
         ]
         .map(RequestBody::Sim),
@@ -259,19 +259,19 @@ pub(crate) fn extreme_responses() -> Vec<Response> {
 
 #[test]
 fn largest_messages_fit_the_frame_buffers() {
-    let mut out = [0u8; MAX_FRAME_WIRE];
+    let mut out = [0u8; MAX_FRAME_LINK];
     let mut largest = (0, 0);
     for r in extreme_requests() {
         let n = postcard::to_slice(&r, &mut [0u8; 1024]).unwrap().len();
         largest.0 = largest.0.max(n);
         let f = encode_frame(&r, &mut out).expect("request fits");
-        assert!(f.len() <= MAX_FRAME_WIRE);
+        assert!(f.len() <= MAX_FRAME_LINK);
     }
     for r in extreme_responses() {
         let n = postcard::to_slice(&r, &mut [0u8; 1024]).unwrap().len();
         largest.1 = largest.1.max(n);
         let f = encode_frame(&r, &mut out).expect("response fits");
-        assert!(f.len() <= MAX_FRAME_WIRE);
+        assert!(f.len() <= MAX_FRAME_LINK);
     }
     println!(
         "largest request {} / response {} bytes, MAX_MESSAGE {MAX_MESSAGE}",

@@ -10,8 +10,8 @@ use super::*;
 use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use crate::segment::{Rate, Segment};
 
-pub(crate) fn config() -> WireConfig {
-    WireConfig {
+pub(crate) fn config() -> LinkConfig {
+    LinkConfig {
         machine: MachineConfig {
             tick_hz: 100_000,
             timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 12_000 },

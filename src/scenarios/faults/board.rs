@@ -7,7 +7,7 @@ use super::{
 };
 use crate::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use crate::machine::{BoardConfig, FollowingConfig, HomeAxis};
-use crate::protocol::{AxisScale, WireConfig};
+use crate::protocol::{AxisScale, LinkConfig};
 
 fn home_axis(toward_max: bool, max_travel_steps: u32, home_pos_steps: i64) -> HomeAxis {
     HomeAxis {
@@ -35,7 +35,7 @@ pub fn config(case: Case) -> BoardConfig {
     };
     let scale = AxisScale { steps_per_unit_milli: 80_000, soft_min: -soft, soft_max: soft };
     let mut cfg = BoardConfig {
-        wire: WireConfig {
+        wire: LinkConfig {
             machine: MachineConfig {
                 tick_hz: TICK_HZ,
                 timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },

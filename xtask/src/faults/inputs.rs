@@ -99,7 +99,7 @@ fn cases(root: &Path, bin: &Path, dir: &Path) -> Result<Vec<Case>> {
         v
     };
     let mut v = vec![
-        Case { closed_pipe: true, ..case("broken pipe", &["fourier", "table"], Expect::Quiet) },
+        Case { closed_pipe: true, ..case("broken pipe", &["turning", "table"], Expect::Quiet) },
         Case {
             closed_pipe: true,
             ..case("broken pipe", &["polar", "dump", &stream_s], Expect::Quiet)
@@ -156,13 +156,13 @@ fn cases(root: &Path, bin: &Path, dir: &Path) -> Result<Vec<Case>> {
         write(dir, "bad-last-row.txt", b"0 0 0 0 0\n0.1 0 0 0 0\n0.2 0 0 0 0\n0.3 0 0.001x 0 0\n")?;
     v.push(case(
         "file parsers dropping rows",
-        &["fourier", "run", "--sim", "--table", &table],
+        &["turning", "run", "--sim", "--table", &table],
         refused(&format!("{table}:4:7")),
     ));
     let short = write(dir, "short-last-row.txt", b"0 0 0 0 0\n0.1 0 0 0 0\n0.2 0 0 0\n")?;
     v.push(case(
         "file parsers dropping rows",
-        &["fourier", "run", "--sim", "--table", &short],
+        &["turning", "run", "--sim", "--table", &short],
         refused(&format!("{short}:3")),
     ));
     // A stream with a block dropped, one repeated, and cut at seeded points.
@@ -226,9 +226,9 @@ fn cases(root: &Path, bin: &Path, dir: &Path) -> Result<Vec<Case>> {
         closed_pipe: false,
     });
     for (args, names) in [
-        (&["fourier", "table", "--x-step", "1e-12"][..], "--x-step"),
-        (&["fourier", "table", "--x-max", "1e300"][..], "--x-max"),
-        (&["fourier", "table", "--harmonics", "4294967295"][..], "--harmonics"),
+        (&["turning", "table", "--x-step", "1e-12"][..], "--x-step"),
+        (&["turning", "table", "--x-max", "1e300"][..], "--x-max"),
+        (&["turning", "table", "--harmonics", "4294967295"][..], "--harmonics"),
         (&["wire", "plan", "--fr", "1e308"][..], "(FR)"),
         (&["wire", "plan", "--fr", "1e9"][..], "(FR)"),
         (

@@ -52,11 +52,11 @@ const SITUATIONS: [(&str, &[&str]); 5] = [
     (
         "capability update",
         &[
-            "force::control::",
-            "force::chain::",
+            "milling::control::",
+            "milling::chain::",
             "ForceJob::sample_due",
-            "zslide::command::",
-            "zslide::table::",
+            "turning::command::",
+            "turning::table::",
             "polar::playback::Playback::tick",
             "polar::copy::",
             "wire::controller::",
@@ -499,7 +499,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
         Job {
             name: "turning (Z slide)",
             args: with_fw(
-                vec![s("fourier"), s("run")],
+                vec![s("turning"), s("run")],
                 &[
                     "--rpm",
                     "360",

@@ -5,17 +5,17 @@
 
 use super::{link_err, Bridge, Pending};
 use crate::cli_capabilities::WireBoardJob;
-use crate::fourier::run::{WireTable, ZRunOptions};
 use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
 use crate::grbl::settings;
 use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
+use crate::turning::run::{LinkTableBytes, ZRunOptions};
 use anyhow::Result;
 use motion::protocol::{
-    HostConfig, RequestBody, SimForceFault, WireConfig, CAP_EVENTS, CAP_FORCE_JOB, CAP_WIRE_JOB,
-    CAP_ZSLIDE_JOB,
+    HostConfig, LinkConfig, RequestBody, SimForceFault, CAP_EVENTS, CAP_MILLING_JOB,
+    CAP_TURNING_JOB, CAP_WIRE_JOB,
 };
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -29,7 +29,7 @@ pub struct JobSetup {
     /// The board may home after a job (a simulated or QEMU board, or `--home`).
     pub home: bool,
     /// The bridge's own config, sent again after a job.
-    pub wire: WireConfig,
+    pub link_cfg: LinkConfig,
     /// The board's capabilities (its Hello): a job it cannot run is refused before it starts.
     pub caps: u32,
 }
@@ -41,7 +41,7 @@ const SETTLE: Duration = Duration::from_secs(5);
 enum Loaded {
     Mill(Box<crate::milling::job::MillingJob>),
     Polar { bytes: Vec<u8>, speed: f64, scale: motion::polar::playback::SizeScale },
-    Turn(WireTable, ZRunOptions),
+    Turn(LinkTableBytes, ZRunOptions),
     Wire(Box<WireBoardJob>),
 }
 
@@ -51,7 +51,7 @@ enum Done {
     Mill(crate::milling::run::MillingRunReport, f64),
     Polar(crate::polar::run::PolarReport),
     /// The report, and the options it ran with.
-    Turn(crate::fourier::run::ZRunReport, ZRunOptions),
+    Turn(crate::turning::run::ZRunReport, ZRunOptions),
     /// The report, and the job it ran.
     Wire(crate::wire::run::WireRunReport, Box<WireBoardJob>),
 }
@@ -59,9 +59,9 @@ enum Done {
 /// The capability a command's job needs on the board, and what it is called.
 fn needs(cmd: &JobCmd) -> (u32, &'static str) {
     match cmd {
-        JobCmd::Mill(_) => (CAP_FORCE_JOB, "force jobs (CAP_FORCE_JOB)"),
+        JobCmd::Mill(_) => (CAP_MILLING_JOB, "milling jobs (CAP_MILLING_JOB)"),
         JobCmd::Polar { .. } => (CAP_EVENTS, "event jobs (CAP_EVENTS)"),
-        JobCmd::Turn { .. } => (CAP_ZSLIDE_JOB, "Z-slide jobs (CAP_ZSLIDE_JOB)"),
+        JobCmd::Turn { .. } => (CAP_TURNING_JOB, "turning jobs (CAP_TURNING_JOB)"),
         JobCmd::Wire { .. } => (CAP_WIRE_JOB, "wire jobs (CAP_WIRE_JOB)"),
     }
 }
@@ -110,7 +110,7 @@ impl Bridge<'_> {
             ),
             JobCmd::Turn { name, flags } => (
                 name.clone(),
-                crate::fourier::cli::turn_job(flags).map(|(t, o)| Loaded::Turn(t, o)),
+                crate::turning::cli::turn_job(flags).map(|(t, o)| Loaded::Turn(t, o)),
             ),
             JobCmd::Wire { file, segments } => (
                 file_name(file),
@@ -168,7 +168,7 @@ impl Bridge<'_> {
                 hook.positions = Box::new(jobs::turning_mm);
                 let o = ZRunOptions { host: setup.host, home: setup.home, ..o.clone() };
                 let say = |m: &str| eprintln!("motionctl: {m}");
-                crate::fourier::run::run_with(t, table, &o, &say, &mut hook)
+                crate::turning::run::run_with(t, table, &o, &say, &mut hook)
                     .map(|r| Done::Turn(r, o))
             }
             Loaded::Wire(job) => {
@@ -265,7 +265,7 @@ impl Bridge<'_> {
             let _ = self.s.request(RequestBody::Abort).map_err(link_err)?;
             let _ = self.s.request(RequestBody::ClearFault).map_err(link_err)?;
         }
-        if let Err(e) = self.configure(setup.wire, setup.home, "machine file")? {
+        if let Err(e) = self.configure(setup.link_cfg, setup.home, "machine file")? {
             eprintln!("motionctl: {e}; '$H' homes");
             self.alarm = Some(alarm::HOMING_REQUIRED);
         }

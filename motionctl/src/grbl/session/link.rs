@@ -24,17 +24,17 @@ impl Bridge<'_> {
         }
     }
 
-    /// Sends `wire` as the board's config (`runner::ready_board`, homing if `home` allows), the
+    /// Sends `link_cfg` as the board's config (`runner::ready_board`, homing if `home` allows), the
     /// bridge's status period, and reads the board's state back. The inner error: why the board
     /// is not ready (e.g. it must be homed and may not be).
     pub(super) fn configure(
         &mut self,
-        wire: motion::protocol::WireConfig,
+        link_cfg: motion::protocol::LinkConfig,
         home: bool,
         what: &str,
     ) -> Result<Result<(), String>> {
         let say = |m: &str| eprintln!("motionctl: {m}");
-        let r = runner::ready_board(&mut self.s, wire, runner::Home::allowed(home), what, &say)
+        let r = runner::ready_board(&mut self.s, link_cfg, runner::Home::allowed(home), what, &say)
             .map(drop);
         runner::ask(
             &mut self.s,

@@ -8,7 +8,7 @@ use crate::grbl::report::{Report, State};
 use crate::grbl::settings;
 use anyhow::Result;
 use motion::machine::MachineState;
-use motion::protocol::{ProgramOutputs, RequestBody, WireState, MAX_OVERRIDE_BITS};
+use motion::protocol::{LinkState, ProgramOutputs, RequestBody, MAX_OVERRIDE_BITS};
 use motion_gcode::canon::Units;
 
 impl Bridge<'_> {
@@ -105,7 +105,7 @@ impl Bridge<'_> {
         } else if self.hold || self.paused || self.spindle_holds() {
             let stopping = self.latest.machine == MachineState::Running
                 || (self.latest.machine == MachineState::Holding
-                    && self.latest.state != WireState::Held);
+                    && self.latest.state != LinkState::Held);
             State::Hold { stopping }
         } else if self.moving() {
             if self.jog {

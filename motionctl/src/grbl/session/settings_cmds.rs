@@ -90,16 +90,16 @@ impl Bridge<'_> {
         machine: Machine,
         board: bool,
     ) -> Result<Result<(), String>> {
-        let (cfg, wire) = match crate::grbl::board_config(&machine) {
+        let (cfg, link_cfg) = match crate::grbl::board_config(&machine) {
             Ok(c) => c,
             Err(e) => return Ok(Err(format!("{e:#}"))),
         };
         if board {
             self.stop_motion()?;
-            let r = self.configure(wire, false, "machine with the grbl settings")?;
+            let r = self.configure(link_cfg, false, "machine with the grbl settings")?;
             if let Err(e) = r {
                 let config_now = runner::ask(&mut self.s, RequestBody::GetConfig, "GetConfig")?;
-                if config_now != Reply::Config(wire) {
+                if config_now != Reply::Config(link_cfg) {
                     return Ok(Err(e));
                 }
                 // The config is in; the board lost its homing.

@@ -8,7 +8,7 @@
 use super::Bridge;
 use crate::grbl::report::State;
 use anyhow::Result;
-use motion::protocol::{ProgramOutputs, SpindleDir, WireState};
+use motion::protocol::{LinkState, ProgramOutputs, SpindleDir};
 use std::time::{Duration, Instant};
 
 /// Spin-up time after the stopped spindle is switched on again before motion resumes (the
@@ -59,7 +59,7 @@ impl Bridge<'_> {
     /// (then the resume waits for the spin-up).
     pub(super) fn spindle_stop_step(&mut self) -> Result<()> {
         let now = ProgramOutputs::from_bits(self.latest.outputs);
-        let complete = self.hold && (self.latest.state == WireState::Held || !self.moving());
+        let complete = self.hold && (self.latest.state == LinkState::Held || !self.moving());
         match self.spindle_stop.action(complete, now.spindle) {
             Action::None => {}
             Action::Stop(dir) => {

@@ -7,7 +7,7 @@ use crate::grbl::protocol::WELCOME;
 use crate::grbl::settings;
 use anyhow::{bail, Result};
 use motion::machine::MachineState;
-use motion::protocol::{ProgramOutputs, RequestBody, WireState};
+use motion::protocol::{LinkState, ProgramOutputs, RequestBody};
 use std::time::{Duration, Instant};
 
 /// Longest wait for a hold to stop the machine before a reset drops its queue.
@@ -41,7 +41,7 @@ impl Bridge<'_> {
                 self.refresh()?;
                 let running =
                     matches!(self.latest.machine, MachineState::Running | MachineState::Holding);
-                if !running || self.latest.state == WireState::Held || start.elapsed() > STOP_WAIT {
+                if !running || self.latest.state == LinkState::Held || start.elapsed() > STOP_WAIT {
                     break;
                 }
                 std::thread::sleep(Duration::from_millis(5));

@@ -23,13 +23,13 @@ const LINE_WAIT: Duration = Duration::from_secs(20);
 
 /// The sender's side of the endpoint.
 #[derive(Clone, Default)]
-struct Wire {
+struct SenderPort {
     to_bridge: Rc<RefCell<Vec<u8>>>,
     from_bridge: Rc<RefCell<Vec<u8>>>,
     opened: Rc<Cell<bool>>,
 }
 
-impl Endpoint for Wire {
+impl Endpoint for SenderPort {
     fn poll(&mut self, timeout: Duration) -> std::io::Result<Input> {
         let data = std::mem::take(&mut *self.to_bridge.borrow_mut());
         let opened = !self.opened.replace(true);
@@ -51,19 +51,19 @@ impl Endpoint for Wire {
 /// A raw session: lines to the bridge, its answers read back one line at a time.
 struct Sender<'b, 'a> {
     bridge: &'b mut Bridge<'a>,
-    wire: Wire,
+    port: SenderPort,
 }
 
 impl Sender<'_, '_> {
     fn send(&mut self, text: &str) {
-        self.wire.to_bridge.borrow_mut().extend_from_slice(text.as_bytes());
+        self.port.to_bridge.borrow_mut().extend_from_slice(text.as_bytes());
     }
 
     /// The next line from the bridge, running it until one comes.
     fn line(&mut self) -> String {
         let start = Instant::now();
         loop {
-            let mut out = self.wire.from_bridge.borrow_mut();
+            let mut out = self.port.from_bridge.borrow_mut();
             if let Some(i) = out.windows(2).position(|w| w == b"\r\n") {
                 let l = String::from_utf8_lossy(&out[..i]).into_owned();
                 out.drain(..i + 2);
@@ -123,10 +123,10 @@ fn session(surface: Option<SimProbe>, script: impl FnOnce(&mut Sender)) {
         settings: Settings::from_machine(machine),
         startup: Default::default(),
     };
-    let wire = Wire::default();
-    let mut ep = wire.clone();
+    let port = SenderPort::default();
+    let mut ep = port.clone();
     let mut bridge = Bridge::new(s, &mut ep, machine, cfg, latest, None, persist);
-    let mut sender = Sender { bridge: &mut bridge, wire };
+    let mut sender = Sender { bridge: &mut bridge, port };
     sender.expect("");
     sender.expect("Grbl 1.1h ['$' for help]");
     script(&mut sender);
