@@ -380,7 +380,7 @@ fn row_json(r: &Row) -> serde_json::Value {
 
 #[cfg(test)]
 mod tests {
-    use super::first_error;
+    use super::{first_error, with_tick};
 
     #[test]
     fn the_tick_line_is_replaced_and_counted() {
