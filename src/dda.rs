@@ -568,9 +568,6 @@ impl Dda {
         if reversing & self.gated & self.axes_with_pending() != 0 {
             return false;
         }
-        let Some(p) = self.ready.pop_front() else {
-            return false;
-        };
         let now = self.now;
         for i in 0..MAX_AXES {
             let bit = 1u8 << i;
@@ -596,6 +593,10 @@ impl Dda {
                 open_at: dir_at + self.timing.setup_ticks as u64,
             };
         }
+        // Read in place and dropped after: popping it first would copy the whole slot.
+        let Some(p) = self.ready.front() else {
+            return false;
+        };
         self.t = p.t;
         self.minus_t = p.t.wrapping_neg();
         self.h = p.h;
@@ -618,6 +619,7 @@ impl Dda {
         let carried = ((self.rate as u64 * p.carry as u64) >> RATE_FRAC_BITS).min(MAX_RATE as u64);
         self.rate = carried as u32;
         self.rate_sq = (carried * carried) >> RATE_FRAC_BITS;
+        self.ready.pop_front();
         true
     }
 
