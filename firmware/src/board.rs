@@ -28,6 +28,7 @@ pub type CycleCounter = <Selected as Contract>::CycleCounter;
 
 pub const NAME: &str = <Selected as Contract>::NAME;
 pub const HOST_BAUD: u32 = <Selected as Contract>::HOST_BAUD;
+pub const LINK_TIMEOUT_MS: u64 = <Selected as Contract>::LINK_TIMEOUT_MS;
 /// QEMU's board, whose sensors are simulated (force jobs sample a plant; its timer
 /// does not pace the scenario firmware: see `bin/scenarios.rs`).
 pub const SIMULATED: bool =

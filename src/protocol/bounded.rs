@@ -146,7 +146,7 @@ impl<'de> Deserialize<'de> for SegmentBatch {
 /// Most bytes of one step-event block on the link ([`crate::polar::stream::MAX_BLOCK`]).
 pub const MAX_EVENT_BLOCK: usize = crate::polar::stream::MAX_BLOCK;
 
-/// The bytes of one step-event stream block (v1, `src/polar/stream.rs`): postcard bytes
+/// The bytes of one step-event stream block (v1, `src/polar/stream/block.rs`): postcard bytes
 /// (length-prefixed), refused above [`MAX_EVENT_BLOCK`].
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct BlockBytes(heapless::Vec<u8, MAX_EVENT_BLOCK>);

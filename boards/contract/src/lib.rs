@@ -48,6 +48,9 @@ pub trait Board: Sized {
     const NAME: &'static str;
     /// Host link baud rate.
     const HOST_BAUD: u32;
+    /// A job (Running or Holding) with no valid frame from the host for this long, in the
+    /// board's own milliseconds, is a lost link: the machine holds and latches `LinkLost`.
+    const LINK_TIMEOUT_MS: u64;
     /// The chip's peripherals (the PAC's `Peripherals`) and the core's.
     type Device;
     type Core;

@@ -84,6 +84,7 @@ impl board_contract::Board for Board {
     const NAME: &'static str = "f405-motion";
     /// 84 MHz / 460800 -> BRR 182 (USARTDIV 11.375), 461538 baud, +0.16 %.
     const HOST_BAUD: u32 = 460_800;
+    const LINK_TIMEOUT_MS: u64 = 1_000;
     type Device = pac::Peripherals;
     type Core = cortex_m::Peripherals;
     type TickTimer = TickTimer;

@@ -49,6 +49,12 @@ impl board_contract::Board for Board {
     const NAME: &'static str = "netduinoplus2";
     /// QEMU moves bytes at its own pace whatever BRR says.
     const HOST_BAUD: u32 = 115_200;
+    /// Ten times the real board's: under `-icount sleep=off` the board's clock is its
+    /// instruction count, and while the guest idles (a job held, a queue waiting for the host)
+    /// it runs about 3.5x ahead of the wall clock. With 1 s, a host that a loaded machine left
+    /// without the CPU for 0.3 s lost its QEMU job to `LinkLost` (seen in corpus and bench runs
+    /// beside compilers); 10 s asks for about 3 s of host silence.
+    const LINK_TIMEOUT_MS: u64 = 10_000;
     type Device = pac::Peripherals;
     type Core = cortex_m::Peripherals;
     type TickTimer = TickTimer;
