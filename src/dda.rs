@@ -593,10 +593,8 @@ impl Dda {
                 open_at: dir_at + self.timing.setup_ticks as u64,
             };
         }
-        // Read in place and dropped after: popping it first would copy the whole slot.
-        let Some(p) = self.ready.front() else {
-            return false;
-        };
+        // `next` is read in place and dropped after: popping it first would copy the whole slot.
+        let p = next;
         self.t = p.t;
         self.minus_t = p.t.wrapping_neg();
         self.h = p.h;

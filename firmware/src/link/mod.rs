@@ -89,10 +89,6 @@ pub const TX_BUFFER: usize = 1024;
 /// How often the status task runs, as a fraction of a second: 1 ms, so a status period of P ms
 /// is met to the millisecond.
 const POLLS_PER_SECOND: u32 = 1_000;
-/// A job (Running or Holding) with no valid frame from the host for this long is a lost link:
-/// the machine holds and latches `LinkLost` (the board's figure: 1 s on the real board).
-/// motionctl sends at least every 100 ms during a job.
-pub const LINK_TIMEOUT_MS: u64 = crate::board::LINK_TIMEOUT_MS;
 /// Watchdog timeout (nominal LSI) and how often the status task offers to feed it.
 pub const WATCHDOG_TIMEOUT_MS: u32 = 100;
 pub const WATCHDOG_POLL_MS: u64 = 10;

@@ -74,7 +74,10 @@ impl Link {
             (m.machine.state(), f.mask(), f.first(), m.dda.now())
         });
         let job = matches!(state, MachineState::Running | MachineState::Holding);
-        LINK_OK.store(!job || now_ms.saturating_sub(self.last_frame_ms) < LINK_TIMEOUT_MS, Relaxed);
+        // A job with no valid frame for the board's link timeout is a lost link (motionctl
+        // sends at least every 100 ms during a job).
+        let fresh = now_ms.saturating_sub(self.last_frame_ms) < board::LINK_TIMEOUT_MS;
+        LINK_OK.store(!job || fresh, Relaxed);
         // Without a session nobody hears a Fault frame; the host reads the latch from its first
         // Status. Announcing it later would report a fault the host may since have cleared.
         if self.board.next_seq().is_none() {
