@@ -11,7 +11,8 @@ use crate::runner::{self, RunOptions};
 use crate::transport::{self, LinkTarget, Transport};
 use anyhow::{bail, Result};
 use clap::Args;
-use motion::protocol::HostConfig;
+use motion::capability::{self, Capability};
+use motion::protocol::{HelloInfo, HostConfig};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -285,6 +286,21 @@ pub fn stream_outputs(
     Ok(())
 }
 
+/// Refuses a board that runs none of `cap`'s jobs (its Hello sets none of the capability's
+/// registry bits), saying which capabilities it does run.
+pub fn require_capability(info: &HelloInfo, cap: &Capability) -> Result<()> {
+    if cap.on_board(info.capabilities) {
+        return Ok(());
+    }
+    let runs: Vec<&str> = capability::on_board(info.capabilities).map(|c| c.name).collect();
+    let runs = if runs.is_empty() { "none".to_string() } else { runs.join(", ") };
+    bail!(
+        "the board ({:?}) runs no {} jobs (its capabilities: {runs})",
+        info.firmware.as_str(),
+        cap.name
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::SimProbeSpec;
@@ -299,5 +315,30 @@ mod tests {
             let e = bad.parse::<SimProbeSpec>().unwrap_err();
             assert!(e.contains("expected AXIS=MM"), "{bad}: {e}");
         }
+    }
+
+    #[test]
+    fn a_board_without_a_capability_is_refused_with_what_it_runs() {
+        use motion::protocol::{FixedStr, HelloInfo, CAP_DDA, CAP_EVENTS, CAP_WIRE_JOB};
+        let hello = |capabilities| HelloInfo {
+            version: 1,
+            firmware: FixedStr::truncated("test-board"),
+            capabilities,
+            axes: 4,
+            queue_capacity: 64,
+            tick_hz: 100_000,
+            max_window: 8,
+            max_segments_per_frame: 8,
+            last_panic: None,
+        };
+        let info = hello(CAP_DDA | CAP_EVENTS | CAP_WIRE_JOB);
+        assert!(super::require_capability(&info, &motion::wire::CAPABILITY).is_ok());
+        let e = super::require_capability(&info, &motion::turning::CAPABILITY).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the board (\"test-board\") runs no turning jobs (its capabilities: polar, wire)"
+        );
+        let e = super::require_capability(&hello(CAP_DDA), &motion::milling::CAPABILITY);
+        assert!(e.unwrap_err().to_string().ends_with("(its capabilities: none)"));
     }
 }

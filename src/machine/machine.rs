@@ -32,7 +32,7 @@ mod source;
 mod watch;
 pub use command::{MachineCommand, Refusal};
 pub use fast::SUPERVISE_TICKS;
-pub use source::{DdaSource, StepSource};
+pub use source::{DdaSource, SourceJob, StepSource};
 
 /// Slack, in virtual ticks, between the point where a starved job is held and the last point
 /// from which the hold still stops within the running segment (the hold acts from the next tick).
@@ -158,16 +158,14 @@ pub struct Machine {
     ticks: u64,
     /// Ticks until the job bookkeeping runs again (every [`JOB_WATCH_TICKS`]).
     job_watch_in: u8,
-    /// Events were admitted for an event job that has not ended.
-    events_queued: bool,
-    /// An event job runs (or holds): the tick's source is the playback, and the job ends when
-    /// the source is idle.
-    event_job: bool,
-    /// A hold is in force (feed hold, or a hold reaction): event sources stop their clock.
-    paused: bool,
-    /// A Z-slide job runs (or holds): like an event job, the tick's source is the caller's and
+    /// Items (step events, a source's own segments) were admitted for a source job that has
+    /// not ended.
+    source_queued: bool,
+    /// A source job runs (or holds): the tick's source is its owner's (the tag says whose), and
     /// the job ends when the source is idle.
-    z_job: bool,
+    source: Option<SourceJob>,
+    /// A hold is in force (feed hold, or a hold reaction): sources with a clock stop it.
+    paused: bool,
     /// The host was late: the machine holds on the path until the next segment is admitted,
     /// then resumes by itself (a sender's pause is not a fault).
     starved: bool,
@@ -224,10 +222,9 @@ impl Machine {
             last_dir: 0,
             ticks: 0,
             job_watch_in: 1,
-            events_queued: false,
-            event_job: false,
+            source_queued: false,
+            source: None,
             paused: false,
-            z_job: false,
             starved: false,
             resume_pending: false,
             starve_holds: 0,
@@ -359,10 +356,10 @@ impl Machine {
         self.switch_filter.probe_level()
     }
 
-    /// Marks the next `Start` as a probe move of `kind`: `Ready`, nothing admitted, no event,
-    /// Z or copy job. The queued segments then run as the probe move (see [`super::probe`]).
+    /// Marks the next `Start` as a probe move of `kind`: `Ready`, nothing admitted, no source
+    /// job. The queued segments then run as the probe move (see [`super::probe`]).
     pub fn arm_probe(&mut self, kind: ProbeKind, dda: &Dda) -> Result<(), Refusal> {
-        let busy = self.in_flight(dda) != 0 || self.events_queued || self.event_job || self.z_job;
+        let busy = self.in_flight(dda) != 0 || self.source_queued || self.source.is_some();
         if self.state != MachineState::Ready || busy || !dda.is_idle() {
             return Err(Refusal::OutOfState(self.state));
         }
@@ -396,14 +393,21 @@ impl Machine {
         matches!(self.state, MachineState::Running | MachineState::Holding) && !self.frozen
     }
 
-    /// An event job was started and has not ended: tick with the playback source.
-    pub fn event_job(&self) -> bool {
-        self.event_job
+    /// The source job that was started and has not ended, if any: tick with its owner's source.
+    #[inline(always)]
+    pub fn source_job(&self) -> Option<SourceJob> {
+        self.source
     }
 
-    /// Events were admitted (queued or playing) and the job has not ended.
-    pub fn events_queued(&self) -> bool {
-        self.events_queued
+    /// Source job `job` was started and has not ended.
+    #[inline(always)]
+    pub fn runs(&self, job: SourceJob) -> bool {
+        self.source == Some(job)
+    }
+
+    /// Items were admitted for a source job (queued or playing) and the job has not ended.
+    pub fn source_queued(&self) -> bool {
+        self.source_queued
     }
 
     /// Ticks seen.
@@ -436,8 +440,8 @@ impl Machine {
         self.tick_with(dda, inp, &mut DdaSource)
     }
 
-    /// [`Machine::tick`] with the steps from `source` (an event job's playback): the same
-    /// inputs, freeze, counters, soft limits and job bookkeeping; an event job ends when the
+    /// [`Machine::tick`] with the steps from `source` (a source job's): the same
+    /// inputs, freeze, counters, soft limits and job bookkeeping; a source job ends when the
     /// source is idle and raises `QueueUnderrun` when it starves.
     #[inline]
     pub fn tick_with(
@@ -470,8 +474,7 @@ impl Machine {
         }
         match self.state {
             MachineState::Homing => self.watch_homing(dda, raw),
-            MachineState::Running if self.event_job => self.watch_events(dda, source),
-            MachineState::Running if self.z_job => self.watch_z_job(dda, source),
+            MachineState::Running if self.source.is_some() => self.watch_source(dda, source),
             MachineState::Running => {
                 // The bookkeeping looks ahead by more than these ticks (the starve margin), so
                 // a divided rate loses nothing but a few ticks of latency at the job's end. A
@@ -517,11 +520,6 @@ impl Machine {
     /// following error, steps.
     pub fn following_worst_steps(&self) -> [u32; MAX_AXES] {
         self.following.worst_steps()
-    }
-
-    /// A Z-slide job runs or holds ([`MachineCommand::StartZ`]): the tick's source is the Z job.
-    pub fn z_job(&self) -> bool {
-        self.z_job
     }
 
     /// A fault the board found outside the tick (a peripheral that refused its setup, a
@@ -611,13 +609,12 @@ impl Machine {
             self.done_base = dda.segments_done();
             self.underruns_base = dda.underruns();
             self.last_exit_nonzero = false;
-            // The caller dropped the events it held (Abort, ClearFault, SetConfig, Home).
-            self.events_queued = false;
-            self.event_job = false;
+            // The caller dropped the items it held (Abort, ClearFault, SetConfig, Home).
+            self.source_queued = false;
+            self.source = None;
             self.paused = false;
             self.starved = false;
             self.resume_pending = false;
-            self.z_job = false;
         }
         let mv = match (self.state, &mut self.jog) {
             (MachineState::Homing, _) => self.homing.take_move(),

@@ -35,7 +35,7 @@ pub use debounce::SwitchFilter;
 pub use faults::{reaction, FaultLatch, Reaction};
 pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{
-    BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, StepSource, TickOut,
+    BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, SourceJob, StepSource, TickOut,
 };
 pub use outputs::{Outputs, Z_DAC_MID_SCALE};
 pub use probe::{ProbeKind, ProbePhase, ProbeRun};

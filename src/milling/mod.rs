@@ -15,3 +15,17 @@ pub mod peak;
 pub mod plant;
 pub mod sample_timer;
 pub mod scenario;
+
+use crate::capability::Capability;
+use crate::protocol::FaultCode;
+
+/// Constant-force milling's registry entry. It runs no source job of its own: a force job is a
+/// plain segment job whose feed override the force loop sets.
+pub const CAPABILITY: Capability = Capability {
+    name: "milling",
+    title: "constant-force milling (Elbestawi 1980): a feed override that holds the cutting \
+            force at its nominal value, with impact strategies",
+    hello_bits: crate::protocol::CAP_MILLING_JOB,
+    jobs: &[],
+    faults: &[FaultCode::ForceSaturated, FaultCode::ForceStuck, FaultCode::ForceTrip],
+};

@@ -451,9 +451,9 @@ mod tests {
         // `polar::job::homing_config`).
         let cfg = BoardConfig::with_homing(crate::polar::job::link_config(), &HomingConfig::NONE);
         let (mut m, mut dda, mut prep) = crate::machine::homed(cfg);
-        m.command(MachineCommand::StartCopy, &mut dda).unwrap();
+        m.command(MachineCommand::StartSource(crate::polar::COPY_JOB), &mut dda).unwrap();
         assert_eq!(m.state(), MachineState::Running);
-        assert!(m.command(MachineCommand::StartCopy, &mut dda).is_err());
+        assert!(m.command(MachineCommand::StartSource(crate::polar::COPY_JOB), &mut dda).is_err());
         assert!(m.command(MachineCommand::Start, &mut dda).is_err());
         let mut copy = CopyMode::new([0, 0], SizeScale::new(3, 2).unwrap(), false);
         let tick = |m: &mut Machine, dda: &mut Dda, copy: &mut CopyMode, counts| {
@@ -477,7 +477,7 @@ mod tests {
         assert_eq!(m.state(), MachineState::Running, "a copy never ends by itself");
         m.command(MachineCommand::Abort, &mut dda).unwrap();
         m.background(&mut dda, &mut prep);
-        assert!(!m.event_job());
+        assert!(m.source_job().is_none());
         assert_eq!(m.state(), MachineState::Ready);
     }
 }

@@ -161,7 +161,7 @@ mod tests {
         fn queue(&mut self, upto: usize) {
             while self.next < upto.min(self.blocks.len()) && self.feed.credits() > 0 {
                 let last = self.next + 1 == self.blocks.len();
-                self.m.command(MachineCommand::QueueEvents, &mut self.dda).unwrap();
+                self.m.command(MachineCommand::QueueSource, &mut self.dda).unwrap();
                 self.feed.push(self.blocks[self.next], last).unwrap();
                 self.next += 1;
             }
@@ -195,7 +195,8 @@ mod tests {
         for r in [&mut full, &mut fast] {
             r.queue(usize::MAX);
             r.feed.fill(&mut r.play);
-            r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+            r.m.command(MachineCommand::StartQueued(crate::polar::PLAYBACK_JOB), &mut r.dda)
+                .unwrap();
         }
         let (mut job_ticks, mut step_only) = (0u64, 0u64);
         while fast.m.state() == MachineState::Running && fast.ticks < 100_000_000 {
@@ -244,8 +245,8 @@ mod tests {
             Err(Refusal::OutOfState(MachineState::Ready))
         ));
         r.feed.fill(&mut r.play);
-        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
-        assert!(r.m.event_job());
+        r.m.command(MachineCommand::StartQueued(crate::polar::PLAYBACK_JOB), &mut r.dda).unwrap();
+        assert!(r.m.runs(crate::polar::PLAYBACK_JOB));
         let mut rises = [0u64; 2];
         while r.m.state() == MachineState::Running && r.ticks < 100_000_000 {
             r.queue(usize::MAX);
@@ -255,7 +256,7 @@ mod tests {
             }
         }
         assert_eq!(r.m.state(), MachineState::Ready, "faults {:#x}", r.m.faults().mask());
-        assert!(!r.m.event_job() && !r.m.events_queued());
+        assert!(!r.m.runs(crate::polar::PLAYBACK_JOB) && !r.m.source_queued());
         // Same events, same steps, same ticks as the model; positions from the machine's own
         // counters (rising edges and DIR), not from the playback.
         assert_eq!(r.play.fired(), events);
@@ -272,7 +273,7 @@ mod tests {
         let mut r = Run::new(SizeScale::ONE, Rate::ONE);
         r.queue(usize::MAX);
         r.feed.fill(&mut r.play);
-        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        r.m.command(MachineCommand::StartQueued(crate::polar::PLAYBACK_JOB), &mut r.dda).unwrap();
         while r.play.fired() < 500 {
             r.queue(usize::MAX);
             r.tick(&Inputs::QUIET);
@@ -296,7 +297,7 @@ mod tests {
         // Two blocks, none marked last: the host is late with the third.
         r.queue(2);
         r.feed.fill(&mut r.play);
-        r.m.command(MachineCommand::StartEvents, &mut r.dda).unwrap();
+        r.m.command(MachineCommand::StartQueued(crate::polar::PLAYBACK_JOB), &mut r.dda).unwrap();
         let admitted = r.feed.events_admitted;
         while r.m.state() == MachineState::Running && r.ticks < 10_000_000 {
             r.tick(&Inputs::QUIET);
@@ -306,7 +307,7 @@ mod tests {
         assert_eq!(r.play.fired(), admitted, "every admitted event fired before the underrun");
         // The machine table refuses more blocks in Fault.
         assert!(matches!(
-            r.m.command(MachineCommand::QueueEvents, &mut r.dda),
+            r.m.command(MachineCommand::QueueSource, &mut r.dda),
             Err(Refusal::OutOfState(MachineState::Fault))
         ));
         // The hold reaction stops the playback's clock: events that reach it now do not fire.

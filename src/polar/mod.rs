@@ -14,6 +14,24 @@ pub mod playback;
 pub mod scenario;
 pub mod stream;
 
+use crate::capability::Capability;
+use crate::machine::SourceJob;
+
+/// A playback of recorded step events (`StartPlayback`).
+pub const PLAYBACK_JOB: SourceJob = SourceJob(1);
+/// A copy job: steps from the template digitizer's encoder counts (`StartCopy`).
+pub const COPY_JOB: SourceJob = SourceJob(2);
+
+/// Polar contouring's registry entry.
+pub const CAPABILITY: Capability = Capability {
+    name: "polar",
+    title: "polar contouring (Fahim 1983): timed step events on an (r, theta) machine, played \
+            back with speed and size scaling, and template copying",
+    hello_bits: crate::protocol::CAP_EVENTS | crate::protocol::CAP_COPY_JOB,
+    jobs: &[PLAYBACK_JOB, COPY_JOB],
+    faults: &[],
+};
+
 /// Axis index of the arm angle (theta) in step masks.
 pub const AXIS_THETA: u8 = 0;
 /// Axis index of the carriage radius (r) in step masks.

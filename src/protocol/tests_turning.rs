@@ -15,7 +15,7 @@ use crate::turning::link_job::{
 use crate::turning::link_requests::{self as zr, ZNak, ZRequests};
 use crate::turning::scenario as sc;
 
-/// SimTarget plus the firmware's Z code; `z_active` plays the machine's `z_job()`.
+/// SimTarget plus the firmware's Z code; `z_active` plays the machine's `runs(TURNING_JOB)`.
 struct ZTarget {
     sim: SimTarget,
     req: ZRequests,

@@ -35,7 +35,7 @@ pub fn start_nak(e: ZStartError) -> ZNak {
 
 /// The upload staging buffer, a copy of the active table (so `StartZ` builds its generator
 /// outside the tick's lock: [`ZRequests::prepare`]) and the request handlers. `job_active`: a Z
-/// job runs or holds (the machine's `z_job()`): every upload step is then refused with
+/// job runs or holds (the machine `runs(TURNING_JOB)`): every upload step is then refused with
 /// `OutOfState`.
 #[derive(Clone, Debug, Default)]
 pub struct ZRequests {
@@ -106,7 +106,7 @@ pub fn install(job: &mut ZJob, table: LinkTable, job_active: bool) -> Result<(),
 }
 
 /// Engages the job for `StartZ` (the caller then starts the machine's job with
-/// `MachineCommand::StartZ`, and calls `ZJob::drop_run` if the machine refuses).
+/// `MachineCommand::StartSource(TURNING_JOB)`, and calls `ZJob::drop_run` if the machine refuses).
 pub fn start(job: &mut ZJob, spec: &ZJobSpec, tick_hz: u32, job_active: bool) -> Result<(), ZNak> {
     if job_active {
         return Err((ErrorCode::OutOfState, NakDetail::None));

@@ -19,3 +19,20 @@ pub use command::{ZCommand, ZCommandConfig, ZConfigError, ZGen, ZState, ZUpdate}
 pub use output::{CommandLead, DacScale, StepFollower, StepScale};
 pub use plant::{VoiceCoilMotor, VoiceCoilServo, VoiceCoilSlide};
 pub use table::{CoefficientTable, Interp, TableError, TableForm, ZPoint};
+
+use crate::capability::Capability;
+use crate::machine::SourceJob;
+use crate::protocol::FaultCode;
+
+/// A Z-slide job (`StartZ`): X fed at a constant rate while Z follows the Fourier series.
+pub const TURNING_JOB: SourceJob = SourceJob(3);
+
+/// Non-axisymmetric turning's registry entry.
+pub const CAPABILITY: Capability = Capability {
+    name: "turning",
+    title: "non-axisymmetric turning (Douglass 1983): a Z slide commanded by a Fourier series in \
+            spindle angle with X-dependent coefficients",
+    hello_bits: crate::protocol::CAP_TURNING_JOB,
+    jobs: &[TURNING_JOB],
+    faults: &[FaultCode::ZSlideLimit],
+};

@@ -3,8 +3,8 @@
 //! [`Machine`] (fault inputs, e-stop freeze, counters, soft limits, job end) through
 //! [`Machine::tick_with`], like an event job.
 //!
-//! Life cycle (the machine's table): `Machine::command(QueueWire)` admits each segment (Queue
-//! column: segment and soft-limit checks), [`WireJob::queue`] keeps it; `StartWire` (Start
+//! Life cycle (the machine's table): `Machine::command(QueueSourceSegment)` admits each segment (Queue
+//! column: segment and soft-limit checks), [`WireJob::queue`] keeps it; `StartQueued(WIRE_JOB)` (Start
 //! column) starts the job and [`WireJob::start`] takes over the DDA and pre-feeds it in the same
 //! critical section. The tick calls [`tick`]; the feeder calls [`WireJob::feed`] whenever
 //! [`WireJob::wants_feed`]. The job ends (Running -> Ready) when the controller is `Done`.
@@ -150,7 +150,7 @@ impl WireJob {
         })
     }
 
-    /// Keeps an admitted segment (the caller ran `MachineCommand::QueueWire` first).
+    /// Keeps an admitted segment (the caller ran `MachineCommand::QueueSourceSegment` first).
     pub fn queue(&mut self, seg: &Segment) -> Result<(), SegmentError> {
         let js = job_segment(seg)?;
         if self.queue.push(js) {
@@ -166,7 +166,7 @@ impl WireJob {
         self.queue.free()
     }
 
-    /// The job started (the caller ran `MachineCommand::StartWire`): takes over the idle DDA
+    /// The job started (the caller ran `MachineCommand::StartQueued(crate::wire::WIRE_JOB)`): takes over the idle DDA
     /// and feeds it, so the first tick already moves. Control-task code (divides).
     pub fn start(&mut self, dda: &mut Dda) -> Result<(), SegmentError> {
         self.core.attach(dda);
@@ -267,7 +267,7 @@ pub fn step_only_tick(
     job: &mut WireJob,
     stall_raw: bool,
 ) -> Option<StepOutput> {
-    if !(job.live && job.started && machine.event_job()) {
+    if !(job.live && job.started && machine.runs(super::WIRE_JOB)) {
         return None;
     }
     machine.fast_tick_with(dda, &mut Source { job, stall_raw })
@@ -286,7 +286,7 @@ pub fn tick(
     job: &mut WireJob,
     stall_raw: bool,
 ) -> TickOut {
-    let mut out = if job.live && job.started && machine.event_job() {
+    let mut out = if job.live && job.started && machine.runs(super::WIRE_JOB) {
         let mut inp = *inp;
         if job.core.fault_code() == Some(FaultCode::WireStall) && !job.fault_reported {
             // Once: the controller stopped already; the machine latches and holds.
@@ -297,7 +297,7 @@ pub fn tick(
     } else {
         machine.tick(dda, inp)
     };
-    if job.live && job.started && !machine.event_job() {
+    if job.live && job.started && !machine.runs(super::WIRE_JOB) {
         // The machine ended the job (done, or dropped after a fault or an abort).
         job.live = false;
     }
@@ -380,14 +380,14 @@ mod tests {
         let mut send = |m: &mut Machine, dda: &mut Dda, w: &mut WireJob, upto: usize| {
             while sent < upto.min(js.len()) && w.credits() > 0 {
                 let seg = js[sent].segment(sent as u32);
-                m.command(MachineCommand::QueueWire(&seg), dda).unwrap();
+                m.command(MachineCommand::QueueSourceSegment(&seg), dda).unwrap();
                 w.queue(&seg).unwrap();
                 sent += 1;
             }
         };
         send(&mut m, &mut dda, &mut w, lead);
         let t0 = dda.now();
-        m.command(MachineCommand::StartWire, &mut dda).unwrap();
+        m.command(MachineCommand::StartQueued(crate::wire::WIRE_JOB), &mut dda).unwrap();
         w.start(&mut dda).unwrap();
         let mut rec = StepRecorder::new();
         let (mut t, mut power_while_stalled, mut power_on_ticks) = (0u64, false, 0u64);
@@ -532,10 +532,10 @@ mod tests {
         let mut w = WireJob::new(&machine::config(), STALL_PARAMS, js.len() as u32).unwrap();
         for (k, s) in js.iter().enumerate().take(4) {
             let seg = s.segment(k as u32);
-            m.command(MachineCommand::QueueWire(&seg), &mut dda).unwrap();
+            m.command(MachineCommand::QueueSourceSegment(&seg), &mut dda).unwrap();
             w.queue(&seg).unwrap();
         }
-        m.command(MachineCommand::StartWire, &mut dda).unwrap();
+        m.command(MachineCommand::StartQueued(crate::wire::WIRE_JOB), &mut dda).unwrap();
         w.start(&mut dda).unwrap();
         let out = tick(&mut m, &mut dda, &Inputs::QUIET, &mut w, false);
         assert!(out.outputs.wire_power);
@@ -554,7 +554,7 @@ mod tests {
         let mut w = WireJob::new(&machine::config(), STALL_PARAMS, js.len() as u32).unwrap();
         for (k, s) in js.iter().enumerate().take(3) {
             let seg = s.segment(k as u32);
-            m.command(MachineCommand::QueueWire(&seg), &mut dda).unwrap();
+            m.command(MachineCommand::QueueSourceSegment(&seg), &mut dda).unwrap();
             w.queue(&seg).unwrap();
         }
         // A plain segment or a plain Start does not join a wire job.
@@ -564,7 +564,7 @@ mod tests {
             Err(Refusal::OutOfState(MachineState::Ready))
         ));
         assert!(m.command(MachineCommand::Start, &mut dda).is_err());
-        m.command(MachineCommand::StartWire, &mut dda).unwrap();
+        m.command(MachineCommand::StartQueued(crate::wire::WIRE_JOB), &mut dda).unwrap();
         w.start(&mut dda).unwrap();
         let mut t = 0;
         while m.state() == MachineState::Running && t < 2_000_000 {

@@ -13,3 +13,20 @@ pub mod job;
 pub mod link_job;
 pub mod machine;
 pub mod scenario;
+
+use crate::capability::Capability;
+use crate::machine::SourceJob;
+use crate::protocol::FaultCode;
+
+/// A wire job (`ArmWire`): its own segments, with stall retrace.
+pub const WIRE_JOB: SourceJob = SourceJob(4);
+
+/// The 4-axis wire manipulator's registry entry.
+pub const CAPABILITY: Capability = Capability {
+    name: "wire",
+    title: "4-axis wire manipulator (Bhatti 1991): ruled shapes cut by coordinated X, Y, alpha \
+            and beta at a constant area rate, with wire-stall retrace",
+    hello_bits: crate::protocol::CAP_WIRE_JOB,
+    jobs: &[WIRE_JOB],
+    faults: &[FaultCode::WireStall],
+};

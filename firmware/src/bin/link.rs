@@ -35,6 +35,7 @@ mod app {
     };
     use core::sync::atomic::Ordering::Relaxed;
     use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
+    use motion::polar::PLAYBACK_JOB;
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
     use motion_firmware::link::{
@@ -298,7 +299,7 @@ mod app {
             } else if let Some(out) = link::turning::tick(m, &inputs) {
                 *l.step_only = StepOnly::Z;
                 out
-            } else if m.machine.event_job() {
+            } else if m.machine.runs(PLAYBACK_JOB) {
                 *l.step_only = StepOnly::Events;
                 m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
@@ -321,7 +322,7 @@ mod app {
             let wake = (FEEDER_BLOCKED.load(Relaxed) && m.dda.ready_free() > 0)
                 || m.machine.wants_background()
                 || (EVENTS_WAITING.load(Relaxed)
-                    && m.machine.event_job()
+                    && m.machine.runs(PLAYBACK_JOB)
                     && m.playback.free() >= EVENT_REFILL)
                 || link::wire::wants_feed(m);
             if wake {

@@ -14,6 +14,7 @@ use motion::polar::copy_link::{
 };
 use motion::polar::playback::SizeScale;
 use motion::polar::StepEvent;
+use motion::polar::COPY_JOB;
 use motion::protocol::{BlockBytes, ErrorCode, Status, TeachChunk};
 use rtic::Mutex;
 
@@ -43,7 +44,7 @@ impl Default for CopyState {
 
 /// The copy job runs (the machine's source job is ours).
 pub fn live(m: &Motion) -> bool {
-    m.copy.running && m.machine.event_job()
+    m.copy.running && m.machine.runs(COPY_JOB)
 }
 
 /// One tick with the encoder counts read this tick (`None`: no copy job, the caller ticks as
@@ -54,7 +55,7 @@ pub fn tick(m: &mut Motion, inputs: &Inputs, counts: [i32; 2]) -> Option<TickOut
     if !m.copy.running {
         return None;
     }
-    if !m.machine.event_job() {
+    if !m.machine.runs(COPY_JOB) {
         m.copy.running = false;
         return None;
     }
@@ -66,10 +67,12 @@ pub fn tick(m: &mut Motion, inputs: &Inputs, counts: [i32; 2]) -> Option<TickOut
 /// `StartCopy`: the machine's command first (it refuses out of state or with anything queued),
 /// then a fresh copy from the counts now, in one critical section: the next tick copies.
 pub fn start(m: &mut Motion, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
-    if super::wire::live(m) || m.machine.events_queued() {
+    if super::wire::live(m) || m.machine.source_queued() {
         return Err(ErrorCode::OutOfState);
     }
-    m.machine.command(MachineCommand::StartCopy, &mut m.dda).map_err(|e| e.error_code())?;
+    m.machine
+        .command(MachineCommand::StartSource(COPY_JOB), &mut m.dda)
+        .map_err(|e| e.error_code())?;
     m.copy.mode = Some(CopyMode::new(m.copy.counts, scale, teach));
     m.copy.running = true;
     Ok(())

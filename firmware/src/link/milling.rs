@@ -111,8 +111,8 @@ pub fn arm(
         return Err(ErrorCode::Unsupported);
     }
     let busy = !plain_queue_empty
-        || m.machine.events_queued()
-        || m.machine.event_job()
+        || m.machine.source_queued()
+        || m.machine.source_job().is_some()
         || wire_live
         || live(m)
         || !m.dda.is_idle();

@@ -32,10 +32,9 @@ use motion::machine::{BoardConfig, BootConfig, Machine, MachineState, ResetCause
 use motion::polar::playback::QUEUE_DEPTH;
 use motion::polar::playback::{Playback, SizeScale};
 use motion::protocol::LinkState;
-use motion::protocol::CAP_TURNING_JOB;
 use motion::protocol::{
-    CAP_COPY_JOB, CAP_DDA, CAP_EVENTS, CAP_HOLD_RESUME, CAP_MILLING_JOB, CAP_OVERRIDE, CAP_PROBE,
-    CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM, CAP_WIRE_JOB,
+    CAP_COPY_JOB, CAP_DDA, CAP_HOLD_RESUME, CAP_MILLING_JOB, CAP_OVERRIDE, CAP_PROBE,
+    CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::turning::link_job::ZJob;
 use motion::Dda;
@@ -115,20 +114,21 @@ pub const EVENT_REFILL: usize = QUEUE_DEPTH / 2;
 /// into the playback inside it (a few hundred cycles, well inside a tick).
 const EVENT_BATCH: usize = 16;
 
-/// What the board announces in `HelloInfo::capabilities`.
+/// What the board announces in `HelloInfo::capabilities`: the machine's own features, and every
+/// registered capability's jobs less those whose hardware this board lacks.
 pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_STATUS_STREAM
     | CAP_OVERRIDE
     | CAP_HOLD_RESUME
     | CAP_SOFT_LIMITS
-    | CAP_EVENTS
-    | CAP_WIRE_JOB
-    | CAP_TURNING_JOB
     | CAP_PROBE
-    | if milling::HAS_FORCE_SOURCE { CAP_MILLING_JOB } else { 0 }
+    | (motion::capability::hello_bits() & !MISSING_HARDWARE)
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
-    | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 }
-    | if board::CopyEncoders::ROUTED { CAP_COPY_JOB } else { 0 };
+    | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
+
+/// Capability jobs this board cannot run: no force source, no copy encoders.
+const MISSING_HARDWARE: u32 = if milling::HAS_FORCE_SOURCE { 0 } else { CAP_MILLING_JOB }
+    | if board::CopyEncoders::ROUTED { 0 } else { CAP_COPY_JOB };
 
 /// The DDA, the event playback and the machine around them: one resource, so the tick takes
 /// one lock.
@@ -191,7 +191,7 @@ impl Motion {
     pub(super) fn wire_state(&self) -> LinkState {
         match (self.machine.state(), self.dda.state()) {
             (MachineState::Running, MotionState::Idle) => LinkState::Moving,
-            (MachineState::Holding, MotionState::Idle) if self.machine.event_job() => {
+            (MachineState::Holding, MotionState::Idle) if self.machine.source_job().is_some() => {
                 LinkState::Held
             }
             _ => self.machine.wire_state(&self.dda),

@@ -9,6 +9,7 @@ use motion::machine::{BoardConfig, MachineState};
 use motion::polar::copy_link::TeachRecorder;
 use motion::polar::feed::EventFeed;
 use motion::polar::StepEvent;
+use motion::polar::PLAYBACK_JOB;
 use motion::protocol::{BoardLink, FaultCode, FrameError, Response};
 use motion::segment::SegmentError;
 use motion::turning::link_requests::ZRequests;
@@ -153,7 +154,7 @@ impl Link {
         let events = &mut self.feed.events;
         loop {
             let room = motion.lock(|m| {
-                if m.machine.event_job() && !events.is_finished() {
+                if m.machine.runs(PLAYBACK_JOB) && !events.is_finished() {
                     m.playback.free()
                 } else {
                     0

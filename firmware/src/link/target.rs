@@ -9,6 +9,7 @@ use motion::dda::{Command, Preparer};
 use motion::machine::{BoardConfig, MachineCommand, MachineState, ProbeKind, Refusal};
 use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
 use motion::polar::StepEvent;
+use motion::polar::PLAYBACK_JOB;
 use motion::protocol::{
     BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkConfig, LinkState, LinkTarget,
     ProgramOutputs, Status, TeachChunk, WireJobParams, SENSOR_CHANNELS,
@@ -16,6 +17,7 @@ use motion::protocol::{
 use motion::segment::{Rate, Segment};
 use motion::turning::link_job::{ZJobSpec, ZTableHeader};
 use motion::turning::link_requests::ZNak;
+use motion::turning::TURNING_JOB;
 use motion::Dda;
 use rtic::Mutex;
 
@@ -221,7 +223,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn hold(&mut self) -> Result<(), ErrorCode> {
         // A hold must not outlive the job it was meant for: nothing moving and nothing to feed
         // means there is nothing to hold.
-        let idle = self.with(|m| m.dda.is_idle() && !m.machine.event_job());
+        let idle = self.with(|m| m.dda.is_idle() && m.machine.source_job().is_none());
         if idle && self.link.queue.is_empty() {
             return Err(ErrorCode::OutOfState);
         }
@@ -266,7 +268,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn event_credits(&self) -> u16 {
-        if self.with(|m| m.machine.events_queued()) {
+        if self.with(|m| m.machine.source_queued()) {
             self.link.events.credits()
         } else {
             // A new stream starts with an empty feed (see `queue_events`).
@@ -275,7 +277,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn next_event_block(&self) -> Option<u16> {
-        if self.with(|m| m.machine.events_queued()) {
+        if self.with(|m| m.machine.source_queued()) {
             self.link.events.expected()
         } else {
             Some(0)
@@ -284,15 +286,17 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
 
     fn events_pending(&self) -> bool {
         // A wire job is a source job too, but its segments come through QueueSegments.
-        self.with(|m| (m.machine.events_queued() || m.machine.event_job()) && !wire::live(m))
+        self.with(|m| {
+            (m.machine.source_queued() || m.machine.source_job().is_some()) && !wire::live(m)
+        })
     }
 
     fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
         if self.with(|m| wire::live(m) || copy::live(m)) {
             return Err(ErrorCode::OutOfState);
         }
-        let fresh = !self.with(|m| m.machine.events_queued());
-        let state = self.command(MachineCommand::QueueEvents)?;
+        let fresh = !self.with(|m| m.machine.source_queued());
+        let state = self.command(MachineCommand::QueueSource)?;
         if fresh {
             // The machine had no events: whatever the feed holds is a finished job's.
             self.link.events.clear();
@@ -317,7 +321,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         let (n, finished) = feed.take(&mut first);
         let (head, _) = first.split_at(n);
         let r = self.motion.get_mut().lock(|m| {
-            m.machine.command(MachineCommand::StartEvents, &mut m.dda)?;
+            m.machine.command(MachineCommand::StartQueued(PLAYBACK_JOB), &mut m.dda)?;
             m.playback = Playback::new(scale);
             for &ev in head {
                 // Cannot fail: a fresh playback holds QUEUE_DEPTH events.
@@ -342,18 +346,18 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
-        let active = self.with(|m| m.machine.z_job());
+        let active = self.with(|m| m.machine.runs(TURNING_JOB));
         self.link.z.begin(h, active)
     }
 
     fn z_table_chunk(&mut self, index: u16, bytes: &[u8]) -> Result<(), ZNak> {
-        let active = self.with(|m| m.machine.z_job());
+        let active = self.with(|m| m.machine.runs(TURNING_JOB));
         self.link.z.chunk(index, bytes, active)
     }
 
     fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
         // Checked outside the lock; the install (a copy) inside it.
-        let active = self.with(|m| m.machine.z_job());
+        let active = self.with(|m| m.machine.runs(TURNING_JOB));
         let table = self.link.z.end(crc, active)?;
         let copy = table.clone();
         self.motion.get_mut().lock(|m| turning::install(m, table))?;
@@ -365,7 +369,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         let (tick_hz, speed, active) = self.with(|m| {
             let tick_hz = m.machine.config().wire.machine.tick_hz;
-            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.z_job())
+            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.runs(TURNING_JOB))
         });
         // The generator is built here, outside the lock (see `turning`).
         let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;

@@ -1,7 +1,7 @@
 //! Z-slide jobs on the link firmware (`motion::turning::link_job`): the table upload goes through
 //! the link's [`ZRequests`] (staging buffer, never touched by the tick) into the [`ZJob`] in
 //! [`Motion`] at `ZTableEnd`; `StartZ` engages the job and starts the machine's Z job
-//! (`MachineCommand::StartZ`, the Start column) in one critical section; every tick the board's
+//! (`MachineCommand::StartSource(TURNING_JOB)`, the Start column) in one critical section; every tick the board's
 //! spindle is read ([`sense`]: the sim spindle under QEMU, TIM4's encoder on the F405) and, while
 //! the machine's Z job runs, the tick runs the job through `Machine::tick_with` ([`tick`]) with
 //! the job's latched faults as sensor inputs, and drives the DAC with the job's code.
@@ -17,6 +17,7 @@ use motion::protocol::{ErrorCode, NakDetail, Status};
 use motion::spindle::encoder::EncoderConfig;
 use motion::turning::link_job::{ZJob, ZPrepared};
 use motion::turning::link_requests::{self as zr, ZNak};
+use motion::turning::TURNING_JOB;
 
 use super::Motion;
 use crate::board;
@@ -44,7 +45,7 @@ pub fn sense(spindle: &mut board::Spindle, job: &mut ZJob) {
 /// fresh faults join the sensor inputs; a DAC job's code goes to `Outputs::z_dac`.
 #[inline]
 pub fn tick(m: &mut Motion, inputs: &Inputs) -> Option<TickOut> {
-    if !m.machine.z_job() {
+    if !m.machine.runs(TURNING_JOB) {
         return None;
     }
     let Motion { dda, machine, z, .. } = m;
@@ -70,7 +71,7 @@ pub fn step_only_tick(m: &mut Motion, spindle: &mut board::Spindle) -> Option<St
 
 /// `ZTableEnd`'s install (inside the `Motion` lock).
 pub fn install(m: &mut Motion, table: motion::turning::link_job::LinkTable) -> Result<(), ZNak> {
-    let active = m.machine.z_job();
+    let active = m.machine.runs(TURNING_JOB);
     zr::install(&mut m.z, table, active)
 }
 
@@ -80,9 +81,9 @@ pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<()
     if !plain_queue_empty || super::wire::live(m) {
         return Err((ErrorCode::OutOfState, NakDetail::None));
     }
-    zr::begin(&mut m.z, p, m.machine.z_job())?;
+    zr::begin(&mut m.z, p, m.machine.runs(TURNING_JOB))?;
     let Motion { dda, machine, z, .. } = m;
-    if let Err(e) = machine.command(MachineCommand::StartZ, dda) {
+    if let Err(e) = machine.command(MachineCommand::StartSource(TURNING_JOB), dda) {
         z.drop_run();
         return Err((e.error_code(), NakDetail::None));
     }

@@ -1,7 +1,7 @@
 //! Wire-manipulator jobs on the link firmware (`motion::wire::link_job`): `ArmWire` makes a
 //! [`WireJob`] in [`Motion`]; while it is live the host's `QueueSegments` go into it (after the
-//! machine's `QueueWire` checks) instead of the link's plain queue, `Start` starts it
-//! (`StartWire`) and pre-feeds the DDA in the same critical section, the tick runs it through
+//! machine's `QueueSourceSegment` checks) instead of the link's plain queue, `Start` starts it
+//! (`StartQueued(WIRE_JOB)`) and pre-feeds the DDA in the same critical section, the tick runs it through
 //! `motion::wire::link_job::tick` (the machine's `tick_with`, the wire-stall switch, the wire
 //! power output), and the feeder calls [`feed`] when the tick asks for it.
 //!
@@ -16,6 +16,7 @@ use motion::protocol::{ErrorCode, Status, WireJobParams};
 use motion::segment::{Rate, Segment};
 use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
+use motion::wire::WIRE_JOB;
 
 use super::{LastJob, Motion};
 
@@ -61,8 +62,8 @@ pub fn feed(m: &mut Motion) {
 /// `ArmWire`: in `Ready` with nothing queued, no event job and no live wire job.
 pub fn arm(m: &mut Motion, plain_queue_empty: bool, p: &WireJobParams) -> Result<(), ErrorCode> {
     let busy = !plain_queue_empty
-        || m.machine.events_queued()
-        || m.machine.event_job()
+        || m.machine.source_queued()
+        || m.machine.source_job().is_some()
         || live(m)
         || !m.dda.is_idle();
     if m.machine.state() != MachineState::Ready || busy {
@@ -98,19 +99,21 @@ pub fn queue(m: &mut Motion, seg: &Segment) -> Result<MachineState, ErrorCode> {
     }
     // The job's own check (four axes) before the machine's, so a refusal changes nothing.
     link_job::job_segment(seg).map_err(|_| ErrorCode::InvalidSegment)?;
-    let state = machine.command(MachineCommand::QueueWire(seg), dda).map_err(|e| e.error_code())?;
+    let state = machine
+        .command(MachineCommand::QueueSourceSegment(seg), dda)
+        .map_err(|e| e.error_code())?;
     w.queue(seg).map_err(|_| ErrorCode::Internal)?;
     Ok(state)
 }
 
-/// `Start` with a live wire job: the machine's `StartWire`, then the first segments into the DDA
+/// `Start` with a live wire job: the machine's `StartQueued(WIRE_JOB)`, then the first segments into the DDA
 /// in the same critical section (the first tick of the job already moves).
 pub fn start(m: &mut Motion) -> Result<(), ErrorCode> {
     let Motion { dda, machine, job, .. } = m;
     let Some(w) = job.wire_mut().filter(|w| w.is_live()) else {
         return Err(ErrorCode::Internal);
     };
-    machine.command(MachineCommand::StartWire, dda).map_err(|e| e.error_code())?;
+    machine.command(MachineCommand::StartQueued(WIRE_JOB), dda).map_err(|e| e.error_code())?;
     if w.start(dda).is_err() {
         w.drop_job();
         let _ = machine.command(MachineCommand::Abort, dda);

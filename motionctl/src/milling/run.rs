@@ -24,7 +24,7 @@ use motion::milling::link_job::{job_params, sim_params};
 use motion::milling::scenario as sc;
 use motion::protocol::{
     AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
-    SegmentBatch, SimForceFault, SimRequest, Status, CAP_MILLING_JOB, CAP_SIM_INPUTS,
+    SegmentBatch, SimForceFault, SimRequest, Status, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -222,9 +222,7 @@ pub fn run_resumable(
     let mut s = Session::new(transport, opts.host);
     let link = |e: LinkFailure| anyhow!("{e}");
     let info = s.connect().map_err(link)?;
-    if info.capabilities & CAP_MILLING_JOB == 0 {
-        bail!("the board ({:?}) runs no milling jobs (no CAP_MILLING_JOB)", info.firmware.as_str());
-    }
+    crate::board_link::require_capability(&info, &motion::milling::CAPABILITY)?;
     let simulated = info.capabilities & CAP_SIM_INPUTS != 0;
     if opts.fault != SimForceFault::None && !simulated {
         bail!(

@@ -23,13 +23,14 @@ use motion::dda::{Dda, Preparer};
 use motion::machine::{BoardConfig, Inputs, Machine, MachineCommand, MachineState};
 use motion::protocol::{
     AxisScale, BlockBytes, HomingConfig, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
-    SimRequest, CAP_SIM_INPUTS, CAP_TURNING_JOB, CRC32, MAX_Z_CHUNK,
+    SimRequest, CAP_SIM_INPUTS, CRC32, MAX_Z_CHUNK,
 };
 use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::turning::link_job::{
     table_link_bytes, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, ZTableUpload, MAX_TABLE_BYTES,
 };
 use motion::turning::scenario as sc;
+use motion::turning::TURNING_JOB;
 use std::time::{Duration, Instant};
 
 /// Machine axes of a Z job: Z (the slide) on axis 0, X (radial feed) on axis 1.
@@ -286,7 +287,7 @@ pub fn model(
         enc.update(c, i);
         job.sense_from(&enc);
         let inp = Inputs { sensor_faults: job.take_sensor_faults(), ..Inputs::QUIET };
-        if m.z_job() {
+        if m.runs(TURNING_JOB) {
             m.tick_with(dda, &inp, job);
         } else {
             m.tick(dda, &inp);
@@ -297,9 +298,10 @@ pub fn model(
     }
     let base = m.positions();
     job.start(spec, tick_hz).map_err(|e| anyhow!("StartZ refused by the model: {e:?}"))?;
-    m.command(MachineCommand::StartZ, &mut dda).map_err(|e| anyhow!("StartZ: {e:?}"))?;
+    m.command(MachineCommand::StartSource(TURNING_JOB), &mut dda)
+        .map_err(|e| anyhow!("StartZ: {e:?}"))?;
     let mut ticks = 0u64;
-    while m.z_job() && m.faults().mask() == 0 && ticks < max_ticks {
+    while m.runs(TURNING_JOB) && m.faults().mask() == 0 && ticks < max_ticks {
         if let Some((at, rpm)) = step {
             if ticks == at {
                 speed = sim_speed(rpm, tick_hz);
@@ -315,7 +317,7 @@ pub fn model(
         max_following_nin: job.max_following_nin(),
         ticks,
         faults: m.faults().mask(),
-        finished: !m.z_job() && m.state() == MachineState::Ready,
+        finished: !m.runs(TURNING_JOB) && m.state() == MachineState::Ready,
     })
 }
 
@@ -368,9 +370,7 @@ pub fn run_with(
     let mut s = Session::new(transport, o.host);
     let link = |e: LinkFailure| anyhow!("{e}");
     let info = s.connect().map_err(link)?;
-    if info.capabilities & CAP_TURNING_JOB == 0 {
-        bail!("the board ({:?}) runs no turning jobs (no CAP_TURNING_JOB)", info.firmware.as_str());
-    }
+    crate::board_link::require_capability(&info, &motion::turning::CAPABILITY)?;
     let sim = info.capabilities & CAP_SIM_INPUTS != 0;
     if o.speed_step.is_some() && !sim {
         bail!("the board ({:?}) has no simulated spindle: no speed step", info.firmware.as_str());

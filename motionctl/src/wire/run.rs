@@ -18,7 +18,7 @@ use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
     HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch, SimRequest, WireJobParams,
-    CAP_SIM_INPUTS, CAP_WIRE_JOB, MAX_SEGMENTS_PER_FRAME,
+    CAP_SIM_INPUTS, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
 use std::collections::HashMap;
@@ -123,9 +123,7 @@ pub fn run_with(
     let mut s = Session::new(transport, opts.host);
     let link = |e: LinkFailure| anyhow!("{e}");
     let info = s.connect().map_err(link)?;
-    if info.capabilities & CAP_WIRE_JOB == 0 {
-        bail!("the board ({:?}) runs no wire jobs (no CAP_WIRE_JOB)", info.firmware.as_str());
-    }
+    crate::board_link::require_capability(&info, &motion::wire::CAPABILITY)?;
     if opts.stall.is_some() && info.capabilities & CAP_SIM_INPUTS == 0 {
         bail!(
             "the board ({:?}) has no simulated inputs: no stall to inject",

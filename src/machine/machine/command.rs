@@ -15,29 +15,22 @@ pub enum MachineCommand<'a> {
     Abort,
     ClearFault,
     JogOff,
-    /// Admit step events for an event job (the table's Queue column). The caller checked the
-    /// events (stream CRC and decoding) and holds them; segments and events never share a job.
-    QueueEvents,
-    /// Start the event job (the table's Start column): the caller's step source plays the
-    /// admitted events through [`Machine::tick_with`].
-    StartEvents,
-    /// Start a Z-slide job (the table's Start column): the caller's step source
-    /// (`motion::turning::link_job::ZJob`) steps X and Z through [`Machine::tick_with`]; the job
-    /// ends when the source is idle. Refused while segments or events are queued.
-    StartZ,
-    /// Admit one segment for a wire job (the table's Queue column): checked like `Queue`
-    /// (segment and soft limits) but held by the caller's wire job (`motion::wire::link_job`),
-    /// not fed by the link's feeder. A wire job is a source job like an event job: it runs
-    /// through [`Machine::tick_with`] and never shares a job with plain segments or events.
-    QueueWire(&'a Segment),
-    /// Start the wire job (the table's Start column): like `StartEvents`.
-    StartWire,
-    /// Start a copy job (the table's Start column): the caller's step source
-    /// (`motion::polar::copy_link::CopySource`) turns encoder counts into steps through
-    /// [`Machine::tick_with`] as an event job whose source is never idle: it runs until `Abort`
-    /// or a fault, and `Hold`/`Resume` act on it like on an event job. Refused while segments
-    /// or events are queued or another source job runs.
-    StartCopy,
+    /// Admit items (step events, checked and held by the caller) for a source job (the table's
+    /// Queue column). Segments and a source job's items never share a job.
+    QueueSource,
+    /// Admit one segment for a source job (the table's Queue column): checked like `Queue`
+    /// (segment and soft limits) but held by the caller's source (a wire job's), not fed by the
+    /// link's feeder.
+    QueueSourceSegment(&'a Segment),
+    /// Start the source job `job` over the items admitted for it (the table's Start column): the
+    /// caller's step source plays them through [`Machine::tick_with`]; the job ends when the
+    /// source is idle, and a source that runs dry first raises `QueueUnderrun`.
+    StartQueued(SourceJob),
+    /// Start the source job `job` with nothing admitted (the table's Start column): the caller's
+    /// source makes its own motion (a Z slide from the spindle angle, steps from encoder counts)
+    /// until it is idle, or for ever (until `Abort` or a fault). Refused while segments or items
+    /// are queued or another source job runs.
+    StartSource(SourceJob),
 }
 
 impl MachineCommand<'_> {
@@ -52,12 +45,10 @@ impl MachineCommand<'_> {
             MachineCommand::Abort => CommandKind::Abort,
             MachineCommand::ClearFault => CommandKind::ClearFault,
             MachineCommand::JogOff => CommandKind::JogOff,
-            MachineCommand::QueueEvents => CommandKind::Queue,
-            MachineCommand::StartEvents => CommandKind::Start,
-            MachineCommand::StartZ => CommandKind::Start,
-            MachineCommand::QueueWire(_) => CommandKind::Queue,
-            MachineCommand::StartWire => CommandKind::Start,
-            MachineCommand::StartCopy => CommandKind::Start,
+            MachineCommand::QueueSource | MachineCommand::QueueSourceSegment(_) => {
+                CommandKind::Queue
+            }
+            MachineCommand::StartQueued(_) | MachineCommand::StartSource(_) => CommandKind::Start,
         }
     }
 }
@@ -120,18 +111,16 @@ impl Machine {
                 }
             }
         };
-        // Segments and events never share a job: the machine has one job end to watch.
-        let events = self.events_queued || self.event_job || self.z_job;
+        // Segments and a source job never share a job: the machine has one job end to watch.
+        let source = self.source_queued || self.source.is_some();
         let mixed = match cmd {
-            MachineCommand::Queue(_) | MachineCommand::Start => events,
-            MachineCommand::QueueEvents => self.in_flight(dda) != 0,
-            MachineCommand::StartEvents => !self.events_queued || self.event_job,
-            MachineCommand::StartZ => events || self.in_flight(dda) != 0,
+            MachineCommand::Queue(_) | MachineCommand::Start => source,
+            MachineCommand::QueueSource => self.in_flight(dda) != 0,
             // During a source job the DDA also runs the source's own segments: only a plain
             // job's segments count against it.
-            MachineCommand::QueueWire(_) => !events && self.in_flight(dda) != 0,
-            MachineCommand::StartWire => !self.events_queued || self.event_job,
-            MachineCommand::StartCopy => events || self.in_flight(dda) != 0,
+            MachineCommand::QueueSourceSegment(_) => !source && self.in_flight(dda) != 0,
+            MachineCommand::StartQueued(_) => !self.source_queued || self.source.is_some(),
+            MachineCommand::StartSource(_) => source || self.in_flight(dda) != 0,
             _ => false,
         };
         if mixed {
@@ -154,24 +143,19 @@ impl Machine {
                 self.admitted = self.admitted.wrapping_add(1);
                 self.last_exit_nonzero = seg.exit_rate.to_bits() != 0;
             }
-            MachineCommand::QueueEvents => self.events_queued = true,
-            MachineCommand::QueueWire(seg) => {
+            MachineCommand::QueueSource => self.source_queued = true,
+            MachineCommand::QueueSourceSegment(seg) => {
                 self.admit(seg)?;
-                self.events_queued = true;
+                self.source_queued = true;
             }
-            MachineCommand::StartWire | MachineCommand::StartEvents | MachineCommand::StartCopy => {
+            MachineCommand::StartQueued(job) | MachineCommand::StartSource(job) => {
                 self.probe.drop_move();
-                self.event_job = true;
-                self.paused = false;
-            }
-            MachineCommand::StartZ => {
-                self.probe.drop_move();
-                self.z_job = true;
+                self.source = Some(job);
                 self.paused = false;
             }
             MachineCommand::Home => {
                 self.probe.drop_move();
-                self.events_queued = false;
+                self.source_queued = false;
                 self.homed = false;
                 self.homing = Homing::start(&self.cfg);
             }

@@ -3,9 +3,9 @@
 //! A full tick ([`Machine::tick`]) reads and debounces the inputs, watches the faults, applies
 //! holds, keeps the job's books and leaves the outputs. While all of that is quiet -- inputs
 //! released and steady, no fault cause, no pending hold or resume, no homing, jog or starve, no
-//! probe move, no event or Z job unless its step source allows step-only ticks
-//! ([`StepSource::step_only_ticks`]: event and wire jobs and a Z job with step outputs do; a
-//! force job is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
+//! probe move, no source job unless its step source allows step-only ticks
+//! ([`StepSource::step_only_ticks`]: a playback, a wire job and a Z job with step outputs do;
+//! a force job is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
 //! [`Machine::fast_tick`]s: the job's step source, the step counters and the soft-limit check on
 //! the axes that stepped, nothing else. The board skips reading its inputs on those ticks too. A
 //! full tick then comes round at least every [`SUPERVISE_TICKS`] ticks, and at once after any
@@ -76,7 +76,7 @@ impl Machine {
         // The machine's own state first: a capability job (every tick of one comes here) is
         // told apart by a few flag tests, before the inputs are looked at.
         let machine_quiet = !(self.starved || self.probe.watching())
-            && (source_ok || !(self.event_job || self.z_job))
+            && (source_ok || self.source.is_none())
             && self.active == 0
             && !(self.frozen || self.abort_pending || self.hold_pending || self.resume_pending)
             && self.jog.is_none()

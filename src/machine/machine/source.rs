@@ -1,9 +1,10 @@
-//! Where a tick's steps come from: the [`StepSource`] trait and the DDA's own ([`DdaSource`]).
+//! Where a tick's steps come from: the [`StepSource`] trait, the DDA's own ([`DdaSource`]), and
+//! the tag a capability's source job runs under ([`SourceJob`]).
 
 use crate::dda::{Dda, StepOutput};
 
 /// Where a tick's steps come from: the DDA ([`DdaSource`], segment jobs) or a recorded
-/// step-event playback (`motion::polar::playback::Playback`, event jobs). The machine runs
+/// capability's source job (a step-event playback, a Z slide, a wire job; [`SourceJob`]). The machine runs
 /// either through the same tick ([`Machine::tick_with`](super::Machine::tick_with)): fault
 /// inputs, e-stop freeze, step counters, soft limits and job end are the same code for both.
 pub trait StepSource {
@@ -33,6 +34,13 @@ pub trait StepSource {
         max
     }
 }
+
+/// Which source job runs: a tag the capability that owns the job chooses (each capability lists
+/// its tags in its `motion::capability` entry, and the registry checks that no two share one).
+/// The machine runs every source job by the same rules and only keeps the tag, so that the
+/// application ticks the owner's source; it never names a capability.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SourceJob(pub u8);
 
 /// The DDA as a [`StepSource`]: what [`Machine::tick`](super::Machine::tick) runs.
 #[derive(Clone, Copy, Debug, Default)]

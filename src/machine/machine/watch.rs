@@ -1,5 +1,5 @@
 //! What a full tick watches and counts: level causes and fault inputs, the probe, homing, a jog,
-//! the job's bookkeeping (segments, events, a Z job) and the step counters with soft limits.
+//! the job's bookkeeping (segments, a source job) and the step counters with soft limits.
 
 use super::*;
 
@@ -218,29 +218,20 @@ impl Machine {
         }
     }
 
-    /// An event job: done when the source has stepped everything; a source that ran dry before
+    /// A source job: done when the source has stepped everything; a source that ran dry before
     /// the host's last block is an underrun (hold, like a late segment).
     #[inline]
-    pub(super) fn watch_events(&mut self, dda: &Dda, source: &impl StepSource) {
+    pub(super) fn watch_source(&mut self, dda: &Dda, source: &impl StepSource) {
         if source.idle(dda) {
-            self.event_job = false;
-            self.events_queued = false;
-            // A wire job's segments ran through the DDA without entering the plain job's
+            self.source = None;
+            self.source_queued = false;
+            // A source's own segments ran through the DDA without entering the plain job's
             // count: the count starts again from here (nothing plain can be queued during it).
             self.admitted = 0;
             self.done_base = dda.segments_done();
             self.enter(MachineState::Ready);
         } else if source.starved() {
             self.raise(FaultCode::QueueUnderrun);
-        }
-    }
-
-    /// A Z-slide job: done when its source (X feed finished, Z back at rest) is idle.
-    #[inline]
-    pub(super) fn watch_z_job(&mut self, dda: &Dda, source: &impl StepSource) {
-        if source.idle(dda) {
-            self.z_job = false;
-            self.enter(MachineState::Ready);
         }
     }
 }

@@ -108,7 +108,7 @@ impl ZJob {
     }
 
     /// Checks `spec` against the table and the last sensed spindle speed, and engages (setup
-    /// time: divides). The caller then starts the machine's job (`MachineCommand::StartZ`); a
+    /// time: divides). The caller then starts the machine's job (`MachineCommand::StartSource(TURNING_JOB)`); a
     /// refusal there is undone with [`ZJob::drop_run`].
     pub fn start(&mut self, spec: &ZJobSpec, tick_hz: u32) -> Result<(), ZStartError> {
         if self.run.is_some() {

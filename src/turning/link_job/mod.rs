@@ -1,7 +1,7 @@
 //! The Z-slide job of the link firmware: a coefficient table uploaded in chunks
 //! ([`ZTableUpload`], checked whole: byte count, CRC-32, [`CoefficientTable::try_new`]) into a
 //! [`LinkTable`], and the job itself ([`ZJob`]), a [`StepSource`] the machine runs through
-//! `Machine::tick_with` (started by `MachineCommand::StartZ`).
+//! `Machine::tick_with` (started by `MachineCommand::StartSource(TURNING_JOB)`).
 //!
 //! Per tick the board first hands the job its spindle reading ([`ZJob::sense`]: the sim spindle's
 //! encoder in QEMU, the timer encoder or resolver on the F405), then the machine ticks the job:

@@ -145,7 +145,7 @@ impl Rig {
     /// grants one (and true), else a full one.
     fn tick_step_only(&mut self, t: u32, index_lost: bool) -> (StepOutput, bool) {
         self.sense(t, index_lost);
-        let step = if self.m.z_job() {
+        let step = if self.m.runs(crate::turning::TURNING_JOB) {
             self.m.fast_tick_with(&mut self.dda, &mut self.job)
         } else {
             self.m.fast_tick(&mut self.dda)
@@ -165,7 +165,7 @@ impl Rig {
 
     fn full_tick(&mut self) -> StepOutput {
         let inp = Inputs { sensor_faults: self.job.take_sensor_faults(), ..Inputs::QUIET };
-        if self.m.z_job() {
+        if self.m.runs(crate::turning::TURNING_JOB) {
             self.m.tick_with(&mut self.dda, &inp, &mut self.job).step
         } else {
             self.m.tick(&mut self.dda, &inp).step
@@ -180,7 +180,9 @@ impl Rig {
     /// per tick set to match from the first tick ([`Rig::tick_shift`]).
     fn start_at(&mut self, tick_hz: u32) {
         self.job.start(&spec(), tick_hz).unwrap();
-        self.m.command(MachineCommand::StartZ, &mut self.dda).unwrap();
+        self.m
+            .command(MachineCommand::StartSource(crate::turning::TURNING_JOB), &mut self.dda)
+            .unwrap();
     }
 }
 
@@ -239,7 +241,7 @@ fn link_job_reproduces_the_scenario_z_trace_through_the_machine() {
             }
             compared += 1;
         }
-        if ended_at.is_none() && t > sc::ENGAGE_TICK && !rig.m.z_job() {
+        if ended_at.is_none() && t > sc::ENGAGE_TICK && !rig.m.runs(crate::turning::TURNING_JOB) {
             ended_at = Some(t);
         }
     }
@@ -326,7 +328,7 @@ fn coefficients_interpolated_a_tick_ahead_change_no_command() {
             a.start();
             b.start();
         }
-        if t > sc::ENGAGE_TICK && a.m.z_job() {
+        if t > sc::ENGAGE_TICK && a.m.runs(crate::turning::TURNING_JOB) {
             let cmd = match t % HOLD_EVERY_TICKS {
                 0 => Some(MachineCommand::Hold),
                 HOLD_TICKS => Some(MachineCommand::Resume),
@@ -374,7 +376,7 @@ fn step_only_ticks_step_a_z_job_as_full_ticks_do() {
             full.start();
             fast.start();
         }
-        let running = full.m.z_job();
+        let running = full.m.runs(crate::turning::TURNING_JOB);
         let a = full.tick(t, false);
         let (b, was_step_only) = fast.tick_step_only(t, false);
         if running {
@@ -444,7 +446,7 @@ fn full_ticks_keep_off_the_generators_heavy_ticks() {
         if t == sc::ENGAGE_TICK {
             r.start_at(2 * sc::TICK_HZ);
         }
-        let running = r.m.z_job();
+        let running = r.m.runs(crate::turning::TURNING_JOB);
         let (shift, phase) =
             r.job.run.as_ref().map_or((0, 0), |z| (z.update_shift, z.update_phase));
         let (_, was_step_only) = r.tick_step_only(t, false);
