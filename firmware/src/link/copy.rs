@@ -18,6 +18,7 @@ use motion::polar::COPY_JOB;
 use motion::protocol::{BlockBytes, ErrorCode, Status, TeachChunk};
 use rtic::Mutex;
 
+use super::capabilities::LinkJob;
 use super::Motion;
 
 /// The copy job's state in [`Motion`] (the tick owns it).
@@ -152,5 +153,23 @@ fn chunk(block: u16, r: TeachRead<'_>, (taught_events, lost_events): (u32, u32))
         ended: r.ended,
         taught_events,
         lost_events,
+    }
+}
+
+/// Copy mode's link hooks (the polar capability's copy jobs; its playback is the machine's
+/// source job the link feeds, `Link::feed_events`).
+pub struct PolarCopy;
+
+impl LinkJob for PolarCopy {
+    fn live(m: &Motion) -> bool {
+        live(m)
+    }
+
+    fn drop_job(m: &mut Motion) {
+        drop_job(m)
+    }
+
+    fn status(m: &Motion, teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
+        status(m, teach, s)
     }
 }

@@ -42,6 +42,8 @@ use motion::Dda;
 use crate::board;
 use board_contract::{CopyEncoders as _, MachineIo as _};
 
+/// The capabilities' link hooks, walked by the target.
+pub mod capabilities;
 /// Copy-mode jobs (`StartCopy`, `ReadTeach`).
 pub mod copy;
 mod feed;

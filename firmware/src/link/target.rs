@@ -24,6 +24,7 @@ use rtic::Mutex;
 use crate::board;
 use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
 
+use super::capabilities::{Capabilities, LinkJob as _};
 use super::feed::Feed;
 use super::*;
 
@@ -56,10 +57,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// machine's background (the abort of the frozen DDA).
     fn drop_job(&mut self) {
         self.motion.get_mut().lock(|m| {
-            wire::drop_job(m);
-            copy::drop_job(m);
-            milling::drop_job(m);
-            m.z.drop_run();
+            Capabilities::drop_job(m);
         });
         self.link.queue.clear();
         self.link.events.clear();
@@ -159,10 +157,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
                 probe_input: mc.probe_input(),
                 ..Status::default()
             };
-            wire::status(m, &mut s);
-            turning::status(m, &mut s);
-            copy::status(m, &self.link.teach, &mut s);
-            milling::status(m, &mut s);
+            Capabilities::status(m, &self.link.teach, &mut s);
             s
         })
     }
@@ -292,7 +287,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
-        if self.with(|m| wire::live(m) || copy::live(m)) {
+        if self.with(|m| Capabilities::live(m)) {
             return Err(ErrorCode::OutOfState);
         }
         let fresh = !self.with(|m| m.machine.source_queued());
@@ -410,7 +405,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn arm_probe(&mut self, kind: ProbeKind) -> Result<(), ErrorCode> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         let r = self.motion.get_mut().lock(|m| {
-            if !empty || wire::live(m) || milling::live(m) || copy::live(m) {
+            if !empty || Capabilities::live(m) {
                 return Err(ErrorCode::OutOfState);
             }
             m.machine.arm_probe(kind, &m.dda).map_err(|e| e.error_code())

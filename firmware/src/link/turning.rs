@@ -19,6 +19,9 @@ use motion::turning::link_job::{ZJob, ZPrepared};
 use motion::turning::link_requests::{self as zr, ZNak};
 use motion::turning::TURNING_JOB;
 
+use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
+
+use super::capabilities::LinkJob;
 use super::Motion;
 use crate::board;
 use board_contract::SpindleEncoder as _;
@@ -93,4 +96,21 @@ pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<()
 /// The Z fields of `Status`.
 pub fn status(m: &Motion, s: &mut Status) {
     zr::status(&m.z, m.machine.config().wire.machine.tick_hz, s);
+}
+
+/// The turning capability's link hooks.
+pub struct Turning;
+
+impl LinkJob for Turning {
+    fn live(m: &Motion) -> bool {
+        m.machine.runs(TURNING_JOB)
+    }
+
+    fn drop_job(m: &mut Motion) {
+        m.z.drop_run();
+    }
+
+    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
+        status(m, s)
+    }
 }

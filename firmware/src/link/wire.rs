@@ -18,6 +18,9 @@ use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
 use motion::wire::WIRE_JOB;
 
+use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
+
+use super::capabilities::LinkJob;
 use super::{LastJob, Motion};
 
 /// The wire job is live (armed, or started and not yet ended).
@@ -143,4 +146,21 @@ pub fn status(m: &Motion, s: &mut Status) {
         }
     }
     s.wire_power = m.machine.outputs().wire_power;
+}
+
+/// The wire capability's link hooks.
+pub struct Wire;
+
+impl LinkJob for Wire {
+    fn live(m: &Motion) -> bool {
+        live(m)
+    }
+
+    fn drop_job(m: &mut Motion) {
+        drop_job(m)
+    }
+
+    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
+        status(m, s)
+    }
 }
