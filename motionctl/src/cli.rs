@@ -572,6 +572,13 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
         Err(r) => bail!("{what} refused: {}", describe_rejection(&r)),
         Ok(Reply::Status(st)) => {
             crate::outln!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
+            let jobs: Vec<&str> =
+                motion::capability::on_board(info.capabilities).map(|c| c.name).collect();
+            crate::outln!(
+                "jobs       G-code{}{}",
+                if jobs.is_empty() { "" } else { ", " },
+                jobs.join(", ")
+            );
             if let Some(p) = &info.last_panic {
                 crate::outln!(
                     "last panic {}:{}:{} (before the last reset)",
