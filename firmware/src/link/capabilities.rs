@@ -22,6 +22,33 @@ pub trait LinkJob {
     fn status(m: &Motion, teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status);
 }
 
+/// Implements [`LinkJob`] for `$ty` in a module whose free functions `live(m)`,
+/// `drop_job(m)` and `status(m, s)` are the hooks (the module needs no teach recorder).
+macro_rules! link_job_from_module_fns {
+    ($ty:ident) => {
+        impl $crate::link::capabilities::LinkJob for $ty {
+            fn live(m: &Motion) -> bool {
+                live(m)
+            }
+
+            fn drop_job(m: &mut Motion) {
+                drop_job(m)
+            }
+
+            fn status(
+                m: &Motion,
+                _teach: &motion::polar::copy_link::TeachRecorder<
+                    { motion::polar::copy_link::TEACH_BLOCKS },
+                >,
+                s: &mut Status,
+            ) {
+                status(m, s)
+            }
+        }
+    };
+}
+pub(crate) use link_job_from_module_fns;
+
 /// Every capability's link module, in the order Status fills them.
 pub type Capabilities = (wire::Wire, turning::Turning, copy::PolarCopy, milling::Milling);
 

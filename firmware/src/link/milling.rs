@@ -20,9 +20,6 @@ use motion::machine::{Inputs, MachineState, TickOut};
 use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 
-use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
-
-use super::capabilities::LinkJob;
 use super::{LastJob, Motion};
 
 /// The board has a force sample source the link can run a force job from: the simulator's
@@ -202,16 +199,4 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
 /// The milling capability's link hooks.
 pub struct Milling;
 
-impl LinkJob for Milling {
-    fn live(m: &Motion) -> bool {
-        live(m)
-    }
-
-    fn drop_job(m: &mut Motion) {
-        drop_job(m)
-    }
-
-    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
-        status(m, s)
-    }
-}
+super::capabilities::link_job_from_module_fns!(Milling);

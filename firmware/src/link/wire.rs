@@ -18,9 +18,6 @@ use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
 use motion::wire::WIRE_JOB;
 
-use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
-
-use super::capabilities::LinkJob;
 use super::{LastJob, Motion};
 
 /// The wire job is live (armed, or started and not yet ended).
@@ -151,16 +148,4 @@ pub fn status(m: &Motion, s: &mut Status) {
 /// The wire capability's link hooks.
 pub struct Wire;
 
-impl LinkJob for Wire {
-    fn live(m: &Motion) -> bool {
-        live(m)
-    }
-
-    fn drop_job(m: &mut Motion) {
-        drop_job(m)
-    }
-
-    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
-        status(m, s)
-    }
-}
+super::capabilities::link_job_from_module_fns!(Wire);
