@@ -16,7 +16,7 @@ fn an_unsupported_stored_tick_rate_boots_on_safe_defaults_until_a_valid_config()
     assert_eq!(m.faults().mask(), FaultCode::TickRate.bit(), "exactly its own code");
     assert_eq!(*m.config(), BoardConfig::safe_default());
     assert_eq!(m.active_causes(), FaultCode::TickRate.bit(), "a level until a valid config");
-    let mut dda = Dda::new(&m.config().wire.machine).unwrap();
+    let mut dda = Dda::new(&m.config().link.machine).unwrap();
     assert_eq!(
         m.command(MachineCommand::ClearFault, &mut dda),
         Err(Refusal::CauseActive(FaultCode::TickRate))
@@ -37,7 +37,7 @@ fn board_faults_stop_the_machine_and_clear_at_once() {
         assert_eq!(m.state(), MachineState::Fault, "{code:?}");
         assert_eq!(m.faults().first(), Some(code));
         assert!(!m.may_feed(), "{code:?}: nothing more is fed");
-        let mut dda = Dda::new(&cfg.wire.machine).unwrap();
+        let mut dda = Dda::new(&cfg.link.machine).unwrap();
         assert!(m.command(MachineCommand::Home, &mut dda).is_err(), "{code:?}: no motion");
         assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
     }

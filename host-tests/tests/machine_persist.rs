@@ -108,7 +108,7 @@ fn boot_with_a_corrupt_record_uses_safe_defaults_and_says_so() {
     assert!(!m.faults().has(FaultCode::ConfigMissing));
     assert_eq!(*m.config(), motion::machine::BoardConfig::safe_default());
     // The defaults allow no travel at all.
-    assert_eq!(m.config().wire.scale[0].soft_max, 0);
+    assert_eq!(m.config().link.scale[0].soft_max, 0);
 }
 
 /// Missing (erased flash, as QEMU's reads), corrupt (a bit flipped), invalid (a complete record
@@ -118,7 +118,7 @@ fn boot_with_a_corrupt_record_uses_safe_defaults_and_says_so() {
 fn missing_corrupt_and_invalid_each_latch_their_own_code_until_a_valid_config() {
     let good = config(Case::EStop);
     let mut invalid = good;
-    invalid.wire.machine.tick_hz = 0;
+    invalid.link.machine.tick_hz = 0;
     assert!(invalid.validate().is_err());
     type Prepare = fn(&mut ConfigStore<Flash>, &BoardConfig);
     let cases: [(&str, Prepare, FaultCode); 3] = [
@@ -145,7 +145,7 @@ fn missing_corrupt_and_invalid_each_latch_their_own_code_until_a_valid_config() 
         assert_eq!(m.boot(loaded), MachineState::Fault, "{name}");
         assert_eq!(m.faults().mask(), code.bit(), "{name}: exactly its own code");
         assert_eq!(m.active_causes(), code.bit(), "{name}: a level until a valid config");
-        let mc = m.config().wire.machine;
+        let mc = m.config().link.machine;
         let mut dda = Dda::new(&mc).unwrap();
         assert_eq!(
             m.command(MachineCommand::ClearFault, &mut dda),

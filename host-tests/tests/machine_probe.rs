@@ -30,7 +30,7 @@ impl Rig {
         let cfg = config(Case::EStop);
         let mut m = Machine::new();
         m.boot(Ok(cfg));
-        let mc = m.config().wire.machine;
+        let mc = m.config().link.machine;
         let mut r = Rig { m, dda: Dda::new(&mc).unwrap(), prep: Preparer::new(&mc).unwrap(), cfg };
         r.m.command(MachineCommand::Home, &mut r.dda).unwrap();
         for _ in 0..10 {
@@ -42,7 +42,7 @@ impl Rig {
 
     /// The switch debounce in ticks (the probe's too).
     fn debounce_ticks(&self) -> u32 {
-        let c = self.cfg.wire;
+        let c = self.cfg.link;
         c.inputs.debounce_ticks(c.machine.tick_hz) as u32
     }
 
@@ -72,7 +72,7 @@ impl Rig {
 
     /// Queues an X move of `steps` (planned as one job) straight into the DDA.
     fn queue_x(&mut self, steps: i32) {
-        let mut p = Planner::new(&self.cfg.wire.machine);
+        let mut p = Planner::new(&self.cfg.link.machine);
         p.push(&Move { steps: [steps, 0, 0, 0, 0, 0], feed_hz: FEED_HZ }).unwrap();
         p.finish();
         let segs: Vec<Segment> = std::iter::from_fn(|| p.pop()).collect();
@@ -117,7 +117,7 @@ fn a_toward_move_latches_the_trip_decelerates_and_ends_ready() {
     let latched = p.latched_steps()[0];
     // The debounce delays the trip by its ticks: at most that many ticks of steps past the
     // surface (one step per tick at most; at FEED_HZ, debounce * FEED_HZ / tick_hz steps).
-    let late = (r.debounce_ticks() * FEED_HZ / r.cfg.wire.machine.tick_hz) as i64 + 1;
+    let late = (r.debounce_ticks() * FEED_HZ / r.cfg.link.machine.tick_hz) as i64 + 1;
     assert!((surface..=surface + late).contains(&latched), "latched {latched}");
     assert_eq!(p.latched_steps()[1], 0);
     // Stopped with a deceleration: a little past the latch, far from the move's end; the rest

@@ -22,7 +22,7 @@ impl Rig {
         if let Some(c) = cfg {
             m.boot(Ok(c));
         }
-        let mc = m.config().wire.machine;
+        let mc = m.config().link.machine;
         Rig { m, dda: Dda::new(&mc).unwrap(), prep: Preparer::new(&mc).unwrap() }
     }
 
@@ -40,7 +40,7 @@ impl Rig {
 
     /// `inp` for as long as the machine's switch debounce takes to believe a new level.
     fn hold(&mut self, inp: &Inputs) {
-        let c = self.m.config().wire;
+        let c = self.m.config().link;
         for _ in 0..c.inputs.debounce_ticks(c.machine.tick_hz).max(1) {
             self.tick(inp);
         }
@@ -63,7 +63,7 @@ impl Rig {
 }
 
 fn segment(steps: i32) -> Segment {
-    let mut p = Planner::new(&config(Case::EStop).wire.machine);
+    let mut p = Planner::new(&config(Case::EStop).link.machine);
     p.push(&Move { steps: [steps, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
     p.finish();
     p.pop().unwrap()

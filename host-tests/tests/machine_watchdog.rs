@@ -125,7 +125,7 @@ fn starved_gate_resets_and_the_next_boot_latches_watchdog_reset() {
     assert_eq!(*m.config(), cfg, "the stored config still loads");
     assert_eq!(m.positions(), [0; 6], "counters start at zero after a reset");
     // An event, not a level: ClearFault at once, to Idle (a reset loses the homing).
-    let mut dda = Dda::new(&cfg.wire.machine).unwrap();
+    let mut dda = Dda::new(&cfg.link.machine).unwrap();
     assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
 
     // The same boot after a power-on: no fault.

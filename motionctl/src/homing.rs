@@ -264,8 +264,8 @@ mod tests {
         use motion::machine::BoardConfig;
         let h = check_axis(&raw(SwitchEnd::Min, 0.0), &X).unwrap();
         let homing = config(&[0], &[Some(h)], &[80.0]);
-        let mut wire = BoardConfig::safe_default().wire;
-        wire.machine.axes[0].max_rate_hz = 20_000;
-        assert_eq!(BoardConfig::with_homing(wire, &homing).validate(), Ok(()));
+        let mut link = BoardConfig::safe_default().link;
+        link.machine.axes[0].max_rate_hz = 20_000;
+        assert_eq!(BoardConfig::with_homing(link, &homing).validate(), Ok(()));
     }
 }

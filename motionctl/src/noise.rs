@@ -1,4 +1,4 @@
-//! A noisy wire for testing: wraps a [`Transport`] so every byte, in both directions, is with
+//! A noisy link for testing: wraps a [`Transport`] so every byte, in both directions, is with
 //! probability `rate` either corrupted (one random bit flipped) or dropped, 50/50, from a seeded
 //! generator. `--noise 0.01 --seed 7` is the "proxy that corrupts or drops 1 % of bytes".
 

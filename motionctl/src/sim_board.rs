@@ -30,7 +30,7 @@ pub struct SimTrouble {
 pub struct SimBoard {
     pub board: BoardLink,
     pub target: SimTarget,
-    wire: SimLink,
+    link: SimLink,
     start: Instant,
     last: Instant,
     /// Machine ticks owed to the running queue.
@@ -63,7 +63,7 @@ impl SimBoard {
         SimBoard {
             board: BoardLink::new("motionctl-sim", caps),
             target: SimTarget::new(LinkConfig::UNSET, capacity),
-            wire: SimLink::new(),
+            link: SimLink::new(),
             start: now,
             last: now,
             budget_ticks: 0.0,
@@ -144,7 +144,7 @@ impl SimBoard {
             }
         }
         if let Some(resp) = self.board.poll(self.now_ms(), &self.target) {
-            self.wire.emit(&resp);
+            self.link.emit(&resp);
         }
     }
 }
@@ -155,28 +155,28 @@ impl Transport for SimBoard {
         if self.silent() {
             return Ok(());
         }
-        self.frames_in += self.wire.receive(bytes, &mut self.board, &mut self.target);
+        self.frames_in += self.link.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
         if self.silent() {
-            self.wire.clear();
+            self.link.clear();
         }
-        if self.wire.is_empty() {
+        if self.link.is_empty() {
             SimLink::idle_wait(timeout);
             self.advance();
             if self.silent() {
-                self.wire.clear();
+                self.link.clear();
             }
         }
-        Ok(self.wire.take())
+        Ok(self.link.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
         self.reconnects += 1;
-        self.wire.reset();
+        self.link.reset();
         Ok(())
     }
 

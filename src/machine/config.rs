@@ -34,7 +34,7 @@ impl HomeAxis {
 /// Everything the machine needs to run, persisted as one record.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct BoardConfig {
-    pub wire: LinkConfig,
+    pub link: LinkConfig,
     /// Axes homed, in order (the polar machine: arm against its stop, then the carriage at
     /// minimum radius). The first `home_count` entries count; 0 = no switches, home where it is.
     pub home_order: [u8; MAX_AXES],
@@ -60,7 +60,7 @@ impl BoardConfig {
         const SCALE: AxisScale =
             AxisScale { steps_per_unit_milli: 1_000, soft_min: 0, soft_max: 0 };
         BoardConfig {
-            wire: LinkConfig {
+            link: LinkConfig {
                 machine: MachineConfig {
                     tick_hz: 50_000,
                     timing: StepTiming {
@@ -81,11 +81,11 @@ impl BoardConfig {
         }
     }
 
-    /// `wire` with the homing parameters of `h` and no following-error check (validate before
+    /// `link` with the homing parameters of `h` and no following-error check (validate before
     /// use).
-    pub fn with_homing(wire: LinkConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
+    pub fn with_homing(link: LinkConfig, h: &crate::protocol::HomingConfig) -> BoardConfig {
         BoardConfig {
-            wire,
+            link,
             home_order: h.order,
             home_count: h.count,
             home: h.axes,
@@ -110,8 +110,8 @@ impl BoardConfig {
     /// Every check of [`LinkConfig::validate`] plus the homing parameters; the error names the
     /// field (and axis).
     pub fn validate(&self) -> Result<(), ConfigError> {
-        self.wire.validate()?;
-        let axes = self.wire.machine.axis_count;
+        self.link.validate()?;
+        let axes = self.link.machine.axis_count;
         let err = |field, axis, reason| Err(ConfigError { field, axis, reason });
         if self.home_count > axes {
             return err("home_count", None, "more than axis_count");
@@ -127,7 +127,7 @@ impl BoardConfig {
             }
             seen |= 1 << a;
             let h = &self.home[a as usize];
-            let max_rate = self.wire.machine.axes[a as usize].max_rate_hz;
+            let max_rate = self.link.machine.axes[a as usize].max_rate_hz;
             if h.search_hz == 0 || h.search_hz > max_rate {
                 return err("search_hz", Some(a), "must be within 1..=max_rate_hz");
             }

@@ -321,7 +321,7 @@ mod machine_tests {
     #[test]
     fn an_estop_spike_trips_and_a_bouncing_release_does_not_clear() {
         let cfg = BoardConfig::safe_default();
-        let debounce = cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz) as u32;
+        let debounce = cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz) as u32;
         assert_eq!(debounce, 100, "2 ms at the safe default's 50 kHz");
         let (mut m, mut dda, _) = homed(cfg);
         let estop = |on: bool| Inputs { estop: on, ..Inputs::QUIET };

@@ -114,7 +114,7 @@ impl FaultLatch {
         true
     }
 
-    /// Bit n set = `FaultCode` n latched (the wire's `Status::faults`).
+    /// Bit n set = `FaultCode` n latched (the link's `Status::faults`).
     pub const fn mask(&self) -> u32 {
         self.mask
     }

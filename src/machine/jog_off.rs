@@ -42,7 +42,7 @@ impl JogOff {
     /// switch is closed, one is on an unused axis, or an axis has both closed (a wiring fault:
     /// no direction is away from both).
     pub fn start(limit_min: u8, limit_max: u8, cfg: &BoardConfig) -> Option<Self> {
-        let used = (1u16 << cfg.wire.machine.axis_count).wrapping_sub(1) as u8;
+        let used = (1u16 << cfg.link.machine.axis_count).wrapping_sub(1) as u8;
         let tripped = limit_min | limit_max;
         if tripped == 0 || tripped & !used != 0 || limit_min & limit_max != 0 {
             return None;
@@ -72,7 +72,7 @@ impl JogOff {
             let (r, d) = if home.latch_hz > 0 && home.backoff_steps > 0 {
                 (home.latch_hz, home.backoff_steps)
             } else {
-                let r = (cfg.wire.machine.axes[a].max_rate_hz / JOG_RATE_DIVISOR).max(1);
+                let r = (cfg.link.machine.axes[a].max_rate_hz / JOG_RATE_DIVISOR).max(1);
                 (r, (r / JOG_TRAVEL_DIVISOR).max(1))
             };
             rate_hz = rate_hz.min(r);
@@ -118,7 +118,7 @@ mod tests {
         let c = cfg();
         let mut j = JogOff::start(0b01, 0b10, &c).unwrap();
         let mv = j.take_move(&c).unwrap();
-        let rate = c.wire.machine.axes[0].max_rate_hz / JOG_RATE_DIVISOR;
+        let rate = c.link.machine.axes[0].max_rate_hz / JOG_RATE_DIVISOR;
         assert_eq!(mv.feed_hz, rate);
         let d = (rate / JOG_TRAVEL_DIVISOR) as i32;
         assert_eq!(&mv.steps[..2], &[d, -d], "x off its min (+), y off its max (-)");

@@ -198,8 +198,8 @@ impl Machine {
         let cfg = BoardConfig::safe_default();
         Machine {
             state: MachineState::Boot,
-            limits: SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count),
-            raw_limits: SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count),
+            limits: SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count),
+            raw_limits: SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count),
             cfg,
             config_set: false,
             latch: FaultLatch::new(),
@@ -231,7 +231,7 @@ impl Machine {
             following: FollowingMonitor::new(),
             tick_overruns: 0,
             switch_filter: SwitchFilter::new(
-                cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz),
+                cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz),
             ),
             fast_left: 0,
             probe: ProbeRun::new(),
@@ -279,9 +279,9 @@ impl Machine {
     }
 
     fn install(&mut self, cfg: BoardConfig) {
-        self.limits = SoftLimits::from_scale(&cfg.wire.scale, cfg.wire.machine.axis_count);
+        self.limits = SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count);
         self.raw_limits = self.limits.minus(&self.offset);
-        self.switch_filter.set_ticks(cfg.wire.inputs.debounce_ticks(cfg.wire.machine.tick_hz));
+        self.switch_filter.set_ticks(cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz));
         self.cfg = cfg;
         self.config_set = true;
         self.active &= !CONFIG_FAULTS;
@@ -292,7 +292,7 @@ impl Machine {
     }
 
     /// The state as the link reports it.
-    pub fn wire_state(&self, dda: &Dda) -> LinkState {
+    pub fn link_state(&self, dda: &Dda) -> LinkState {
         match self.state {
             MachineState::Fault => LinkState::Faulted,
             MachineState::Boot | MachineState::Idle | MachineState::Ready => LinkState::Idle,
@@ -623,7 +623,7 @@ impl Machine {
         };
         let Some(mv) = mv else { return };
         self.fast_left = 0;
-        let mut planner = Planner::new(&self.cfg.wire.machine);
+        let mut planner = Planner::new(&self.cfg.link.machine);
         let mut ok = planner.push(&mv).is_ok();
         planner.finish();
         while ok {

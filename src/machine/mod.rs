@@ -61,8 +61,8 @@ pub(crate) fn homed(cfg: BoardConfig) -> (Machine, crate::dda::Dda, crate::dda::
     cfg.validate().unwrap();
     let mut m = Machine::new();
     m.boot(Ok(cfg));
-    let mut dda = crate::dda::Dda::new(&cfg.wire.machine).unwrap();
-    let mut prep = crate::dda::Preparer::new(&cfg.wire.machine).unwrap();
+    let mut dda = crate::dda::Dda::new(&cfg.link.machine).unwrap();
+    let mut prep = crate::dda::Preparer::new(&cfg.link.machine).unwrap();
     m.command(MachineCommand::Home, &mut dda).unwrap();
     for _ in 0..10 {
         m.tick(&mut dda, &Inputs::QUIET);

@@ -13,7 +13,7 @@
 //! paths are integer-only, division-free and bounded (one plant sample, one ADC conversion, one
 //! chain sample of three channels, and every `DECIMATION`th sample one control update).
 //!
-//! Parts: `params` (the wire parameters and the setups they stand for, with their checks) and
+//! Parts: `params` (the link parameters and the setups they stand for, with their checks) and
 //! `ticks` (the firmware's tick and sample entry points); the job itself is here.
 
 mod params;

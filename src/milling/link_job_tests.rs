@@ -12,12 +12,12 @@ use crate::scenario::run_to_end;
 fn board() -> BoardConfig {
     let scale =
         AxisScale { steps_per_unit_milli: 1_000_000, soft_min: i64::MIN, soft_max: i64::MAX };
-    let wire = LinkConfig {
+    let link = LinkConfig {
         machine: sc::machine(),
         scale: [scale; crate::config::MAX_AXES],
         inputs: crate::config::InputFilterConfig::DEFAULT,
     };
-    BoardConfig::with_homing(wire, &HomingConfig::NONE)
+    BoardConfig::with_homing(link, &HomingConfig::NONE)
 }
 
 fn ready() -> (Machine, Dda, crate::dda::Preparer) {
@@ -184,7 +184,7 @@ fn a_force_trip_on_step_only_ticks_holds_within_a_supervision_period() {
 }
 
 #[test]
-fn case_a_wire_params_are_the_scenarios_setup() {
+fn case_a_link_params_are_the_scenarios_setup() {
     let p = case_a_job();
     assert_eq!(control_params(&p), Ok(sc::control_params(18_000_000)));
     assert_eq!(chain_config(&p), Ok(sc::chain_config()));

@@ -1,7 +1,7 @@
-//! Numbered codes that cross the wire: NAK error codes, segment-check sub-codes and fault codes.
+//! Numbered codes that cross the link: NAK error codes, segment-check sub-codes and fault codes.
 //!
 //! Each enum is defined once, by [`coded_enum!`], together with its table of
-//! `(code, name, description)`; the wire carries the code byte, and [`markdown_table`] renders the
+//! `(code, name, description)`; the link carries the code byte, and [`markdown_table`] renders the
 //! tables for documentation, so the docs can never drift from the code.
 
 use crate::segment::SegmentError;

@@ -1,4 +1,4 @@
-//! Host <-> board wire protocol, shared by the firmware and the host tools. The specification,
+//! Host <-> board link protocol, shared by the firmware and the host tools. The specification,
 //! with the generated code tables, is `src/protocol/PROTOCOL.md`.
 //!
 //! * [`frame`]: `COBS(postcard(message) ++ crc32_le) ++ 0x00` framing ([`encode_frame`],

@@ -189,7 +189,7 @@ impl Rig {
     }
 
     fn send(&mut self, body: RequestBody) -> Result<(), (ErrorCode, NakDetail)> {
-        // Every request survives the wire.
+        // Every request survives the link.
         let req = Request { seq: self.seq, body };
         let mut buf = [0u8; MAX_FRAME_LINK];
         let frame = encode_frame(&req, &mut buf).expect("fits a frame");

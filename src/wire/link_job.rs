@@ -326,12 +326,12 @@ mod tests {
     fn board() -> BoardConfig {
         let scale =
             AxisScale { steps_per_unit_milli: 1_000, soft_min: i64::MIN, soft_max: i64::MAX };
-        let wire = LinkConfig {
+        let link = LinkConfig {
             machine: machine::config(),
             scale: [scale; MAX_AXES],
             inputs: crate::config::InputFilterConfig::DEFAULT,
         };
-        BoardConfig::with_homing(wire, &HomingConfig::NONE)
+        BoardConfig::with_homing(link, &HomingConfig::NONE)
     }
 
     fn ready() -> (Machine, Dda, crate::dda::Preparer) {

@@ -202,11 +202,11 @@ pub fn run(root: &Path, quick: bool) -> Result<()> {
     Ok(())
 }
 
-/// The protocol fuzz test (host-tests/tests/protocol.rs) at `inputs` inputs: frame decoder, message
-/// decoder and board session on random, mutated and spliced frames. Any panic fails it.
+/// The protocol fuzz test (host-tests/tests/protocol_fuzz.rs) at `inputs` inputs: frame decoder,
+/// message decoder and board session on random, mutated and spliced frames. Any panic fails it.
 fn fuzz_decoder(root: &Path, inputs: u64) -> Result<Vec<(&'static str, f64)>> {
     let out = crate::cargo(root)
-        .args(["test", "-p", "host-tests", "--profile", "test-fast", "--test", "protocol"])
+        .args(["test", "-p", "host-tests", "--profile", "test-fast", "--test", "protocol_fuzz"])
         .args(["board_survives_a_million_hostile_inputs", "--", "--nocapture"])
         .env("FUZZ_INPUTS", inputs.to_string())
         .output()?;
@@ -446,7 +446,7 @@ How these are measured:
   streams the 2000-segment end-to-end job (xtask/src/e2e.rs) to the link firmware, no noise,
   from the first batch to the last acknowledgement (bounded by the job once the queue is full).
   `link_status_hz`: status reports received per second of board time at the default 40 ms period.
-- `fuzz_decoder_*`: the protocol fuzz test (host-tests/tests/protocol.rs,
+- `fuzz_decoder_*`: the protocol fuzz test (host-tests/tests/protocol_fuzz.rs,
   `board_survives_a_million_hostile_inputs`) run with `FUZZ_INPUTS=10000000`: random bytes,
   valid frames, bit-flipped, truncated and spliced frames through the board's frame decoder,
   message decoder and session; any panic would fail the run. CI runs the same test at 1e6.

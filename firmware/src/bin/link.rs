@@ -81,7 +81,7 @@ mod app {
     fn init(mut cx: init::Context) -> (Shared, Local) {
         // The timer starts at the safe default's rate and is retimed to the stored config's
         // before it runs.
-        let default_hz = BoardConfig::safe_default().wire.machine.tick_hz;
+        let default_hz = BoardConfig::safe_default().link.machine.tick_hz;
         let board::Parts {
             reset,
             mut tick_timer,
@@ -109,7 +109,7 @@ mod app {
         // rate this timer cannot make boots on safe defaults with TickRate.
         let mut tick_rate = tick_timer.rate_control();
         let loaded = config.load().and_then(|c| {
-            let tick_hz = c.wire.machine.tick_hz;
+            let tick_hz = c.link.machine.tick_hz;
             if tick_rate.set(tick_hz) {
                 Ok(c)
             } else {
@@ -121,7 +121,7 @@ mod app {
             defmt::error!("the safe default config is refused: the firmware is broken");
             board::exit(false)
         };
-        let tick_hz = motion.machine.config().wire.machine.tick_hz;
+        let tick_hz = motion.machine.config().link.machine.tick_hz;
         if !tick_rate.set(tick_hz) {
             defmt::error!("tick rate {=u32} Hz not supported by this board", tick_hz);
             motion.machine.board_fault(FaultCode::BoardSetup);
@@ -458,7 +458,7 @@ mod app {
             WATCHDOG.control_alive();
             #[cfg(feature = "isr-cycles")]
             {
-                let tick_hz = motion.lock(|m| m.machine.config().wire.machine.tick_hz);
+                let tick_hz = motion.lock(|m| m.machine.config().link.machine.tick_hz);
                 cx.local.isr_log.poll(tick_hz);
             }
             let (responses, feed) = link.lock(|l| l.poll(&mut motion));

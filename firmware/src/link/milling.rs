@@ -126,8 +126,8 @@ pub fn arm(
             _ => {}
         }
     }
-    let tick_hz = m.machine.config().wire.machine.tick_hz;
-    let job = ForceJob::new(p, tick_hz, TICK_SAMPLED, m.force.sim.as_ref())
+    let tick_hz = m.machine.config().link.machine.tick_hz;
+    let job = ForceJob::new(p, tick_hz, TICK_SAMPLED, m.milling.sim.as_ref())
         .map_err(|_| ErrorCode::OutOfRange)?;
     m.job = LastJob::Force(job);
     Ok(())
@@ -177,7 +177,7 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
     }
     // The spindle encoder, read every tick (`turning::sense`), gives the speed: a stopped
     // spindle holds the feed with `SpindleStopped`.
-    let tick_hz = machine.config().wire.machine.tick_hz;
+    let tick_hz = machine.config().link.machine.tick_hz;
     job.set_spindle_mrev_s(mrev_s_from_turn_q32_per_tick(
         z.sensed_speed_turn_q32_per_tick(),
         tick_hz,

@@ -146,7 +146,7 @@ pub struct Motion {
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
     pub copy: copy::CopyState,
     /// The simulated plant the next force job samples.
-    pub force: milling::ForceSlot,
+    pub milling: milling::ForceSlot,
     /// The simulated probe surface (`Sim(Probe)`), evaluated from the step counters every tick.
     #[cfg(feature = "sim-inputs")]
     pub sim_probe: Option<motion::protocol::SimProbeSurface>,
@@ -162,12 +162,12 @@ impl Motion {
     ) -> Option<(Self, Preparer)> {
         let mut machine = Machine::new();
         machine.boot_after_reset(loaded, reset);
-        let mut cfg = machine.config().wire.machine;
+        let mut cfg = machine.config().link.machine;
         if cfg.validate().is_err() {
             // A validated config the DDA or preparer still refuses: the safe defaults instead.
             machine = Machine::new();
             machine.boot_after_reset(Err(BootConfig::Corrupt), reset);
-            cfg = machine.config().wire.machine;
+            cfg = machine.config().link.machine;
         }
         let dda = Dda::new(&cfg).ok()?;
         let preparer = Preparer::new(&cfg).ok()?;
@@ -180,7 +180,7 @@ impl Motion {
                 job: LastJob::None,
                 z: ZJob::new(),
                 copy: copy::CopyState::new(),
-                force: milling::ForceSlot::default(),
+                milling: milling::ForceSlot::default(),
                 #[cfg(feature = "sim-inputs")]
                 sim_probe: None,
             },
@@ -190,13 +190,13 @@ impl Motion {
 
     /// The state as the link reports it: started with segments still to feed counts as
     /// moving (the feeder is about to run).
-    pub(super) fn wire_state(&self) -> LinkState {
+    pub(super) fn link_state(&self) -> LinkState {
         match (self.machine.state(), self.dda.state()) {
             (MachineState::Running, MotionState::Idle) => LinkState::Moving,
             (MachineState::Holding, MotionState::Idle) if self.machine.source_job().is_some() => {
                 LinkState::Held
             }
-            _ => self.machine.wire_state(&self.dda),
+            _ => self.machine.link_state(&self.dda),
         }
     }
 }

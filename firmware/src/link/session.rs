@@ -203,7 +203,7 @@ impl Link {
     /// Milliseconds of DDA time since boot (division: never call from the tick).
     fn now_ms(&self, motion: &mut impl Mutex<T = Motion>) -> u64 {
         let (now, tick_hz) =
-            motion.lock(|m| (m.dda.now(), m.machine.config().wire.machine.tick_hz));
+            motion.lock(|m| (m.dda.now(), m.machine.config().link.machine.tick_hz));
         self.feed.clock_base_ms + now * 1_000 / tick_hz.max(1) as u64
     }
 }

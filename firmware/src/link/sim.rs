@@ -17,7 +17,7 @@ pub fn apply(motion: &mut impl Mutex<T = Motion>, req: &SimRequest) -> Result<()
     let done = match *req {
         SimRequest::Inject { wire_stall } => board::MachineIo::inject_wire_stall(wire_stall),
         SimRequest::Spindle { rpm_milli, index } => {
-            let tick_hz = motion.lock(|m| m.machine.config().wire.machine.tick_hz);
+            let tick_hz = motion.lock(|m| m.machine.config().link.machine.tick_hz);
             return spindle(tick_hz, rpm_milli, index);
         }
         SimRequest::Milling(p) => return motion.lock(|m| milling(m, &p)),
@@ -70,6 +70,6 @@ fn milling(m: &mut Motion, p: &SimMillingParams) -> Result<(), ErrorCode> {
     if !milling::TICK_SAMPLED {
         return Err(ErrorCode::Unsupported);
     }
-    m.force.sim = Some(*p);
+    m.milling.sim = Some(*p);
     Ok(())
 }

@@ -68,16 +68,16 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
     /// Installs `cfg` (a validated board config): the machine first (it refuses out of state),
     /// then a DDA and preparer for a changed machine config, retimed in one critical section.
     fn install(&mut self, cfg: &BoardConfig) -> Result<(), ErrorCode> {
-        let preparer = Preparer::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?;
-        let old = self.with(|m| m.machine.config().wire.machine);
-        let tick_hz = cfg.wire.machine.tick_hz;
-        let fresh = if cfg.wire.machine == old {
+        let preparer = Preparer::new(&cfg.link.machine).map_err(|_| ErrorCode::InvalidConfig)?;
+        let old = self.with(|m| m.machine.config().link.machine);
+        let tick_hz = cfg.link.machine.tick_hz;
+        let fresh = if cfg.link.machine == old {
             None
         } else {
             if !self.link.tick_rate.supports(tick_hz) {
                 return Err(ErrorCode::InvalidConfig);
             }
-            Some(Dda::new(&cfg.wire.machine).map_err(|_| ErrorCode::InvalidConfig)?)
+            Some(Dda::new(&cfg.link.machine).map_err(|_| ErrorCode::InvalidConfig)?)
         };
         self.command(MachineCommand::SetConfig(cfg))?;
         self.drop_job();
@@ -102,7 +102,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
 
 impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn state(&self) -> LinkState {
-        self.with(|m| m.wire_state())
+        self.with(|m| m.link_state())
     }
 
     fn machine_state(&self) -> MachineState {
@@ -118,7 +118,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     }
 
     fn config(&self) -> LinkConfig {
-        self.with(|m| m.machine.config().wire)
+        self.with(|m| m.machine.config().link)
     }
 
     fn planned_position(&self) -> [i64; MAX_AXES] {
@@ -132,7 +132,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
             let mut s = Status {
                 tick: d.now(),
                 positions: mc.positions(),
-                state: m.wire_state(),
+                state: m.link_state(),
                 override_bits: d.feed_override().to_bits(),
                 queue_depth: mc.in_flight(d).min(u16::MAX as u32) as u16,
                 segments_done: d.segments_done(),
@@ -173,8 +173,8 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         if *homing == self.with(|m| m.machine.config().homing()) {
             return Ok(());
         }
-        let wire = self.with(|m| m.machine.config().wire);
-        self.install(&BoardConfig::with_homing(wire, homing))
+        let link = self.with(|m| m.machine.config().link);
+        self.install(&BoardConfig::with_homing(link, homing))
     }
 
     fn queue_segment(&mut self, seg: &Segment) -> Result<(), ErrorCode> {
@@ -363,7 +363,7 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
     fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
         let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
         let (tick_hz, speed, active) = self.with(|m| {
-            let tick_hz = m.machine.config().wire.machine.tick_hz;
+            let tick_hz = m.machine.config().link.machine.tick_hz;
             (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.runs(TURNING_JOB))
         });
         // The generator is built here, outside the lock (see `turning`).

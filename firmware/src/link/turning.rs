@@ -95,7 +95,7 @@ pub fn start(m: &mut Motion, plain_queue_empty: bool, p: ZPrepared) -> Result<()
 
 /// The Z fields of `Status`.
 pub fn status(m: &Motion, s: &mut Status) {
-    zr::status(&m.z, m.machine.config().wire.machine.tick_hz, s);
+    zr::status(&m.z, m.machine.config().link.machine.tick_hz, s);
 }
 
 /// The turning capability's link hooks.

@@ -76,7 +76,7 @@ pub fn arm(m: &mut Motion, plain_queue_empty: bool, p: &WireJobParams) -> Result
         resume_override: Rate::from_bits(p.resume_override_bits),
         resume_segments: p.resume_segments,
     };
-    let cfg = m.machine.config().wire.machine;
+    let cfg = m.machine.config().link.machine;
     let job = WireJob::new(&cfg, params, p.segments).map_err(|_| ErrorCode::InvalidConfig)?;
     m.job = LastJob::Wire(job);
     Ok(())

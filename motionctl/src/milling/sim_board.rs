@@ -274,7 +274,7 @@ impl LinkTarget for MillingSimTarget {
 pub struct MillingSimBoard {
     pub board: BoardLink,
     pub target: MillingSimTarget,
-    wire: SimLink,
+    link: SimLink,
     last: Instant,
     budget_ticks: f64,
     /// Machine time per wall time.
@@ -300,7 +300,7 @@ impl MillingSimBoard {
         MillingSimBoard {
             board: BoardLink::new("motionctl-force-sim", caps),
             target: MillingSimTarget::new(CAPACITY),
-            wire: SimLink::new(),
+            link: SimLink::new(),
             last: Instant::now(),
             budget_ticks: 0.0,
             speed,
@@ -344,7 +344,7 @@ impl MillingSimBoard {
             if self.target.inner.tick.is_multiple_of(period_ticks) {
                 let ms = self.now_ms();
                 if let Some(resp) = self.board.poll(ms, &self.target) {
-                    self.wire.emit(&resp);
+                    self.link.emit(&resp);
                 }
             }
         }
@@ -364,21 +364,21 @@ impl MillingSimBoard {
 impl Transport for MillingSimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
-        self.wire.receive(bytes, &mut self.board, &mut self.target);
+        self.link.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
-        if self.wire.is_empty() {
+        if self.link.is_empty() {
             SimLink::idle_wait(timeout);
             self.advance();
         }
-        Ok(self.wire.take())
+        Ok(self.link.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
-        self.wire.reset();
+        self.link.reset();
         Ok(())
     }
 

@@ -25,7 +25,7 @@ const CAPS: u32 = CAP_DDA
 pub struct CopySimBoard {
     pub board: BoardLink,
     pub target: CopySim,
-    wire: SimLink,
+    link: SimLink,
     start: Instant,
     last: Instant,
     owed_ticks: f64,
@@ -38,7 +38,7 @@ impl CopySimBoard {
         CopySimBoard {
             board: BoardLink::new("motionctl-copy-sim", CAPS),
             target: CopySim::new(SimTarget::new(motion::polar::job::link_config(), 32)),
-            wire: SimLink::new(),
+            link: SimLink::new(),
             start: now,
             last: now,
             owed_ticks: 0.0,
@@ -57,7 +57,7 @@ impl CopySimBoard {
         self.target.run_copy(whole as u64);
         let now_ms = self.start.elapsed().as_millis() as u64;
         if let Some(resp) = self.board.poll(now_ms, &self.target) {
-            self.wire.emit(&resp);
+            self.link.emit(&resp);
         }
     }
 }
@@ -65,21 +65,21 @@ impl CopySimBoard {
 impl Transport for CopySimBoard {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.advance();
-        self.wire.receive(bytes, &mut self.board, &mut self.target);
+        self.link.receive(bytes, &mut self.board, &mut self.target);
         Ok(())
     }
 
     fn recv(&mut self, timeout: Duration) -> io::Result<Vec<u8>> {
         self.advance();
-        if self.wire.is_empty() {
+        if self.link.is_empty() {
             SimLink::idle_wait(timeout);
             self.advance();
         }
-        Ok(self.wire.take())
+        Ok(self.link.take())
     }
 
     fn reconnect(&mut self) -> io::Result<()> {
-        self.wire.reset();
+        self.link.reset();
         Ok(())
     }
 

@@ -148,7 +148,7 @@ impl Machine {
     /// A segment's machine checks and the soft limits at the end of everything admitted before
     /// it; on success the planned end moves there (a refusal changes nothing).
     pub(super) fn admit(&mut self, seg: &Segment) -> Result<(), Refusal> {
-        seg.check(&self.cfg.wire.machine).map_err(Refusal::Segment)?;
+        seg.check(&self.cfg.link.machine).map_err(Refusal::Segment)?;
         self.planned_end = self
             .limits
             .check_move(&self.planned_end, &seg.steps)

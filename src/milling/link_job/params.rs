@@ -1,4 +1,4 @@
-//! A force job's wire parameters and the setups they stand for: the control law's, the chain's
+//! A force job's link parameters and the setups they stand for: the control law's, the chain's
 //! and the simulated plant's, both ways, with every check `ArmForce` and `Sim(Milling)` make.
 
 use crate::protocol::{
@@ -201,8 +201,8 @@ pub fn plant_params(s: &SimMillingParams, job: &ForceJobParams) -> PlantParams {
     }
 }
 
-/// The wire parameters of a control setup and chain (the inverse of [`control_params`] and
-/// [`chain_config`]; saturating where a wire field is narrower). `sample_hz` = the chain's
+/// The link parameters of a control setup and chain (the inverse of [`control_params`] and
+/// [`chain_config`]; saturating where a link field is narrower). `sample_hz` = the chain's
 /// control rate times `DECIMATION`.
 pub fn job_params(ctl: &ControlParams, chain: &ChainConfig, axis: u8) -> ForceJobParams {
     let ms = |v: u32| v.min(u16::MAX as u32) as u16;
@@ -255,7 +255,7 @@ pub fn job_params(ctl: &ControlParams, chain: &ChainConfig, axis: u8) -> ForceJo
     }
 }
 
-/// The wire parameters of a simulated plant (the inverse of [`plant_params`]).
+/// The link parameters of a simulated plant (the inverse of [`plant_params`]).
 pub fn sim_params(plant: &PlantParams, fault: SimForceFault, fault_at_um: u32) -> SimMillingParams {
     SimMillingParams {
         kc_mn_per_mm2: plant.kc_mn_per_mm2,

@@ -1,4 +1,4 @@
-//! Host -> board: the request, its body (one variant per command, in wire order) and its kind.
+//! Host -> board: the request, its body (one variant per command, in encoding order) and its kind.
 
 use serde::{Deserialize, Serialize};
 

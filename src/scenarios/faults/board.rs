@@ -35,7 +35,7 @@ pub fn config(case: Case) -> BoardConfig {
     };
     let scale = AxisScale { steps_per_unit_milli: 80_000, soft_min: -soft, soft_max: soft };
     let mut cfg = BoardConfig {
-        wire: LinkConfig {
+        link: LinkConfig {
             machine: MachineConfig {
                 tick_hz: TICK_HZ,
                 timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 5_000 },

@@ -81,7 +81,7 @@ impl FaultScenario {
             Ok(config(case))
         };
         machine.boot(loaded);
-        let cfg = machine.config().wire.machine;
+        let cfg = machine.config().link.machine;
         let moves: &'static [Move] = match case {
             Case::EStop
             | Case::LinkLoss
@@ -285,7 +285,7 @@ impl FaultScenario {
             }
             MachineState::Ready if self.started => {
                 self.beyond_tried = true;
-                let mut p = Planner::new(&self.machine.config().wire.machine);
+                let mut p = Planner::new(&self.machine.config().link.machine);
                 let seg = p.push(&BEYOND).ok().and_then(|_| {
                     p.finish();
                     p.pop()
@@ -395,7 +395,7 @@ impl Scenario for FaultScenario {
 
     /// The case's machine's rate: `TICK_HZ`, except the polar machine's.
     fn tick_hz(&self) -> u32 {
-        self.machine.config().wire.machine.tick_hz
+        self.machine.config().link.machine.tick_hz
     }
 
     fn wants_background(&self) -> bool {

@@ -40,7 +40,7 @@ impl IndexerScenario {
     pub fn new(cfg: BoardConfig, job: IndexJob, op: Operator) -> Option<Self> {
         let mut m = Machine::new();
         m.boot(Ok(cfg));
-        let mc = m.config().wire.machine;
+        let mc = m.config().link.machine;
         let mut dda = Dda::new(&mc).ok()?;
         let mut prep = Preparer::new(&mc).ok()?;
         m.command(MachineCommand::Home, &mut dda).ok()?;
@@ -80,7 +80,7 @@ impl Scenario for IndexerScenario {
     }
 
     fn tick_hz(&self) -> u32 {
-        self.m.config().wire.machine.tick_hz
+        self.m.config().link.machine.tick_hz
     }
 
     fn tick(&mut self) -> bool {

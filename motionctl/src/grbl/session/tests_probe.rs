@@ -97,11 +97,11 @@ impl Sender<'_, '_> {
 /// coordinates), behind a bridge a scripted sender has just connected to.
 fn session(surface: Option<SimProbe>, script: impl FnOnce(&mut Sender)) {
     let machine: &'static Machine = Box::leak(Box::new(crate::grbl::test_machine()));
-    let (cfg, wire_cfg) = crate::grbl::board_config(machine).unwrap();
+    let (cfg, link_cfg) = crate::grbl::board_config(machine).unwrap();
     let mut t: Box<dyn Transport> = Box::new(EventSim::scaled(SIM_CAPACITY, SIM_SPEED));
     let mut s = Session::new(&mut *t, HostConfig { rto_ms: 50, window: 8 });
     s.connect().unwrap();
-    runner::ready_board(&mut s, wire_cfg, runner::Home::AsConfigured, "machine file", &|_| {})
+    runner::ready_board(&mut s, link_cfg, runner::Home::AsConfigured, "machine file", &|_| {})
         .unwrap();
     if let Some(sim) = surface {
         let spm: Vec<f64> = machine.axes.iter().map(|a| a.steps_per_mm).collect();

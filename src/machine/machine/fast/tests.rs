@@ -12,7 +12,7 @@ use crate::scenarios::faults::{config, Case};
 fn running(case: Case, moves: &[[i32; 2]]) -> (Machine, Dda, Preparer) {
     let cfg = config(case);
     let (mut m, mut dda, mut prep) = homed(cfg);
-    let mut p = Planner::new(&cfg.wire.machine);
+    let mut p = Planner::new(&cfg.link.machine);
     for mv in moves {
         p.push(&Move { steps: [mv[0], mv[1], 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
     }
@@ -123,7 +123,7 @@ fn a_command_makes_the_next_tick_a_full_one() {
 #[test]
 fn a_switch_being_timed_keeps_every_tick_full() {
     let (mut m, mut dda, _) = running(Case::EStop, &JOB);
-    let c = m.config().wire;
+    let c = m.config().link;
     let debounce = c.inputs.debounce_ticks(c.machine.tick_hz);
     assert!(debounce > 2);
     // Closed for less than the debounce: timed on every tick, then forgotten.
@@ -142,11 +142,11 @@ fn a_soft_limit_crossed_on_a_step_only_tick_latches_on_that_tick() {
     let cfg = config(Case::SoftLimitRun);
     let build = || {
         let (mut m, mut dda, mut prep) = homed(cfg);
-        let mut p = Planner::new(&cfg.wire.machine);
+        let mut p = Planner::new(&cfg.link.machine);
         p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
         p.finish();
         m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
-        let mut p = Planner::new(&cfg.wire.machine);
+        let mut p = Planner::new(&cfg.link.machine);
         p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
         p.finish();
         dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
@@ -167,7 +167,7 @@ fn a_probe_move_keeps_every_tick_full_and_trips_as_with_full_ticks() {
     let build = || {
         let (mut m, mut dda, mut prep) = homed(cfg);
         m.arm_probe(ProbeKind::TowardError, &dda).unwrap();
-        let mut p = Planner::new(&cfg.wire.machine);
+        let mut p = Planner::new(&cfg.link.machine);
         p.push(&Move { steps: [0, -4_000, 0, 0, 0, 0], feed_hz: 2_000 }).unwrap();
         p.finish();
         let seg = p.pop().unwrap();

@@ -36,7 +36,7 @@ fn following_plant_without_jam_never_trips_and_clear_loses_homing() {
     let cfg = config(Case::FollowingError);
     let mut m = Machine::new();
     m.boot(Ok(cfg));
-    let mc = cfg.wire.machine;
+    let mc = cfg.link.machine;
     let (mut dda, mut prep) = (Dda::new(&mc).unwrap(), Preparer::new(&mc).unwrap());
     m.command(MachineCommand::Home, &mut dda).unwrap();
     let mut net = [0i64; MAX_AXES];

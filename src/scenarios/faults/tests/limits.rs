@@ -31,7 +31,7 @@ fn without_a_debounce_limits_stop_on_the_switch() {
     for (c, axis, at) in [(Case::LimitMin(0), 0, SWITCH_MIN), (Case::LimitMax(1), 1, SWITCH_MAX)] {
         let mut s = FaultScenario::new(c).unwrap();
         let mut cfg = *s.machine.config();
-        cfg.wire.inputs.switch_debounce_us = 0;
+        cfg.link.inputs.switch_debounce_us = 0;
         s.machine = Machine::new();
         s.machine.boot(Ok(cfg));
         let r = run_to_end(&mut s, MAX_TICKS + 1);
@@ -94,7 +94,7 @@ fn switch_chatter_shorter_than_the_debounce_is_not_a_limit() {
     // Raw, the same chatter trips the limit.
     let mut s = FaultScenario::new(Case::LimitNoise).unwrap();
     let mut cfg = *s.machine.config();
-    cfg.wire.inputs.switch_debounce_us = 0;
+    cfg.link.inputs.switch_debounce_us = 0;
     s.machine = Machine::new();
     s.machine.boot(Ok(cfg));
     let r = run_to_end(&mut s, MAX_TICKS + 1);

@@ -45,7 +45,7 @@ fn estop_switches_outputs_off_and_refuses_clear_while_pressed() {
 
 /// The switch debounce of the cases, ticks.
 fn debounce_ticks() -> u64 {
-    config(Case::LimitMin(0)).wire.inputs.debounce_ticks(TICK_HZ) as u64
+    config(Case::LimitMin(0)).link.inputs.debounce_ticks(TICK_HZ) as u64
 }
 
 #[test]
