@@ -22,7 +22,7 @@ fn an_unsupported_stored_tick_rate_boots_on_safe_defaults_until_a_valid_config()
         Err(Refusal::CauseActive(FaultCode::TickRate))
     );
     assert!(m.command(MachineCommand::Home, &mut dda).is_err(), "no motion on the defaults");
-    m.command(MachineCommand::SetConfig(&good), &mut dda).unwrap();
+    m.set_config(&good).unwrap();
     assert_eq!(m.active_causes(), 0);
     assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
 }

@@ -153,7 +153,7 @@ fn missing_corrupt_and_invalid_each_latch_their_own_code_until_a_valid_config() 
             "{name}"
         );
         assert!(m.command(MachineCommand::Home, &mut dda).is_err(), "{name}: no motion");
-        m.command(MachineCommand::SetConfig(&good), &mut dda).unwrap();
+        m.set_config(&good).unwrap();
         assert_eq!(m.active_causes(), 0, "{name}");
         assert_eq!(m.command(MachineCommand::ClearFault, &mut dda), Ok(MachineState::Idle));
         assert_eq!(*m.config(), good);

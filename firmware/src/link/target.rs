@@ -79,7 +79,8 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
             }
             Some(Dda::new(&cfg.link.machine).map_err(|_| ErrorCode::InvalidConfig)?)
         };
-        self.command(MachineCommand::SetConfig(cfg))?;
+        let r = self.motion.get_mut().lock(|m| m.machine.set_config(cfg));
+        r.map_err(|e: Refusal| e.error_code())?;
         self.drop_job();
         if board::ConfigStorage::PERSISTS {
             self.link.save_pending = Some(*cfg);

@@ -6,7 +6,6 @@ use super::*;
 /// A command with its payload.
 #[derive(Clone, Copy, Debug)]
 pub enum MachineCommand<'a> {
-    SetConfig(&'a BoardConfig),
     Home,
     Start,
     Queue(&'a Segment),
@@ -36,7 +35,6 @@ pub enum MachineCommand<'a> {
 impl MachineCommand<'_> {
     pub const fn kind(&self) -> CommandKind {
         match self {
-            MachineCommand::SetConfig(_) => CommandKind::SetConfig,
             MachineCommand::Home => CommandKind::Home,
             MachineCommand::Start => CommandKind::Start,
             MachineCommand::Queue(_) => CommandKind::Queue,
@@ -87,30 +85,14 @@ impl Refusal {
 impl Machine {
     /// Runs `cmd` if the table allows it in the current state; else refuses and changes
     /// nothing. Control-task priority (with the DDA locked: Hold and Resume act on it).
-    /// After an accepted `Abort`, `ClearFault` or `SetConfig` the caller drops the segments it
-    /// holds for the DDA (its link queue); after `SetConfig` it rebuilds the DDA and preparer
-    /// from [`Machine::config`] before the next [`Machine::background`].
+    /// After an accepted `Abort` or `ClearFault` the caller drops the segments it holds for the
+    /// DDA (its link queue). `SetConfig` is [`Machine::set_config`].
     pub fn command(
         &mut self,
         cmd: MachineCommand<'_>,
         dda: &mut Dda,
     ) -> Result<MachineState, Refusal> {
-        let to = match cell(self.state, cmd.kind()) {
-            Cell::Refused => return Err(Refusal::OutOfState(self.state)),
-            Cell::Stay => self.state,
-            Cell::To(s) => s,
-            Cell::Recover => {
-                if let Some(&f) = FaultCode::ALL.iter().find(|f| self.active & f.bit() != 0) {
-                    return Err(Refusal::CauseActive(f));
-                }
-                // After a following error the counters no longer say where the axis is.
-                if self.homed && !self.latch.has(FaultCode::FollowingError) {
-                    MachineState::Ready
-                } else {
-                    MachineState::Idle
-                }
-            }
-        };
+        let to = self.table_target(cmd.kind())?;
         // Segments and a source job never share a job: the machine has one job end to watch.
         let source = self.source_queued || self.source.is_some();
         let mixed = match cmd {
@@ -128,16 +110,6 @@ impl Machine {
         }
         // Checks first (a refusal changes nothing), then effects.
         match cmd {
-            MachineCommand::SetConfig(new) => {
-                new.validate().map_err(Refusal::InvalidConfig)?;
-                self.install(*new);
-                self.following.resync();
-                self.homed = false;
-                self.homing.cancel();
-                self.probe.drop_move();
-                self.jog = None;
-                self.freeze();
-            }
             MachineCommand::Queue(seg) => {
                 self.admit(seg)?;
                 self.admitted = self.admitted.wrapping_add(1);
@@ -209,5 +181,47 @@ impl Machine {
         // Whatever the command changed, the next tick is a full one.
         self.fast_left = 0;
         Ok(to)
+    }
+
+    /// `SetConfig` (the table's SetConfig column): validates `new` and installs it, if the
+    /// table allows it in the current state; else refuses and changes nothing. Homing is lost
+    /// and the DDA stops; the caller drops the segments it holds, and rebuilds the DDA and
+    /// preparer from [`Machine::config`] before the next [`Machine::background`]. Not a
+    /// [`MachineCommand`]: installing a config divides (the debounce in ticks), and the
+    /// commands that may run at tick rate (a scenario's) must not reach that code.
+    pub fn set_config(&mut self, new: &BoardConfig) -> Result<MachineState, Refusal> {
+        let to = self.table_target(CommandKind::SetConfig)?;
+        new.validate().map_err(Refusal::InvalidConfig)?;
+        self.install(*new);
+        self.following.resync();
+        self.homed = false;
+        self.homing.cancel();
+        self.probe.drop_move();
+        self.jog = None;
+        self.freeze();
+        self.state = to;
+        self.fast_left = 0;
+        Ok(to)
+    }
+
+    /// The state a command of `kind` leads to from the current one, by the table; a refusal
+    /// (nothing changed) when the table refuses it or a fault's cause is still present.
+    fn table_target(&self, kind: CommandKind) -> Result<MachineState, Refusal> {
+        match cell(self.state, kind) {
+            Cell::Refused => Err(Refusal::OutOfState(self.state)),
+            Cell::Stay => Ok(self.state),
+            Cell::To(s) => Ok(s),
+            Cell::Recover => {
+                if let Some(&f) = FaultCode::ALL.iter().find(|f| self.active & f.bit() != 0) {
+                    return Err(Refusal::CauseActive(f));
+                }
+                // After a following error the counters no longer say where the axis is.
+                if self.homed && !self.latch.has(FaultCode::FollowingError) {
+                    Ok(MachineState::Ready)
+                } else {
+                    Ok(MachineState::Idle)
+                }
+            }
+        }
     }
 }
