@@ -11,6 +11,11 @@ pub trait ConfigStorage {
     fn load(&mut self) -> Result<BoardConfig, BootConfig>;
     /// Saves `cfg` as the next generation. May stall flash fetches: machine at rest only.
     fn save(&mut self, cfg: &BoardConfig) -> Result<(), SaveError>;
+    /// A simulated board's fault test (`Sim(CorruptConfig)`): the stored records read corrupt
+    /// from the next boot on, as disturbed flash would. False: not simulated, nothing done.
+    fn corrupt_at_next_boot() -> bool {
+        false
+    }
 }
 
 /// [`ConfigStorage`] over a NOR flash region of two slots of `slot_bytes` from offset 0.

@@ -3,6 +3,9 @@
 //! in RAM the runtime does not zero (`.uninit`). QEMU keeps RAM across a `system_reset`, so the
 //! record survives a board reset as it would in flash, and is lost when QEMU stops (a power
 //! cut loses it, where real flash would keep it: then the board boots with `ConfigMissing`).
+//!
+//! The fault tests corrupt it (`Sim(CorruptConfig)`): every slot gets a flipped byte at the
+//! next boot, as disturbed flash cells would, and the board must boot into `ConfigCorrupt`.
 
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
@@ -20,10 +23,16 @@ type Flash = RamFlash<{ SLOT_BYTES * SLOTS }, SLOT_BYTES>;
 /// Marks a region this firmware set up: anything else (QEMU's zeroed RAM at start-up) is
 /// replaced by an erased flash.
 const MAGIC: u32 = 0x4346_4731;
+/// `corrupt_at_boot` when the host asked for corruption.
+const CORRUPT: u32 = 0xBAD0_C0DE;
+/// Where in each slot the flipped byte goes: inside the record's header, so no record
+/// survives it.
+const CORRUPT_OFFSET: usize = 4;
 
 #[repr(C)]
 struct Region {
     magic: u32,
+    corrupt_at_boot: u32,
     flash: Flash,
 }
 
@@ -36,18 +45,25 @@ pub struct RamConfig {
 }
 
 impl RamConfig {
-    /// Takes the region: an erased flash on QEMU's first boot, else what the last run left.
-    /// Call once, at boot.
+    /// Takes the region: an erased flash on QEMU's first boot, else what the last run left
+    /// (corrupted first if the host asked). Call once, at boot.
     pub fn take() -> RamConfig {
         let region = addr_of_mut!(REGION).cast::<Region>();
         // SAFETY: called once at boot before interrupts run, so this is the only access. The
-        // magic is read as a plain integer (any bit pattern is valid); the flash is used
+        // two words are read as plain integers (any bit pattern is valid); the flash is used
         // only after `magic` says this firmware wrote a valid one there.
         let flash = unsafe {
             if addr_of!((*region).magic).read_volatile() != MAGIC {
-                region.write(Region { magic: MAGIC, flash: Flash::new() });
+                region.write(Region { magic: MAGIC, corrupt_at_boot: 0, flash: Flash::new() });
             }
-            &mut *addr_of_mut!((*region).flash)
+            let flash = &mut *addr_of_mut!((*region).flash);
+            if addr_of!((*region).corrupt_at_boot).read_volatile() == CORRUPT {
+                addr_of_mut!((*region).corrupt_at_boot).write_volatile(0);
+                for slot in 0..SLOTS {
+                    flash.corrupt(slot * SLOT_BYTES + CORRUPT_OFFSET, 0x5A);
+                }
+            }
+            flash
         };
         RamConfig { store: FlashConfig::new(flash, SLOT_BYTES as u32) }
     }
@@ -63,5 +79,13 @@ impl ConfigStorage for RamConfig {
 
     fn save(&mut self, cfg: &BoardConfig) -> Result<(), SaveError> {
         self.store.save(cfg)
+    }
+
+    fn corrupt_at_next_boot() -> bool {
+        let region = addr_of_mut!(REGION).cast::<Region>();
+        // SAFETY: one aligned word of the region, written whole; the flash part (which the
+        // status task may be using) is not touched. Read back only at boot.
+        unsafe { addr_of_mut!((*region).corrupt_at_boot).write_volatile(CORRUPT) };
+        true
     }
 }

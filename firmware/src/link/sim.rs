@@ -10,7 +10,7 @@ use rtic::Mutex;
 
 use super::{milling, Motion};
 use crate::board;
-use board_contract::{CopyEncoders as _, MachineIo as _, SpindleEncoder as _};
+use board_contract::{ConfigStorage as _, CopyEncoders as _, MachineIo as _, SpindleEncoder as _};
 
 /// Runs one hook (the session checked the capabilities and the plant's ranges).
 pub fn apply(motion: &mut impl Mutex<T = Motion>, req: &SimRequest) -> Result<(), ErrorCode> {
@@ -31,6 +31,7 @@ pub fn apply(motion: &mut impl Mutex<T = Motion>, req: &SimRequest) -> Result<()
             motion.lock(|m| m.sim_probe = surface);
             true
         }
+        SimRequest::CorruptConfig => board::ConfigStorage::corrupt_at_next_boot(),
     };
     if done {
         Ok(())

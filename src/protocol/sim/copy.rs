@@ -246,9 +246,10 @@ impl LinkTarget for CopySim {
                 Ok(())
             }
             SimRequest::Inject { .. } => self.inner.sim(req),
-            SimRequest::Spindle { .. } | SimRequest::Milling(_) | SimRequest::Probe { .. } => {
-                Err(ErrorCode::Unsupported)
-            }
+            SimRequest::Spindle { .. }
+            | SimRequest::Milling(_)
+            | SimRequest::Probe { .. }
+            | SimRequest::CorruptConfig => Err(ErrorCode::Unsupported),
         }
     }
 }

@@ -27,6 +27,9 @@ pub enum SimRequest {
     /// The board evaluates it from its step counters every tick, then debounces it like a
     /// real probe input.
     Probe { surface: Option<SimProbeSurface> },
+    /// The stored config records read corrupt from the next boot on, as disturbed flash would
+    /// (a board whose config store can be corrupted, QEMU's; else `Unsupported`).
+    CorruptConfig,
 }
 
 /// A simulated probe surface (`SimRequest::Probe`): the probe input reads active while axis

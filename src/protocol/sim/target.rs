@@ -537,9 +537,9 @@ impl LinkTarget for SimTarget {
             SimRequest::Inject { wire_stall } => self.sim_wire_stall = wire_stall,
             SimRequest::Milling(params) => self.sim_milling = Some(params),
             SimRequest::Probe { surface } => self.sim_probe = surface,
-            SimRequest::Spindle { .. } | SimRequest::Encoders { .. } => {
-                return Err(ErrorCode::Unsupported)
-            }
+            SimRequest::Spindle { .. }
+            | SimRequest::Encoders { .. }
+            | SimRequest::CorruptConfig => return Err(ErrorCode::Unsupported),
         }
         self.mutations += 1;
         Ok(())

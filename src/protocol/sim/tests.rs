@@ -55,3 +55,18 @@ fn a_board_without_the_hooks_answers_unsupported() {
     assert!(matches!(r, Response::Nak { seq: 2, code: ErrorCode::Malformed, .. }), "{r:?}");
     assert_eq!(b.status(&t).counters.frames_bad, 1);
 }
+
+#[cfg(feature = "sim-inputs")]
+#[test]
+fn corrupt_config_is_the_last_hook_and_a_board_without_a_config_store_refuses_it() {
+    // Hook index 5, after `Probe`: the earlier hooks keep their indices.
+    let corrupt = RequestBody::Sim(SimRequest::CorruptConfig);
+    assert_eq!(postcard::to_slice(&corrupt, &mut [0; 8]).unwrap(), [KIND_SIM, 5]);
+    let probe = RequestBody::Sim(SimRequest::Probe { surface: None });
+    assert_eq!(postcard::to_slice(&probe, &mut [0; 8]).unwrap(), [KIND_SIM, 4, 0]);
+    // The simulated targets keep no config records: refused, nothing changed.
+    let mut t = SimTarget::new(config(), 4);
+    let before = t.clone();
+    assert_eq!(t.sim(&SimRequest::CorruptConfig), Err(ErrorCode::Unsupported));
+    assert_eq!(t, before);
+}

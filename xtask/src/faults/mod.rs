@@ -8,7 +8,7 @@
 //! | --- | --- | --- |
 //! | board faults, noisy switches | host model | every `fault_*` scenario of `src/scenarios/faults/` run to its end and checked ([`motion::scenarios::faults::broken_promise`]); the same scenarios run in QEMU in the `scenarios` step |
 //! | reset, link drop, noise (sim) | simulated board | the `link_sim` tests: reset at segment 50, 2.5 s of silence, 1 % byte noise |
-//! | power cut, reset, link drop 2 s, USART overrun bursts | link firmware in QEMU | [`qemu_cases`]: a G-code job through a TCP proxy that drops or mangles bytes, QEMU reset from its monitor or killed |
+//! | power cut, reset, link drop 2 s, USART overrun bursts, config record corruption | link firmware in QEMU | [`qemu_cases`]: a G-code job through a TCP proxy that drops or mangles bytes, QEMU reset from its monitor or killed, the stored record corrupted (`Sim(CorruptConfig)`) before a reset |
 //! | config record corruption, stored tick rate, home position overflow | host | the record decoder's and the boot's tests (`machine_persist`, `machine_board_faults`) |
 //! | bad inputs | `motionctl` | [`inputs`]: every bad-input class run as a command, plus generated garbage (fixed seeds) |
 //!

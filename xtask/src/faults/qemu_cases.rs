@@ -4,13 +4,18 @@
 //! - a link drop: 2 s of silence both ways mid-job;
 //! - USART overrun bursts: 16 bytes to the board lost of every 1500 for the middle of the job;
 //! - a reset mid-job: `system_reset` on QEMU's monitor (the firmware boots again);
-//! - a power cut mid-job: QEMU killed, then a fresh one.
+//! - a power cut mid-job: QEMU killed, then a fresh one;
+//! - a corrupt config record: `Sim(CorruptConfig)` flips a byte in every slot of the board's
+//!   stored config (QEMU's store is RAM that survives a reset), then a reset.
+//!
+//! Each reset is made on a QEMU of its own (see [`Qemu::reset`]).
 //!
 //! Each ends as documented: the job finishes with every segment once, in order, at the host
 //! model's position (the link recovered), or motionctl stops with a non-zero exit and the way on
 //! (`--resume`), the board stopped (after a reset: `Idle`, not homed, with its stored config,
 //! nothing moving), and `run --resume` finishes the job from the journal's line at the
-//! program's end, leaving no journal.
+//! program's end, leaving no journal. A corrupt record boots the board into `Fault` with
+//! `ConfigCorrupt` on safe defaults, and the next run replaces the record, says so, and runs.
 
 use super::proxy::Proxy;
 use super::Tally;
@@ -45,6 +50,8 @@ struct Qemu {
     child: Child,
     serial_port: u16,
     monitor_port: u16,
+    /// Set by the one [`Qemu::reset`] this process may take.
+    was_reset: std::cell::Cell<bool>,
 }
 
 impl Drop for Qemu {
@@ -61,13 +68,22 @@ impl Qemu {
         let child = link_command(elf, serial_port, Some(monitor_port), log)?
             .spawn()
             .context("starting qemu-system-arm")?;
-        Ok(Qemu { child, serial_port, monitor_port })
+        Ok(Qemu { child, serial_port, monitor_port, was_reset: std::cell::Cell::new(false) })
     }
 
     /// The board's reset button: QEMU resets the machine, the firmware boots again. Waits for
     /// the monitor's prompt after the command (a busy QEMU reads it late; closing the monitor
     /// before then can lose it).
+    ///
+    /// Once per QEMU process: QEMU's STM32 timer model re-arms TIM2 at "now + ARR + the virtual
+    /// time of the counter's last restart", so after a reset late in a run each tick advances
+    /// the virtual clock by about as much as the whole run before it. A second reset then
+    /// overflows that clock within a few hundred ticks: the guest sleeps in `wfi` for good, and
+    /// QEMU spins holding its global lock (no UART, no monitor), whatever the firmware does.
     fn reset(&self) -> Result<()> {
+        if self.was_reset.replace(true) {
+            bail!("a second reset of one QEMU process hangs QEMU's timer model: use a fresh rig");
+        }
         let mut m = TcpStream::connect(("127.0.0.1", self.monitor_port)).context("QEMU monitor")?;
         m.write_all(b"system_reset\n")?;
         m.set_read_timeout(Some(Duration::from_millis(200)))?;
@@ -241,6 +257,20 @@ fn board_status(root: &Path, bin: &Path, rig: &Rig) -> Result<String> {
     Ok(e.stdout)
 }
 
+/// Waits until the board answers `motionctl status` (a few tries): a loaded host can run QEMU
+/// several times slower than the board's clock, and `status` gives up after 5 s.
+fn answering(root: &Path, bin: &Path, rig: &Rig) -> Result<()> {
+    const TRIES: usize = 4;
+    let mut last = None;
+    for _ in 0..TRIES {
+        match board_status(root, bin, rig) {
+            Ok(_) => return Ok(()),
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(last.map_or_else(|| anyhow::anyhow!("no status"), |e| e.context("after the reset")))
+}
+
 /// The board's status twice, 300 ms apart: in `Fault` with `code`, every axis where it was
 /// (nothing moves).
 fn held_with(root: &Path, bin: &Path, rig: &Rig, code: &str) -> Result<()> {
@@ -351,6 +381,28 @@ pub fn run(root: &Path, bin: &Path, tally: &mut Tally) -> Result<()> {
     tally.record("reset mid-job (QEMU)", 1, 1, result);
     drop(r);
 
+    // The stored config corrupted, then a reset: on a board of its own (see `Qemu::reset`) that
+    // stored the config by running the job once.
+    let r = rig(&elf, &log("corrupt-config"))?;
+    let result = (|| -> Result<()> {
+        let j = job("corrupt-config")?;
+        let e = spawn(root, bin, &run_args(&j, &r.proxy, &[]))?.finish()?;
+        check_complete(&e, "the run that stores the config")?;
+        corrupt_config(&r.proxy.addr())?;
+        r.qemu.reset()?;
+        answering(root, bin, &r)?;
+        held_with(root, bin, &r, "ConfigCorrupt")?;
+        let e = spawn(root, bin, &run_args(&j, &r.proxy, &[]))?.finish()?;
+        check_complete(&e, "the run after the corrupt config")?;
+        if !e.stderr.contains("cleared ConfigCorrupt") {
+            bail!("the run did not say it replaced the corrupt config: {}", e.stderr.trim());
+        }
+        println!("  the next run replaced the corrupt record and ran the job");
+        Ok(())
+    })();
+    tally.record("config record corruption (QEMU)", 1, 1, result);
+    drop(r);
+
     // Power cut mid-job.
     let j = job("power-cut")?;
     let mut r = rig(&elf, &log("power-cut"))?;
@@ -365,4 +417,17 @@ pub fn run(root: &Path, bin: &Path, tally: &mut Tally) -> Result<()> {
     tally.record("power cut mid-job (QEMU)", 1, 1, result);
     drop(r);
     Ok(())
+}
+
+/// Asks the board at `addr` to corrupt its stored config records at the next boot.
+fn corrupt_config(addr: &str) -> Result<()> {
+    use motion::protocol::{HostConfig, RequestBody, SimRequest};
+    let mut t = motionctl::transport::Tcp::connect(addr)?;
+    let mut s = motionctl::link::Session::new(&mut t, HostConfig { rto_ms: 200, window: 4 });
+    s.connect().map_err(|e| anyhow::anyhow!("{e}"))?;
+    match s.request(RequestBody::Sim(SimRequest::CorruptConfig)) {
+        Ok(Ok(_)) => Ok(()),
+        Ok(Err(r)) => bail!("Sim(CorruptConfig) refused: {r:?}"),
+        Err(e) => bail!("Sim(CorruptConfig): {e}"),
+    }
 }
