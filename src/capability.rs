@@ -1,12 +1,12 @@
-//! The capability registry: what each machine-tool capability (polar contouring, turning,
-//! milling, wire) declares about itself, in one entry next to its logic, and the one list of
-//! entries ([`REGISTRY`]) that the layers around it walk instead of naming capabilities.
+//! What each machine-tool capability (polar contouring, turning, milling, wire) declares about
+//! itself, in one entry next to its logic ([`Capability`]), and the check of a registry of them
+//! ([`check`]); the registry itself is `crate::capabilities::REGISTRY`.
 //!
 //! An entry says the capability's one name (its folder in `src/`, its `motionctl` subcommand,
 //! the prefix of its scenarios), the `HelloInfo` bits a board sets when it runs its jobs, the
 //! source jobs it runs through the machine ([`SourceJob`] tags: the machine runs every source
 //! job by the same rules and keeps only the tag) and the fault codes only it raises. A fifth
-//! capability adds its folder, its entry, and one line here; [`check`] (run by the tests on
+//! capability adds its folder, its entry, and one line in the registry; [`check`] (run by the tests on
 //! this list and on any list a test builds) refuses two entries that claim the same name, tag,
 //! bit or fault.
 
@@ -41,26 +41,6 @@ impl Capability {
             && scenario.starts_with(self.name)
             && scenario.as_bytes()[self.name.len()] == b'_'
     }
-}
-
-/// Every capability the board and its host tools know, in the order they are listed to users.
-pub const REGISTRY: [&Capability; 4] = [
-    &crate::polar::CAPABILITY,
-    &crate::turning::CAPABILITY,
-    &crate::milling::CAPABILITY,
-    &crate::wire::CAPABILITY,
-];
-
-/// Every `HelloInfo` bit of every capability in [`REGISTRY`]: what a board that has every
-/// capability's hardware announces for them.
-pub const fn hello_bits() -> u32 {
-    let mut bits = 0;
-    let mut i = 0;
-    while i < REGISTRY.len() {
-        bits |= REGISTRY[i].hello_bits;
-        i += 1;
-    }
-    bits
 }
 
 /// Two entries of a registry that claim the same thing, or a malformed entry.
@@ -111,26 +91,3 @@ pub fn check(registry: &[&Capability]) -> Result<(), RegistryError> {
     }
     Ok(())
 }
-
-/// The entry named `name` in [`REGISTRY`].
-pub fn by_name(name: &str) -> Option<&'static Capability> {
-    REGISTRY.iter().copied().find(|c| c.name == name)
-}
-
-/// The capability that owns source job `job`.
-pub fn owner_of_job(job: SourceJob) -> Option<&'static Capability> {
-    REGISTRY.iter().copied().find(|c| c.jobs.contains(&job))
-}
-
-/// The capability whose jobs raise `fault` (`None`: a machine fault, any job can raise it).
-pub fn owner_of_fault(fault: FaultCode) -> Option<&'static Capability> {
-    REGISTRY.iter().copied().find(|c| c.faults.contains(&fault))
-}
-
-/// The capabilities a board runs, from its `HelloInfo::capabilities`.
-pub fn on_board(hello_capabilities: u32) -> impl Iterator<Item = &'static Capability> {
-    REGISTRY.iter().copied().filter(move |c| c.on_board(hello_capabilities))
-}
-
-#[cfg(test)]
-mod tests;

@@ -4,6 +4,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 
+pub mod capabilities;
 pub mod capability;
 pub mod config;
 pub mod cycle_histogram;

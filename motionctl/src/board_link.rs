@@ -11,7 +11,8 @@ use crate::runner::{self, RunOptions};
 use crate::transport::{self, LinkTarget, Transport};
 use anyhow::{bail, Result};
 use clap::Args;
-use motion::capability::{self, Capability};
+use motion::capabilities;
+use motion::capability::Capability;
 use motion::protocol::{HelloInfo, HostConfig};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -292,7 +293,7 @@ pub fn require_capability(info: &HelloInfo, cap: &Capability) -> Result<()> {
     if cap.on_board(info.capabilities) {
         return Ok(());
     }
-    let runs: Vec<&str> = capability::on_board(info.capabilities).map(|c| c.name).collect();
+    let runs: Vec<&str> = capabilities::on_board(info.capabilities).map(|c| c.name).collect();
     let runs = if runs.is_empty() { "none".to_string() } else { runs.join(", ") };
     bail!(
         "the board ({:?}) runs no {} jobs (its capabilities: {runs})",

@@ -573,7 +573,7 @@ fn one_request(link: &LinkArgs, body: RequestBody, what: &str) -> Result<()> {
         Ok(Reply::Status(st)) => {
             crate::outln!("board      {} (protocol v{})", info.firmware.as_str(), info.version);
             let jobs: Vec<&str> =
-                motion::capability::on_board(info.capabilities).map(|c| c.name).collect();
+                motion::capabilities::on_board(info.capabilities).map(|c| c.name).collect();
             crate::outln!(
                 "jobs       G-code{}{}",
                 if jobs.is_empty() { "" } else { ", " },

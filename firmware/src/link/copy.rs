@@ -18,7 +18,7 @@ use motion::polar::COPY_JOB;
 use motion::protocol::{BlockBytes, ErrorCode, Status, TeachChunk};
 use rtic::Mutex;
 
-use super::capabilities::LinkJob;
+use super::link_job::LinkJob;
 use super::Motion;
 
 /// The copy job's state in [`Motion`] (the tick owns it).

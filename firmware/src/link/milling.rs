@@ -199,4 +199,4 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
 /// The milling capability's link hooks.
 pub struct Milling;
 
-super::capabilities::link_job_from_module_fns!(Milling);
+super::link_job::link_job_from_module_fns!(Milling);

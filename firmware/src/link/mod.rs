@@ -42,13 +42,15 @@ use motion::Dda;
 use crate::board;
 use board_contract::{CopyEncoders as _, MachineIo as _};
 
-/// The capabilities' link hooks, walked by the target.
+/// The list of the capabilities' link modules, walked by the target.
 pub mod capabilities;
 /// Copy-mode jobs (`StartCopy`, `ReadTeach`).
 pub mod copy;
 mod feed;
 mod host_port;
 mod last_job;
+/// The hooks each capability's link module fills.
+pub mod link_job;
 /// Constant-force milling jobs (`ArmForce`).
 pub mod milling;
 mod session;
@@ -124,7 +126,7 @@ pub const CAPABILITIES: u32 = CAP_DDA
     | CAP_HOLD_RESUME
     | CAP_SOFT_LIMITS
     | CAP_PROBE
-    | (motion::capability::hello_bits() & !MISSING_HARDWARE)
+    | (motion::capabilities::hello_bits() & !MISSING_HARDWARE)
     // The hooks need their code (the `sim-inputs` feature) and a board that simulates inputs.
     | if cfg!(feature = "sim-inputs") && board::MachineIo::SIM_INPUTS { CAP_SIM_INPUTS } else { 0 };
 

@@ -24,8 +24,9 @@ use rtic::Mutex;
 use crate::board;
 use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
 
-use super::capabilities::{Capabilities, LinkJob as _};
+use super::capabilities::Capabilities;
 use super::feed::Feed;
+use super::link_job::LinkJob as _;
 use super::*;
 
 /// [`LinkTarget`] for one request: the link plus the `Motion` resource. `LinkTarget` reads

@@ -21,7 +21,7 @@ use motion::turning::TURNING_JOB;
 
 use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
-use super::capabilities::LinkJob;
+use super::link_job::LinkJob;
 use super::Motion;
 use crate::board;
 use board_contract::SpindleEncoder as _;

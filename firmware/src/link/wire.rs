@@ -148,4 +148,4 @@ pub fn status(m: &Motion, s: &mut Status) {
 /// The wire capability's link hooks.
 pub struct Wire;
 
-super::capabilities::link_job_from_module_fns!(Wire);
+super::link_job::link_job_from_module_fns!(Wire);

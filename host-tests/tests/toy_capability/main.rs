@@ -7,6 +7,7 @@ mod indexer;
 
 use indexer::scenario::{IndexerScenario, Operator};
 use indexer::{IndexJob, CAPABILITY};
+use motion::capabilities;
 use motion::capability::{self, Capability, RegistryError};
 use motion::machine::MachineState;
 use motion::protocol::FaultCode;
@@ -15,10 +16,10 @@ use motion::scenarios::faults::{config, Case};
 
 /// The built-in registry plus the indexer's line.
 const REGISTRY: [&Capability; 5] = [
-    capability::REGISTRY[0],
-    capability::REGISTRY[1],
-    capability::REGISTRY[2],
-    capability::REGISTRY[3],
+    capabilities::REGISTRY[0],
+    capabilities::REGISTRY[1],
+    capabilities::REGISTRY[2],
+    capabilities::REGISTRY[3],
     &CAPABILITY,
 ];
 

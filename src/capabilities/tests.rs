@@ -1,4 +1,5 @@
 use super::*;
+use crate::capability::{check, Capability, RegistryError};
 use crate::scenario::Scenario as _;
 
 #[test]
