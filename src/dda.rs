@@ -593,8 +593,11 @@ impl Dda {
                 open_at: dir_at + self.timing.setup_ticks as u64,
             };
         }
-        // `next` is read in place and dropped after: popping it first would copy the whole slot.
-        let p = next;
+        // Read in place and dropped after: popping it first would copy the whole slot. Looked up
+        // again after the DIR loop: holding `next` across it costs the segment change more.
+        let Some(p) = self.ready.front() else {
+            return false;
+        };
         self.t = p.t;
         self.minus_t = p.t.wrapping_neg();
         self.h = p.h;
