@@ -1,9 +1,9 @@
 //! Wire-manipulator jobs on the link firmware (`motion::wire::link_job`): `ArmWire` makes a
 //! [`WireJob`] in [`Motion`]; while it is live the host's `QueueSegments` go into it (after the
 //! machine's `QueueSourceSegment` checks) instead of the link's plain queue, `Start` starts it
-//! (`StartQueued(WIRE_JOB)`) and pre-feeds the DDA in the same critical section, the tick runs it through
-//! `motion::wire::link_job::tick` (the machine's `tick_with`, the wire-stall switch, the wire
-//! power output), and the feeder calls [`feed`] when the tick asks for it.
+//! (`StartQueued(WIRE_JOB)`) and pre-feeds the DDA in the same critical section, the tick runs
+//! it through `motion::wire::link_job::tick` (the machine's `tick_with`, the wire-stall switch,
+//! the wire power output), and the feeder calls [`feed`] when the tick asks for it.
 //!
 //! The controller's feeding (segment preparation, and after a stall the abort and the retrace
 //! planning) divides, so it runs in the feeder task, never in the tick; it runs inside the
@@ -106,8 +106,8 @@ pub fn queue(m: &mut Motion, seg: &Segment) -> Result<MachineState, ErrorCode> {
     Ok(state)
 }
 
-/// `Start` with a live wire job: the machine's `StartQueued(WIRE_JOB)`, then the first segments into the DDA
-/// in the same critical section (the first tick of the job already moves).
+/// `Start` with a live wire job: the machine's `StartQueued(WIRE_JOB)`, then the first segments
+/// into the DDA in the same critical section (the first tick of the job already moves).
 pub fn start(m: &mut Motion) -> Result<(), ErrorCode> {
     let Motion { dda, machine, job, .. } = m;
     let Some(w) = job.wire_mut().filter(|w| w.is_live()) else {
