@@ -4,7 +4,8 @@
 //! (`MachineCommand::StartSource(TURNING_JOB)`, the Start column) in one critical section;
 //! every tick the board's spindle is read ([`sense`]: the sim spindle under QEMU, TIM4's
 //! encoder on the F405) and, while the machine's Z job runs, the tick runs the job through
-//! `Machine::tick_with` ([`tick`]) with the job's latched faults as sensor inputs, and drives the DAC with the job's code.
+//! `Machine::tick_with` ([`tick`]) with the job's latched faults as sensor inputs, and drives
+//! the DAC with the job's code.
 //!
 //! Interrupt rate ([`sense`], [`tick`]): integer only, no division, bounded (see
 //! `motion::turning::link_job`). `StartZ` builds its generator (`ZGen::new`: divides and scans
