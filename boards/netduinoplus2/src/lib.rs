@@ -4,7 +4,7 @@
 //!
 //! | resource | use |
 //! | --- | --- |
-//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU |
+//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU; its ticks counted as the sim spindle's clock |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
 //! | (none) | copy-mode encoders: simulated A/B levels (`Sim(Encoders)`) decoded by `board_drivers::quadrature::SoftDecoder` (`sim_io.rs`) |
@@ -22,13 +22,15 @@ mod log;
 mod sim_io;
 mod spindle;
 mod step_port;
+mod tick_timer;
 
-pub use board_stm32f405::{pac, HostSerial, TickRate, TickTimer, Watchdog};
+pub use board_stm32f405::{pac, HostSerial, TickRate, Watchdog};
 pub use config_ram::RamConfig;
 pub use cycles::CycleCounter;
 pub use sim_io::{CopyEncoders, MachineIo};
 pub use spindle::Spindle;
 pub use step_port::StepPort;
+pub use tick_timer::TickTimer;
 
 use board_contract::{NoForceAdc, Parts};
 use motion::machine::ResetCause;

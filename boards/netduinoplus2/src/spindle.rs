@@ -1,5 +1,6 @@
 //! The simulated spindle of the QEMU board (QEMU models no timer encoder mode): a
-//! `motion::spindle::SimSpindle` turned every tick at the speed the host set with `Sim(Spindle)`,
+//! `motion::spindle::SimSpindle` turned with the tick count at the speed the host set with
+//! `Sim(Spindle)` (by the ticks since its last reading, as a real spindle turns with time),
 //! read through the same encoder logic (`QuadratureEncoder`) the real board's TIM4 feeds, with
 //! or without index pulses (index loss -> `EncoderIndex`).
 
@@ -18,11 +19,17 @@ static SIM_INDEX: AtomicBool = AtomicBool::new(true);
 pub struct Spindle {
     sim: SimSpindle,
     enc: Option<QuadratureEncoder>,
+    /// The tick count ([`crate::tick_timer::ticks`]) the sim was last turned to.
+    turned_at: u32,
 }
+
+/// Most ticks the sim catches up in one reading (a step-only run of the tick reads it once per
+/// full tick): one `advance` must stay under a turn for its zero crossing to be an index pulse.
+const MAX_CATCH_UP_TICKS: u32 = 8;
 
 impl Spindle {
     pub const fn new() -> Self {
-        Spindle { sim: SimSpindle::new(0), enc: None }
+        Spindle { sim: SimSpindle::new(0), enc: None, turned_at: 0 }
     }
 }
 
@@ -50,15 +57,20 @@ impl board_contract::SpindleEncoder for Spindle {
         true
     }
 
-    /// Once per tick: turn the sim, read its encoder. Bounded, multiplies only; a few loads
-    /// while the spindle stands still.
+    /// Once per tick: turn the sim by the ticks since it was last turned (as a real spindle
+    /// turns with time: a second reading in one tick finds it where the first did), read its
+    /// encoder. Bounded, multiplies only; a few loads while the spindle stands still.
     #[inline]
     fn update(&mut self) {
+        let now = crate::tick_timer::ticks();
         if self.at_rest() {
+            self.turned_at = now;
             return;
         }
+        let passed = now.wrapping_sub(self.turned_at).min(MAX_CATCH_UP_TICKS);
+        self.turned_at = now;
         let speed = SIM_SPEED_TURN_Q32_PER_TICK.load(Relaxed);
-        self.sim.advance(speed);
+        self.sim.advance(speed.wrapping_mul(passed));
         if let Some(e) = self.enc.as_mut() {
             let (count, index) = self.sim.encoder(e.config().counts_per_rev);
             e.update(count, if SIM_INDEX.load(Relaxed) { index } else { None });

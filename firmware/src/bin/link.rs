@@ -34,7 +34,7 @@ mod app {
         TickTimer as _, Watchdog as _,
     };
     use core::sync::atomic::Ordering::Relaxed;
-    use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
+    use motion::machine::{BoardConfig, BootConfig, DdaSource, Inputs, OverrunDetector};
     use motion::polar::PLAYBACK_JOB;
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
@@ -224,11 +224,19 @@ mod app {
         // The plain job's own flag and path first, as short as it can be: its step-only tick is
         // the one the budget is for (sharing the capabilities' path below costs it a jump table
         // and a flag).
+        // The spindle is read once per tick: on a step-only tick only when the machine grants
+        // it (`fast_tick_sensing`), else by the full tick below.
         if *l.plain && !ESTOP_EDGE.load(Relaxed) {
-            if !*l.spindle_at_rest {
-                l.spindle.update();
-            }
-            if let Some(step) = cx.shared.motion.lock(|m| m.machine.fast_tick(&mut m.dda)) {
+            let (spindle, at_rest) = (&mut *l.spindle, *l.spindle_at_rest);
+            let step = cx.shared.motion.lock(|m| {
+                let sense = || {
+                    if !at_rest {
+                        spindle.update();
+                    }
+                };
+                m.machine.fast_tick_sensing(&mut m.dda, &mut DdaSource, sense)
+            });
+            if let Some(step) = step {
                 port.write(&step);
                 *l.wake -= 1;
                 #[cfg(feature = "isr-cycles")]
@@ -252,10 +260,15 @@ mod app {
                     cx.shared.motion.lock(|m| link::wire::step_only_tick(m, stall))
                 }
                 StepOnly::Events => {
-                    if !*l.spindle_at_rest {
-                        l.spindle.update();
-                    }
-                    cx.shared.motion.lock(|m| m.machine.fast_tick_with(&mut m.dda, &mut m.playback))
+                    let (spindle, at_rest) = (&mut *l.spindle, *l.spindle_at_rest);
+                    cx.shared.motion.lock(|m| {
+                        let sense = || {
+                            if !at_rest {
+                                spindle.update();
+                            }
+                        };
+                        m.machine.fast_tick_sensing(&mut m.dda, &mut m.playback, sense)
+                    })
                 }
             };
             if let Some(step) = step {

@@ -44,9 +44,24 @@ impl Machine {
         dda: &mut Dda,
         source: &mut impl StepSource,
     ) -> Option<StepOutput> {
+        self.fast_tick_sensing(dda, source, || {})
+    }
+
+    /// [`Machine::fast_tick_with`] that runs `sense` (the board's reading of a sensor it reads
+    /// once per tick, the spindle's) first, and only if the tick is granted: on `None` the full
+    /// tick that runs instead reads it, so no tick reads it twice. No check beyond the one
+    /// [`Machine::fast_tick`] makes.
+    #[inline(always)]
+    pub fn fast_tick_sensing(
+        &mut self,
+        dda: &mut Dda,
+        source: &mut impl StepSource,
+        sense: impl FnOnce(),
+    ) -> Option<StepOutput> {
         if self.fast_left == 0 {
             return None;
         }
+        sense();
         self.fast_left -= 1;
         self.ticks += 1;
         let step = source.tick(dda, self.paused);

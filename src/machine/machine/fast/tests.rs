@@ -192,3 +192,38 @@ fn a_probe_move_keeps_every_tick_full_and_trips_as_with_full_ticks() {
     let (end_plain, end_fast) = (plain.left_running.unwrap(), fast.left_running.unwrap());
     assert!(end_fast >= end_plain && end_fast - end_plain < SUPERVISE_TICKS as usize);
 }
+
+/// The board reads its once-per-tick sensor (the spindle) through `fast_tick_sensing`: on every
+/// granted step-only tick exactly once, and never on a tick the machine refuses, which the full
+/// tick then runs (and reads it itself). A job as the link firmware ticks it: every tick reads
+/// the sensor once.
+#[test]
+fn the_sensor_is_read_once_on_every_tick_whichever_path_runs_it() {
+    use crate::machine::DdaSource;
+    let (mut m, mut dda, mut prep) = running(Case::EStop, &JOB);
+    let (mut reads, mut fast_ticks, mut full_ticks) = (0usize, 0usize, 0usize);
+    for _ in 0..20_000 {
+        let before = reads;
+        match m.fast_tick_sensing(&mut dda, &mut DdaSource, || reads += 1) {
+            Some(_) => {
+                fast_ticks += 1;
+                assert_eq!(reads, before + 1, "a granted step-only tick reads the sensor once");
+            }
+            None => {
+                assert_eq!(
+                    reads, before,
+                    "a refused step-only tick must leave the read to the full tick"
+                );
+                // The full tick's own read, as the firmware's full path does.
+                reads += 1;
+                full_ticks += 1;
+                m.tick(&mut dda, &Inputs::QUIET);
+            }
+        }
+        if m.wants_background() {
+            m.background(&mut dda, &mut prep);
+        }
+    }
+    assert_eq!(reads, fast_ticks + full_ticks);
+    assert!(fast_ticks > 0 && full_ticks > 0, "{fast_ticks} step-only, {full_ticks} full ticks");
+}
