@@ -96,11 +96,23 @@ impl MachineConfig {
         (NS_PER_S / self.tick_hz.max(1) as u64) as u32
     }
 
-    /// Checks every field and derives the tick-quantised timing.
+    /// Checks every field and derives the tick-quantised timing, for a tick interrupt (at most
+    /// [`MAX_TICK_HZ`]).
     pub fn validate(&self) -> Result<TickTiming, ConfigError> {
+        self.validate_up_to(MAX_TICK_HZ, "must be within 10 kHz..=250 kHz")
+    }
+
+    /// [`MachineConfig::validate`] with ticks up to `max_tick_hz` (`range` says so in the
+    /// error): a step output whose ticks are not interrupts runs them faster
+    /// (`dda::edge_stream`).
+    pub(crate) fn validate_up_to(
+        &self,
+        max_tick_hz: u32,
+        range: &'static str,
+    ) -> Result<TickTiming, ConfigError> {
         let err = |field, reason| Err(ConfigError { field, axis: None, reason });
-        if self.tick_hz < MIN_TICK_HZ || self.tick_hz > MAX_TICK_HZ {
-            return err("tick_hz", "must be within 10 kHz..=250 kHz");
+        if self.tick_hz < MIN_TICK_HZ || self.tick_hz > max_tick_hz {
+            return err("tick_hz", range);
         }
         if self.axis_count == 0 || self.axis_count as usize > MAX_AXES {
             return err("axis_count", "must be within 1..=6");
@@ -140,10 +152,10 @@ impl MachineConfig {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn cfg() -> MachineConfig {
+    pub(crate) fn cfg() -> MachineConfig {
         MachineConfig {
             tick_hz: 100_000,
             timing: StepTiming { pulse_ns: 2_500, dir_setup_ns: 5_000, dir_hold_ns: 12_000 },

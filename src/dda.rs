@@ -18,6 +18,7 @@ use crate::segment::{order_hash, Rate, Segment, SegmentError, ORDER_HASH_START};
 use heapless::{Deque, Vec};
 
 mod control;
+pub mod edge_stream;
 pub mod feed_arbiter;
 pub mod lane_kernel_check;
 pub mod lanes;
@@ -165,8 +166,13 @@ pub struct Dda {
 
 impl Dda {
     pub fn new(cfg: &MachineConfig) -> Result<Self, ConfigError> {
-        Ok(Dda {
-            timing: cfg.validate()?,
+        Ok(Self::with_timing(cfg.validate()?))
+    }
+
+    /// A DDA with `timing` validated elsewhere (a streamed step output's, [`edge_stream::timing`]).
+    pub fn with_timing(timing: TickTiming) -> Self {
+        Dda {
+            timing,
             now: 0,
             remaining: 0,
             t: 0,
@@ -211,7 +217,7 @@ impl Dda {
             done_hash: ORDER_HASH_START,
             underruns: 0,
             deferred_steps: 0,
-        })
+        }
     }
 
     /// One DDA tick: call at exactly `tick_hz`, apply the result to the pins.

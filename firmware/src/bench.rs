@@ -228,6 +228,7 @@ pub fn kernels(c: &CycleCounter) {
     zslide_kernels(c, overhead);
     force_kernels(c, overhead);
     polar_kernels(c, overhead);
+    stream_kernels(c, overhead);
 }
 
 /// Max and mean (tenths) of `n` measured calls of `f`, printed under `name`.
@@ -375,6 +376,61 @@ fn polar_kernels(c: &CycleCounter, overhead: u32) {
         },
         |(p, _), _, ()| {
             black_box(p.tick());
+        },
+    );
+}
+
+/// Slots per half buffer of the streamed step output: its interrupt's period in slots.
+const STREAM_HALF_SLOTS: usize = 64;
+
+/// The streamed step output's fill (`motion::dda::edge_stream`), the work its DMA interrupt
+/// would do per half buffer: the DDA at the 500 kHz slot clock with four axes at 250 kHz each,
+/// one port word per slot into [`STREAM_HALF_SLOTS`] words. The DDA and the words only: not the
+/// machine's step counters and supervision, nor the interrupt's entry and exit.
+fn stream_kernels(c: &CycleCounter, overhead: u32) {
+    use motion::config::StepTiming;
+    use motion::dda::edge_stream::{self, PortWords};
+    let mut cfg = bench_config();
+    cfg.tick_hz = edge_stream::MAX_STREAM_TICK_HZ;
+    cfg.timing = StepTiming { pulse_ns: 1_000, dir_setup_ns: 200, dir_hold_ns: 200 };
+    for a in cfg.axes.iter_mut() {
+        a.max_rate_hz = cfg.tick_hz / 2;
+    }
+    let timing = defmt::unwrap!(edge_stream::timing(&cfg).ok());
+    let port = defmt::unwrap!(PortWords::new(0, 6, 6).ok());
+    let mut steps = [0; MAX_AXES];
+    for s in steps.iter_mut().take(4) {
+        *s = (SEGMENT_TICKS / 2) as i32;
+    }
+    let seg = |id| Segment {
+        steps,
+        duration_ticks: SEGMENT_TICKS,
+        entry_rate: Rate::ONE,
+        exit_rate: Rate::ONE,
+        accel_per_tick: Rate::ONE,
+        id,
+    };
+    let mut state = (
+        Dda::with_timing(timing),
+        Preparer::with_timing(&cfg, timing),
+        0u32,
+        [0u32; STREAM_HALF_SLOTS],
+    );
+    kernel_prepared(
+        c,
+        overhead,
+        "stream_fill_64_slots_4axes",
+        400,
+        &mut state,
+        |(dda, prep, id, _), _| {
+            while dda.ready_free() > 0 {
+                defmt::unwrap!(dda.push(&defmt::unwrap!(prep.prepare(&seg(*id)).ok())).ok());
+                *id += 1;
+            }
+        },
+        |(dda, _, _, words), _, ()| {
+            let d = black_box(dda);
+            port.fill(black_box(words), || d.tick());
         },
     );
 }

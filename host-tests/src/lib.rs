@@ -94,8 +94,22 @@ pub fn run_segments(
     commands: &[(u64, Command)],
     max_ticks: u64,
 ) -> Run {
-    let mut dda = Dda::new(cfg).expect("config");
-    let mut prep = Preparer::new(cfg).expect("config");
+    let timing = cfg.validate().expect("config");
+    run_segments_observed(cfg, timing, segments, commands, max_ticks, |_, _| {})
+}
+
+/// [`run_segments`] with the tick timing given (a streamed step output's, validated with
+/// `motion::dda::edge_stream::timing`), handing `observe` every tick's number and output.
+pub fn run_segments_observed(
+    cfg: &MachineConfig,
+    timing: TickTiming,
+    segments: &[Segment],
+    commands: &[(u64, Command)],
+    max_ticks: u64,
+    mut observe: impl FnMut(u64, &StepOutput),
+) -> Run {
+    let mut dda = Dda::with_timing(timing);
+    let mut prep = Preparer::with_timing(cfg, timing);
     let mut pins = PinChecker::new(*dda.timing());
     let mut rec = StepRecorder::new();
     let mut cmds: Vec<(u64, Command)> = commands.to_vec();
@@ -124,6 +138,7 @@ pub fn run_segments(
         }
         let out = dda.tick();
         let now = dda.now();
+        observe(now, &out);
         rec.record(now, &out);
         pins.check(now, &out);
         if out.rise() != 0 {

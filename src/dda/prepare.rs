@@ -38,7 +38,13 @@ pub struct Preparer {
 
 impl Preparer {
     pub fn new(cfg: &MachineConfig) -> Result<Self, ConfigError> {
-        Ok(Preparer { cfg: *cfg, timing: cfg.validate()?, prev_exit: 0 })
+        Ok(Self::with_timing(cfg, cfg.validate()?))
+    }
+
+    /// A preparer for `cfg` with its timing validated elsewhere (a streamed step output's,
+    /// `edge_stream::timing`).
+    pub fn with_timing(cfg: &MachineConfig, timing: TickTiming) -> Self {
+        Preparer { cfg: *cfg, timing, prev_exit: 0 }
     }
 
     /// The next segment starts from rest (after an abort or an underrun).

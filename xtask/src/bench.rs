@@ -60,6 +60,10 @@ fn derive_capability_figures(f: &mut BTreeMap<String, f64>) {
             (BUDGET_CYCLES_PER_S / z.max(1.0)).floor(),
         );
     }
+    // The streamed step output's fill, per slot (a half buffer is 64 slots).
+    if let Some(fill) = get(f, "kernel_stream_fill_64_slots_4axes_instr_mean") {
+        f.insert("kernel_stream_instr_per_slot_4axes".into(), (fill / 64.0 * 10.0).round() / 10.0);
+    }
     if let (Some(s), Some(c)) =
         (get(f, "kernel_force_chain_sample_instr"), get(f, "kernel_force_control_update_instr"))
     {
@@ -436,6 +440,26 @@ How these are measured:
   `kernel_tick_apply_instr_*` adds the board's step-port `apply` (on QEMU: the `StepRecorder`
   that stands in for the GPIO pins). One function in a loop: a part of the handler, not the
   handler (see `isr_*`).
+- `kernel_stream_*`: the step output past the tick interrupt's ceiling, not yet in the link
+  firmware. One interrupt per tick pays its entry, exit and bookkeeping every tick, so the step
+  rate ends where the handler fills the core (`step_rate_max_hz_per_axis`). The chosen design, as
+  the fastest grblHAL and Klipper drivers do: a timer at the slot rate requests DMA of one word
+  per slot from a circular buffer into the step port's set/reset register (the F405's GPIOC
+  `BSRR`; TIM8's update on DMA2), and the half-transfer interrupt runs the DDA for the half just
+  played, one tick per slot (`motion::dda::edge_stream`: `PortWords::fill`). It keeps the DDA
+  as it is (the step generator proven equal to the host model, exact counts and the half-step
+  line by construction) and costs per slot whatever number of axes step. Output compare per
+  axis (an interrupt per step, as Klipper schedules them: 46 cycles per step on an F407) needs
+  each step's time computed ahead, a different step generator, and two timers for six axes; it
+  was not built to compare. QEMU models
+  neither the DMA nor TIM8, so the counts and timing are proven on the host model
+  (host-tests/tests/edge_stream.rs: random jobs, overrides and holds at a 500 kHz slot clock
+  replayed through a model of `BSRR`: the pins rise on exactly the DDA's slots and axes, every
+  step within half a step of the line, pulse, setup and hold met, and four axes at 250 kHz each,
+  1 MHz together). `kernel_stream_fill_64_slots_4axes_instr`: the bench firmware filling a
+  64-slot half buffer with four axes stepping at 250 kHz each (max and `_mean`);
+  `kernel_stream_instr_per_slot_4axes`: the mean per slot. A part, not the whole: the machine's
+  step counters and supervision and the interrupt's entry and exit are not in it.
 - `flash_bytes`: `.vector_table + .text + .rodata + .data` of the release demo firmware
   (`flash_bytes_link`, `ram_bytes_link`: the same for the link firmware a user flashes, built
   for the real board, f405-motion, without the simulator's test hooks; `_qemu`: the link
