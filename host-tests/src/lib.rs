@@ -155,3 +155,37 @@ pub fn run_segments_observed(
     let ticks = dda.now();
     Run { dda, rec, pins, edges, segment_ends, position_mismatches, ticks }
 }
+
+/// The first position, walking `edges` (tick, rising axes, DIR levels; a set DIR bit is the
+/// negative direction) from the origin, that is more than half a step off the straight line of
+/// `seg` on some axis: no point k/T of the segment lies within 0.5 step of it on every axis at
+/// once. `None`: every step stays within half a step of the line.
+pub fn off_the_line(seg: &Segment, edges: &[(u64, u8, u8)]) -> Option<[i64; MAX_AXES]> {
+    let t = seg.duration_ticks as f64;
+    let mut pos = [0i64; MAX_AXES];
+    for &(_, rise, dir) in edges {
+        for (i, p) in pos.iter_mut().enumerate() {
+            if rise & (1 << i) != 0 {
+                *p += if dir & (1 << i) != 0 { -1 } else { 1 };
+            }
+        }
+        // The interval of the line parameter (virtual ticks) each axis allows.
+        let (mut lo, mut hi) = (0.0f64, t);
+        for (i, &p) in pos.iter().enumerate() {
+            let d = seg.steps[i] as f64;
+            if d == 0.0 {
+                if p != 0 {
+                    return Some(pos);
+                }
+                continue;
+            }
+            let (a, b) = ((p as f64 - 0.5) * t / d, (p as f64 + 0.5) * t / d);
+            lo = lo.max(a.min(b));
+            hi = hi.min(a.max(b));
+        }
+        if lo > hi + 1e-9 {
+            return Some(pos);
+        }
+    }
+    None
+}

@@ -1,7 +1,7 @@
 //! Property tests of the DDA: exact step totals, straight lines, step timing, override and hold,
 //! and the driver timing every edge must honour.
 
-use host_tests::{run_segments, Run};
+use host_tests::{off_the_line, run_segments, Run};
 use motion::config::{AxisLimits, MachineConfig, StepTiming, MAX_AXES};
 use motion::segment::{Rate, Segment};
 use motion::Command;
@@ -140,29 +140,7 @@ proptest! {
     #[test]
     fn steps_stay_within_half_a_step_of_the_line(seg in segment_strategy(2), ovr in 0.1f64..=2.0) {
         let run = run_segments(&cfg(2_500, 0, 0), &[seg], &[(0, Command::SetOverride(rate(ovr)))], 5_000_000);
-        let t = seg.duration_ticks as f64;
-        let mut pos = [0i64; MAX_AXES];
-        for &(_, rise, dir) in &run.edges {
-            for (i, p) in pos.iter_mut().enumerate() {
-                if rise & (1 << i) != 0 {
-                    *p += if dir & (1 << i) != 0 { -1 } else { 1 };
-                }
-            }
-            // Interval of line parameter u (in virtual ticks) compatible with each axis.
-            let (mut lo, mut hi) = (0.0f64, t);
-            for i in 0..MAX_AXES {
-                let d = seg.steps[i] as f64;
-                if d == 0.0 {
-                    prop_assert_eq!(pos[i], 0);
-                    continue;
-                }
-                let a = (pos[i] as f64 - 0.5) * t / d;
-                let b = (pos[i] as f64 + 0.5) * t / d;
-                lo = lo.max(a.min(b));
-                hi = hi.min(a.max(b));
-            }
-            prop_assert!(lo <= hi + 1e-9, "position {:?} is off the line", pos);
-        }
+        prop_assert_eq!(off_the_line(&seg, &run.edges), None);
     }
 
     /// At constant feed (rate exactly 1.0) each step's tick is within one tick of its ideal time.

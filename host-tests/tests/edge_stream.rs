@@ -4,7 +4,7 @@
 //! counts, every step within half a step of the ideal line, the driver's pulse, setup and hold
 //! times met, and four axes at 250 kHz each.
 
-use host_tests::run_segments_observed;
+use host_tests::{off_the_line, run_segments_observed};
 use motion::config::{AxisLimits, MachineConfig, StepTiming, TickTiming, MAX_AXES};
 use motion::dda::edge_stream::{self, apply, PortWords};
 use motion::segment::{Rate, Segment};
@@ -189,27 +189,7 @@ proptest! {
         let (words, run, timing) = stream(&[seg], &[(0, Command::SetOverride(Rate::from_num(ovr)))]);
         prop_assert!(run.dda.is_idle());
         let r = replay(&words, &timing);
-        let t = seg.duration_ticks as f64;
-        let mut pos = [0i64; MAX_AXES];
-        for &(_, rise, dir) in &r.rises {
-            for (i, p) in pos.iter_mut().enumerate() {
-                if rise & (1 << i) != 0 {
-                    *p += if dir & (1 << i) != 0 { -1 } else { 1 };
-                }
-            }
-            let (mut lo, mut hi) = (0.0f64, t);
-            for i in 0..MAX_AXES {
-                let d = seg.steps[i] as f64;
-                if d == 0.0 {
-                    prop_assert_eq!(pos[i], 0);
-                    continue;
-                }
-                let (a, b) = ((pos[i] as f64 - 0.5) * t / d, (pos[i] as f64 + 0.5) * t / d);
-                lo = lo.max(a.min(b));
-                hi = hi.min(a.max(b));
-            }
-            prop_assert!(lo <= hi + 1e-9, "position {:?} is off the line", pos);
-        }
+        prop_assert_eq!(off_the_line(&seg, &r.rises), None);
         prop_assert_eq!(r.net, total(&[seg]));
     }
 }

@@ -38,9 +38,11 @@ mod app {
     use motion::polar::PLAYBACK_JOB;
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
+    use motion_firmware::link::capabilities::{Capabilities, TickChain as _};
+    use motion_firmware::link::link_job::{Readings, StepReadings};
     use motion_firmware::link::{
-        self, Link, Motion, StepOnly, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK,
-        SAVING_CONFIG, WAKE_TICKS, WATCHDOG,
+        self, Link, Motion, ESTOP_EDGE, EVENTS_WAITING, EVENT_REFILL, LINK_OK, SAVING_CONFIG,
+        WAKE_TICKS, WATCHDOG,
     };
     use rtic_sync::make_signal;
     use rtic_sync::signal::{SignalReader, SignalWriter};
@@ -209,7 +211,7 @@ mod app {
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: i32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
-            plain: bool = false, step_only: StepOnly = StepOnly::No, spindle_at_rest: bool = false,
+            plain: bool = false, capability: u8 = 0, spindle_at_rest: bool = false,
             copy_counts: [i32; 2] = [0; 2]])]
     fn tick(mut cx: tick::Context) {
         let l = cx.local;
@@ -222,8 +224,9 @@ mod app {
         // still, a force, event or wire job, or a Z job with step outputs; no e-stop edge. A
         // turning spindle's decoder still sees every tick.
         // The plain job's own flag and path first, as short as it can be: its step-only tick is
-        // the one the budget is for (sharing the capabilities' path below costs it a jump table
-        // and a flag).
+        // the one the budget is for (sharing the capabilities' path below costs it a dispatch
+        // and a flag). Then the step-only tick of the capability whose job the last full tick
+        // ran (`capability`: its place in `Capabilities`, from 1).
         // The spindle is read once per tick: on a step-only tick only when the machine grants
         // it (`fast_tick_sensing`), else by the full tick below.
         if *l.plain && !ESTOP_EDGE.load(Relaxed) {
@@ -244,33 +247,14 @@ mod app {
                     .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
                 return;
             }
-        } else if *l.step_only != StepOnly::No && !ESTOP_EDGE.load(Relaxed) {
-            let step = match *l.step_only {
-                StepOnly::No => None,
-                StepOnly::Z => {
-                    let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::turning::step_only_tick(m, spindle))
-                }
-                StepOnly::Force => {
-                    let spindle = &mut *l.spindle;
-                    cx.shared.motion.lock(|m| link::milling::step_only_tick(m, spindle))
-                }
-                StepOnly::Wire => {
-                    let stall = l.io.read().wire_stall;
-                    cx.shared.motion.lock(|m| link::wire::step_only_tick(m, stall))
-                }
-                StepOnly::Events => {
-                    let (spindle, at_rest) = (&mut *l.spindle, *l.spindle_at_rest);
-                    cx.shared.motion.lock(|m| {
-                        let sense = || {
-                            if !at_rest {
-                                spindle.update();
-                            }
-                        };
-                        m.machine.fast_tick_sensing(&mut m.dda, &mut m.playback, sense)
-                    })
-                }
+        } else if *l.capability != 0 && !ESTOP_EDGE.load(Relaxed) {
+            let which = *l.capability;
+            let mut b = StepReadings {
+                spindle: &mut *l.spindle,
+                spindle_at_rest: *l.spindle_at_rest,
+                io: &mut *l.io,
             };
+            let step = cx.shared.motion.lock(|m| Capabilities::step_only_tick(which, m, &mut b));
             if let Some(step) = step {
                 port.write(&step);
                 *l.wake -= 1;
@@ -296,25 +280,20 @@ mod app {
         cx.shared.motion.lock(|m| {
             #[cfg(feature = "sim-inputs")]
             let inputs = link::sim::with_probe(m, &inputs);
-            link::turning::sense(l.spindle, &mut m.z);
+            let mut r = Readings {
+                inputs: &inputs,
+                copy_counts,
+                wire_stall: raw.wire_stall,
+                spindle: &mut *l.spindle,
+            };
+            Capabilities::sense(m, &mut r);
+            let capability = Capabilities::tick(m, &r);
             *l.spindle_at_rest = l.spindle.at_rest();
             *l.plain = false;
-            *l.step_only = StepOnly::No;
-            // The copy tick first: it also records the encoder counts for Status.
-            let out = if let Some(out) = link::copy::tick(m, &inputs, copy_counts) {
+            *l.capability = 0;
+            let out = if let Some((out, which)) = capability {
+                *l.capability = which;
                 out
-            } else if let Some(out) = link::milling::tick(m, &inputs) {
-                *l.step_only = StepOnly::Force;
-                out
-            } else if let Some(out) = link::wire::tick(m, &inputs, raw.wire_stall) {
-                *l.step_only = StepOnly::Wire;
-                out
-            } else if let Some(out) = link::turning::tick(m, &inputs) {
-                *l.step_only = StepOnly::Z;
-                out
-            } else if m.machine.runs(PLAYBACK_JOB) {
-                *l.step_only = StepOnly::Events;
-                m.machine.tick_with(&mut m.dda, &inputs, &mut m.playback)
             } else {
                 *l.plain = still;
                 m.machine.tick(&mut m.dda, &inputs)

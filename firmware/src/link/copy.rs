@@ -18,8 +18,11 @@ use motion::polar::COPY_JOB;
 use motion::protocol::{BlockBytes, ErrorCode, Status, TeachChunk};
 use rtic::Mutex;
 
-use super::link_job::LinkJob;
+use super::link_job::{LinkJob, Readings, StepReadings};
 use super::Motion;
+use board_contract::SpindleEncoder as _;
+use motion::dda::StepOutput;
+use motion::polar::PLAYBACK_JOB;
 
 /// The copy job's state in [`Motion`] (the tick owns it).
 pub struct CopyState {
@@ -52,7 +55,6 @@ pub fn live(m: &Motion) -> bool {
 /// usual). A copy the machine ended (abort, fault cleared) is marked stopped here.
 #[inline]
 pub fn tick(m: &mut Motion, inputs: &Inputs, counts: [i32; 2]) -> Option<TickOut> {
-    m.copy.counts = counts;
     if !m.copy.running {
         return None;
     }
@@ -156,11 +158,11 @@ fn chunk(block: u16, r: TeachRead<'_>, (taught_events, lost_events): (u32, u32))
     }
 }
 
-/// Copy mode's link hooks (the polar capability's copy jobs; its playback is the machine's
-/// source job the link feeds, `Link::feed_events`).
-pub struct PolarCopy;
+/// The polar capability's link hooks: its copy jobs (this module) and its playback (the
+/// machine's source job the link feeds, `Link::feed_events`).
+pub struct Polar;
 
-impl LinkJob for PolarCopy {
+impl LinkJob for Polar {
     fn live(m: &Motion) -> bool {
         live(m)
     }
@@ -171,5 +173,39 @@ impl LinkJob for PolarCopy {
 
     fn status(m: &Motion, teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
         status(m, teach, s)
+    }
+
+    /// The copy encoders' counts, for Status whatever job runs.
+    #[inline(always)]
+    fn sense(m: &mut Motion, r: &mut Readings<'_>) {
+        m.copy.counts = r.copy_counts;
+    }
+
+    /// A copy job's tick, else a playback's.
+    #[inline(always)]
+    fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {
+        if let Some(out) = tick(m, r.inputs, r.copy_counts) {
+            return Some(out);
+        }
+        if !m.machine.runs(PLAYBACK_JOB) {
+            return None;
+        }
+        Some(m.machine.tick_with(&mut m.dda, r.inputs, &mut m.playback))
+    }
+
+    /// A playback's step-only tick, reading the spindle only if the machine grants it. A copy
+    /// job takes none: it reads its encoders every tick.
+    #[inline(always)]
+    fn step_only_tick(m: &mut Motion, b: &mut StepReadings<'_>) -> Option<StepOutput> {
+        if m.copy.running {
+            return None;
+        }
+        let (spindle, at_rest) = (&mut *b.spindle, b.spindle_at_rest);
+        let sense = || {
+            if !at_rest {
+                spindle.update();
+            }
+        };
+        m.machine.fast_tick_sensing(&mut m.dda, &mut m.playback, sense)
     }
 }

@@ -20,7 +20,9 @@ use motion::machine::{Inputs, MachineState, TickOut};
 use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
 use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
 
+use super::link_job::{LinkJob, Readings, StepReadings};
 use super::{LastJob, Motion};
+use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
 /// The board has a force sample source the link can run a force job from: the simulator's
 /// plant, or the real board's force ADC (a job is refused while [`ADC_SAMPLE_HZ`] is 0).
@@ -199,4 +201,26 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
 /// The milling capability's link hooks.
 pub struct Milling;
 
-super::link_job::link_job_from_module_fns!(Milling);
+impl LinkJob for Milling {
+    fn live(m: &Motion) -> bool {
+        live(m)
+    }
+
+    fn drop_job(m: &mut Motion) {
+        drop_job(m)
+    }
+
+    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
+        status(m, s)
+    }
+
+    #[inline(always)]
+    fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {
+        tick(m, r.inputs)
+    }
+
+    #[inline(always)]
+    fn step_only_tick(m: &mut Motion, b: &mut StepReadings<'_>) -> Option<StepOutput> {
+        step_only_tick(m, b.spindle)
+    }
+}

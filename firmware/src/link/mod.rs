@@ -68,23 +68,6 @@ pub use last_job::LastJob;
 pub use session::Link;
 pub use target::Target;
 
-/// Which capability's step-only tick the tick task tries before a full one (set by the last
-/// full tick; the machine decides whether it is granted). A plain job's (the DDA's) has a flag
-/// of its own, tested first.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StepOnly {
-    /// None: a plain job, a capability job that takes none, or a copy encoder moving.
-    No,
-    /// A Z job's: the spindle is read first.
-    Z,
-    /// An event job's (the playback).
-    Events,
-    /// A force job's (the sample countdown pends the force interrupt).
-    Force,
-    /// A wire job's (the stall switch is read).
-    Wire,
-}
-
 /// Segments the host may have queued beyond the DDA's own ready queue (`credits` when empty).
 pub const SEGMENT_QUEUE: usize = 64;
 /// Transmit queue; a response that does not fit whole is dropped (the host retransmits).

@@ -22,7 +22,7 @@ use motion::turning::TURNING_JOB;
 
 use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
-use super::link_job::LinkJob;
+use super::link_job::{LinkJob, Readings, StepReadings};
 use super::Motion;
 use crate::board;
 use board_contract::SpindleEncoder as _;
@@ -113,5 +113,21 @@ impl LinkJob for Turning {
 
     fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
         status(m, s)
+    }
+
+    /// The spindle's decoder sees every tick, job or not.
+    #[inline(always)]
+    fn sense(m: &mut Motion, r: &mut Readings<'_>) {
+        sense(r.spindle, &mut m.z)
+    }
+
+    #[inline(always)]
+    fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {
+        tick(m, r.inputs)
+    }
+
+    #[inline(always)]
+    fn step_only_tick(m: &mut Motion, b: &mut StepReadings<'_>) -> Option<StepOutput> {
+        step_only_tick(m, b.spindle)
     }
 }

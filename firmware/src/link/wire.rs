@@ -18,7 +18,10 @@ use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
 use motion::wire::WIRE_JOB;
 
+use super::link_job::{LinkJob, Readings, StepReadings};
 use super::{LastJob, Motion};
+use board_contract::MachineIo as _;
+use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
 /// The wire job is live (armed, or started and not yet ended).
 pub fn live(m: &Motion) -> bool {
@@ -148,4 +151,28 @@ pub fn status(m: &Motion, s: &mut Status) {
 /// The wire capability's link hooks.
 pub struct Wire;
 
-super::link_job::link_job_from_module_fns!(Wire);
+impl LinkJob for Wire {
+    fn live(m: &Motion) -> bool {
+        live(m)
+    }
+
+    fn drop_job(m: &mut Motion) {
+        drop_job(m)
+    }
+
+    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
+        status(m, s)
+    }
+
+    #[inline(always)]
+    fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {
+        tick(m, r.inputs, r.wire_stall)
+    }
+
+    /// The stall switch read for the job's retrace.
+    #[inline(always)]
+    fn step_only_tick(m: &mut Motion, b: &mut StepReadings<'_>) -> Option<StepOutput> {
+        let stall = b.io.read().wire_stall;
+        step_only_tick(m, stall)
+    }
+}
