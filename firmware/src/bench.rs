@@ -116,9 +116,9 @@ fn bench_config() -> MachineConfig {
     cfg
 }
 
-/// `axes` axes stepping together at the fastest spacing, at rate 1.0 throughout.
-fn segment(cfg: &MachineConfig, axes: usize, id: u32) -> Segment {
-    let spacing = defmt::unwrap!(cfg.validate().ok()).min_spacing_ticks;
+/// `axes` axes stepping together one step every `spacing` ticks (the fastest the timing allows:
+/// `TickTiming::min_spacing_ticks`), at rate 1.0 throughout.
+fn segment(spacing: u32, axes: usize, id: u32) -> Segment {
     let mut steps = [0; MAX_AXES];
     for s in steps.iter_mut().take(axes) {
         *s = (SEGMENT_TICKS / spacing) as i32;
@@ -162,12 +162,13 @@ fn scenario(
     let cfg = bench_config();
     let mut dda = defmt::unwrap!(Dda::new(&cfg).ok());
     let mut prep = defmt::unwrap!(Preparer::new(&cfg).ok());
+    let spacing = dda.timing().min_spacing_ticks;
     let mut next_id = 0;
     let total = if axes == 0 { 2_000 } else { SEGMENTS };
     // Keeps the DDA's ready queue full; true once every segment is in.
     let mut feed = |dda: &mut Dda| {
         while axes > 0 && next_id < total && dda.ready_free() > 0 {
-            let p = defmt::unwrap!(prep.prepare(&segment(&cfg, axes, next_id)).ok());
+            let p = defmt::unwrap!(prep.prepare(&segment(spacing, axes, next_id)).ok());
             defmt::unwrap!(dda.push(&p).ok());
             next_id += 1;
         }
@@ -398,18 +399,6 @@ fn stream_kernels(c: &CycleCounter, overhead: u32) {
     }
     let timing = defmt::unwrap!(edge_stream::timing(&cfg).ok());
     let port = defmt::unwrap!(PortWords::new(0, 6, 6).ok());
-    let mut steps = [0; MAX_AXES];
-    for s in steps.iter_mut().take(4) {
-        *s = (SEGMENT_TICKS / 2) as i32;
-    }
-    let seg = |id| Segment {
-        steps,
-        duration_ticks: SEGMENT_TICKS,
-        entry_rate: Rate::ONE,
-        exit_rate: Rate::ONE,
-        accel_per_tick: Rate::ONE,
-        id,
-    };
     let mut state = (
         Dda::with_timing(timing),
         Preparer::with_timing(&cfg, timing),
@@ -424,7 +413,11 @@ fn stream_kernels(c: &CycleCounter, overhead: u32) {
         &mut state,
         |(dda, prep, id, _), _| {
             while dda.ready_free() > 0 {
-                defmt::unwrap!(dda.push(&defmt::unwrap!(prep.prepare(&seg(*id)).ok())).ok());
+                defmt::unwrap!(dda
+                    .push(&defmt::unwrap!(prep
+                        .prepare(&segment(timing.min_spacing_ticks, 4, *id))
+                        .ok()))
+                    .ok());
                 *id += 1;
             }
         },

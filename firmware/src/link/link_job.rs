@@ -55,3 +55,28 @@ pub trait LinkJob {
         None
     }
 }
+
+/// Inside an `impl LinkJob` in a module whose free functions `live(m)`, `drop_job(m)` and
+/// `status(m, s)` are the hooks of those names (a module that needs no teach recorder).
+macro_rules! job_hooks_from_module_fns {
+    () => {
+        fn live(m: &Motion) -> bool {
+            live(m)
+        }
+
+        fn drop_job(m: &mut Motion) {
+            drop_job(m)
+        }
+
+        fn status(
+            m: &Motion,
+            _teach: &motion::polar::copy_link::TeachRecorder<
+                { motion::polar::copy_link::TEACH_BLOCKS },
+            >,
+            s: &mut Status,
+        ) {
+            status(m, s)
+        }
+    };
+}
+pub(crate) use job_hooks_from_module_fns;

@@ -22,7 +22,6 @@ use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, S
 
 use super::link_job::{LinkJob, Readings, StepReadings};
 use super::{LastJob, Motion};
-use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
 /// The board has a force sample source the link can run a force job from: the simulator's
 /// plant, or the real board's force ADC (a job is refused while [`ADC_SAMPLE_HZ`] is 0).
@@ -202,17 +201,7 @@ pub fn on_adc_frames<const N: usize>(m: &mut Motion, frames: Option<&[[u16; N]]>
 pub struct Milling;
 
 impl LinkJob for Milling {
-    fn live(m: &Motion) -> bool {
-        live(m)
-    }
-
-    fn drop_job(m: &mut Motion) {
-        drop_job(m)
-    }
-
-    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
-        status(m, s)
-    }
+    super::link_job::job_hooks_from_module_fns!();
 
     #[inline(always)]
     fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {

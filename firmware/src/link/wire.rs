@@ -21,7 +21,6 @@ use motion::wire::WIRE_JOB;
 use super::link_job::{LinkJob, Readings, StepReadings};
 use super::{LastJob, Motion};
 use board_contract::MachineIo as _;
-use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 
 /// The wire job is live (armed, or started and not yet ended).
 pub fn live(m: &Motion) -> bool {
@@ -152,17 +151,7 @@ pub fn status(m: &Motion, s: &mut Status) {
 pub struct Wire;
 
 impl LinkJob for Wire {
-    fn live(m: &Motion) -> bool {
-        live(m)
-    }
-
-    fn drop_job(m: &mut Motion) {
-        drop_job(m)
-    }
-
-    fn status(m: &Motion, _teach: &TeachRecorder<TEACH_BLOCKS>, s: &mut Status) {
-        status(m, s)
-    }
+    super::link_job::job_hooks_from_module_fns!();
 
     #[inline(always)]
     fn tick(m: &mut Motion, r: &Readings<'_>) -> Option<TickOut> {
