@@ -120,6 +120,8 @@ pub fn run_segments_observed(
     let mut segment_ends = Vec::new();
     let mut position_mismatches = 0;
     let mut done = dda.segments_done();
+    // STEP pins still high: an idle DDA may owe the last pulse its fall.
+    let mut high = 0u8;
     while dda.now() < max_ticks {
         while next < segments.len() && dda.ready_free() > 0 {
             let p = prep.prepare(&segments[next]).expect("valid segment");
@@ -133,12 +135,13 @@ pub fn run_segments_observed(
             dda.apply(c);
             cmds.next();
         }
-        if next == segments.len() && dda.is_idle() && cmds.peek().is_none() {
+        if next == segments.len() && dda.is_idle() && cmds.peek().is_none() && high == 0 {
             break;
         }
         let out = dda.tick();
         let now = dda.now();
         observe(now, &out);
+        high = (high & !out.fall()) | out.rise();
         rec.record(now, &out);
         pins.check(now, &out);
         if out.rise() != 0 {

@@ -194,6 +194,36 @@ proptest! {
     }
 }
 
+/// A job whose last step rises on the DDA's last busy tick: the run goes on until that pulse
+/// has fallen, so the port is left with every STEP low (a case proptest found in CI).
+#[test]
+fn the_last_pulse_falls_after_the_dda_goes_idle() {
+    let seg = |steps: [i32; MAX_AXES], t, entry: f64, exit: f64| Segment {
+        steps,
+        duration_ticks: t,
+        entry_rate: Rate::from_num(entry),
+        exit_rate: Rate::from_num(exit),
+        accel_per_tick: Rate::from_num(0.000_000_931),
+        id: 0,
+    };
+    let segs = [
+        Segment {
+            accel_per_tick: Rate::from_num(0.000_073_574_5),
+            ..seg([1009, 0, 0, 0, 0, 0], 2155, 0.0, 0.647_508_272)
+        },
+        seg([9, 0, 0, 0, 0, 0], 20, 0.841_189_857, 0.361_122_602),
+        seg([0, 0, 0, 0, 0, 8], 22, 0.740_899_44, 0.0),
+    ];
+    let cmds = [(1, Command::Hold), (40_001, Command::Resume)];
+    let (words, run, timing) = stream(&segs, &cmds);
+    assert!(run.dda.is_idle());
+    let r = replay(&words, &timing);
+    assert!(r.violations.is_empty(), "pin timing: {:?}", r.violations);
+    assert_eq!(r.rises, run.edges);
+    assert_eq!(r.net, total(&segs));
+    assert_eq!(r.last_levels & PORT.step_pins(), 0, "a STEP pin left high");
+}
+
 /// Four axes at full feed: at a 500 kHz slot clock each steps every other slot, 250 kHz per axis
 /// and 1 MHz together, for the whole cruise, with 2 us pulses.
 #[test]
