@@ -54,20 +54,10 @@ pub enum Cmd {
         #[arg(long, value_name = "AXIS=MM")]
         sim_probe: Option<board_link::SimProbeSpec>,
     },
-    /// Polar contouring (Fahim): digitize contours into step-event streams, dump streams,
-    /// place the machine pole.
-    #[command(subcommand)]
-    Polar(crate::polar::cli::PolarCmd),
-    /// Non-axisymmetric turning (Douglass): Z-slide coefficient tables and turning jobs
-    /// (also `fourier`, its older name).
-    #[command(subcommand, visible_alias = "fourier")]
-    Turning(crate::cli_capabilities::TurningCmd),
-    /// Constant-force milling (Elbestawi): simulate a milling job's force loop, plot it.
-    #[command(subcommand)]
-    Milling(crate::cli_capabilities::MillingCmd),
-    /// 4-axis wire manipulator (Bhatti): continuous constant area-rate jobs.
-    #[command(subcommand)]
-    Wire(crate::cli_capabilities::WireCmd),
+    /// The capabilities' subcommands (`polar`, `turning`, `milling`, `wire`): see
+    /// [`crate::capabilities`].
+    #[command(flatten)]
+    Capability(crate::capabilities::CapabilityCmd),
     /// List every error and warning of a G-code program, file:line:column (exit 1 on an error).
     Check(crate::gcode::cli::CheckArgs),
     /// G-code tools: `moves` prints the canonical machining calls.
@@ -435,10 +425,7 @@ pub fn execute(cli: Cli) -> Result<()> {
         Cmd::Check(args) => crate::gcode::cli::check(args),
         Cmd::Gcode(cmd) => crate::gcode::cli::run(cmd),
         Cmd::Grbl(args) => crate::grbl::run(args),
-        Cmd::Polar(cmd) => crate::polar::cli::run(cmd),
-        Cmd::Turning(cmd) => crate::cli_capabilities::run_turning(cmd),
-        Cmd::Wire(cmd) => crate::cli_capabilities::run_wire(cmd),
-        Cmd::Milling(cmd) => crate::cli_capabilities::run_milling(cmd),
+        Cmd::Capability(cmd) => crate::capabilities::run(cmd),
         Cmd::Status { link } => one_request(&link, RequestBody::GetStatus, "status"),
         Cmd::Hold { link } => one_request(&link, RequestBody::Hold, "hold"),
         Cmd::Resume { link } => one_request(&link, RequestBody::Resume, "resume"),

@@ -6,8 +6,8 @@
 //! [`link`], [`runner`]) or the host model ([`plan::simulate`]).
 
 pub mod board_link;
+pub mod capabilities;
 pub mod cli;
-pub mod cli_capabilities;
 pub mod convert;
 pub mod csv_log;
 pub mod gcode;

@@ -171,8 +171,7 @@ fn turning_and_wire_jobs_run_from_dollar_commands() {
     // Two segments of the circle -> complex die as a wire job: `?` reports Run with X, Y, Z,
     // A (alpha), B (beta); `!` holds it where it is, `~` resumes; the summary against the
     // host model, then ok.
-    let job =
-        motionctl::cli_capabilities::wire_board_job(&dir.0.join("wire.toml"), Some(1..3)).unwrap();
+    let job = motionctl::wire::cli::wire_board_job(&dir.0.join("wire.toml"), Some(1..3)).unwrap();
     r.send(b"$WIRE=wire.toml 1..3\n");
     let st = r.until_status(|st| st.starts_with("<Run|"));
     assert_eq!(st.split('|').nth(1).unwrap().split(',').count(), 5, "{st}");

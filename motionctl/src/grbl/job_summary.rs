@@ -3,12 +3,12 @@
 //! passed.
 
 use super::jobs::{polar_mm, turning_mm};
-use crate::cli_capabilities::WireBoardJob;
 use crate::milling::run::MillingRunReport;
 use crate::polar::run::PolarReport;
 use crate::runner::fault_names;
 use crate::turning::run::{ZRunOptions, ZRunReport};
 use crate::units::MM_PER_IN;
+use crate::wire::cli::WireBoardJob;
 use crate::wire::run::WireRunReport;
 use motion::protocol::Status;
 

@@ -83,7 +83,7 @@ pub fn parse(line: &str, jobs: &Path) -> Option<Result<JobCmd, String>> {
             let Some(file) = file else {
                 return Some(Err(need_file("wire job (TOML, version 1)")));
             };
-            let segments = match words.next().map(crate::cli_capabilities::parse_range) {
+            let segments = match words.next().map(crate::wire::cli::parse_range) {
                 None => Ok(None),
                 Some(Ok(r)) => Ok(Some(r)),
                 Some(Err(e)) => Err(format!("$WIRE= segments FROM..TO: {e}")),

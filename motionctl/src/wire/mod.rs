@@ -20,6 +20,7 @@
 pub mod area;
 pub mod backlash;
 pub mod cad;
+pub mod cli;
 pub mod continuous;
 pub mod csv;
 pub mod dies;

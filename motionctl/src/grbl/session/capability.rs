@@ -4,7 +4,6 @@
 //! and status stream back, and the result said as `[MSG:]` lines and `ok`, or as an alarm.
 
 use super::{link_err, Bridge, Pending};
-use crate::cli_capabilities::WireBoardJob;
 use crate::grbl::job_summary as summary;
 use crate::grbl::jobs::{self, JobCmd, SenderHook};
 use crate::grbl::protocol::{alarm, error};
@@ -12,6 +11,7 @@ use crate::grbl::settings;
 use crate::milling::run::MillingRunOptions;
 use crate::polar::run::PolarRunOptions;
 use crate::turning::run::{LinkTableBytes, ZRunOptions};
+use crate::wire::cli::WireBoardJob;
 use anyhow::Result;
 use motion::protocol::{
     HostConfig, LinkConfig, RequestBody, SimForceFault, CAP_EVENTS, CAP_MILLING_JOB,
@@ -114,7 +114,7 @@ impl Bridge<'_> {
             ),
             JobCmd::Wire { file, segments } => (
                 file_name(file),
-                crate::cli_capabilities::wire_board_job(file, segments.clone())
+                crate::wire::cli::wire_board_job(file, segments.clone())
                     .map(|j| Loaded::Wire(Box::new(j))),
             ),
         };

@@ -1,13 +1,10 @@
-//! The thesis capabilities' subcommands: `motionctl wire ...` (Bhatti continuous jobs) here;
-//! `motionctl polar ...` lives in [`crate::polar::cli`], `turning ...` in
-//! [`crate::turning::cli`], `milling ...` in [`crate::milling::cli`].
+//! `motionctl wire ...`: the wire manipulator's (Bhatti) continuous jobs planned, run through
+//! the host model, streamed to the board, and Table 11.
 
 mod board_run;
 mod plan_args;
 mod report;
 
-pub use crate::milling::cli::{run_milling, MillingCmd};
-pub use crate::turning::cli::{run_turning, TurningCmd};
 pub use board_run::{wire_board_job, WireBoardJob};
 pub use plan_args::{DrawingArgs, WirePlanArgs};
 
