@@ -46,5 +46,7 @@ pub fn on_board(hello_capabilities: u32) -> impl Iterator<Item = &'static Capabi
     REGISTRY.iter().copied().filter(move |c| c.on_board(hello_capabilities))
 }
 
+pub mod requests;
+
 #[cfg(test)]
 mod tests;

@@ -37,19 +37,19 @@ fn all_requests() -> Vec<Request> {
         RequestBody::Home,
         RequestBody::SetHoming(HomingConfig::NONE),
         RequestBody::JogOffLimit,
-        RequestBody::QueueEvents(EventBlock {
+        RequestBody::from(motion::polar::link_messages::PolarRequest::QueueEvents(EventBlock {
             bytes: BlockBytes::from_slice(&[0xB5, 1, 2, 3]).unwrap(),
             last: false,
-        }),
-        RequestBody::StartPlayback { m: 3, k: 2 },
-        RequestBody::ArmWire(WireJobParams {
+        })),
+        RequestBody::from(motion::polar::link_messages::PolarRequest::StartPlayback { m: 3, k: 2 }),
+        RequestBody::from(motion::wire::link_messages::WireRequest::ArmWire(WireJobParams {
             debounce_ticks: 50,
             retrace_limit_steps: 40_000,
             retrace_override_bits: 1 << 29,
             resume_override_bits: 1 << 29,
             resume_segments: 2,
             segments: 91,
-        }),
+        })),
         RequestBody::Sim(SimRequest::Inject { wire_stall: true }),
     ]
     .into_iter()

@@ -11,6 +11,7 @@ pub mod chain;
 pub mod control;
 pub mod dma_frames;
 pub mod link_job;
+pub mod link_messages;
 pub mod peak;
 pub mod plant;
 pub mod sample_timer;

@@ -10,6 +10,7 @@ pub mod copy_link;
 pub mod feed;
 pub mod job;
 pub mod limacon_stream;
+pub mod link_messages;
 pub mod playback;
 pub mod scenario;
 pub mod stream;

@@ -41,7 +41,7 @@ pub use messages::*;
 pub use program_outputs::{
     ProgramOutputs, SpindleDir, OUT_FLOOD, OUT_MIST, OUT_SPINDLE, OUT_SPINDLE_CCW,
 };
-pub use session::{command_kind, wire_params_ok, BoardLink, LinkTarget, RESULT_MEMORY};
+pub use session::{command_kind, BoardLink, LinkTarget, RESULT_MEMORY};
 #[cfg(feature = "sim-inputs")]
 pub use sim::SimRequest;
 #[cfg(any(test, feature = "sim-inputs"))]

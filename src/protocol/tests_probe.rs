@@ -30,11 +30,11 @@ fn probe_move(link: &mut BoardLink, t: &mut SimTarget, kind: ProbeKind, xs: &[i3
 fn arm_probe_and_the_status_fields_round_trip() {
     for (i, kind) in ProbeKind::ALL.into_iter().enumerate() {
         let r = req(9, RequestBody::ArmProbe(kind));
-        assert_eq!(r.body.kind(), 26);
+        assert_eq!(r.body.kind(), 16);
         let mut buf = [0u8; 16];
         let bytes = postcard::to_slice(&r, &mut buf).unwrap();
-        // seq 9, kind 26, the ProbeKind's index.
-        assert_eq!(bytes, [9, 26, i as u8]);
+        // seq 9, kind 16, the ProbeKind's index.
+        assert_eq!(bytes, [9, 16, i as u8]);
         assert_eq!(decode_request(bytes), Ok(r));
     }
     let st = Status {

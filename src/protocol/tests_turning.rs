@@ -210,12 +210,21 @@ impl Rig {
         chunk: usize,
         crc: u32,
     ) -> Result<(), (ErrorCode, NakDetail)> {
-        self.send(RequestBody::ZTableBegin(h))?;
+        self.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
+            h,
+        )))?;
         for (i, c) in b.chunks(chunk).enumerate() {
             let bytes = BlockBytes::from_slice(c).unwrap();
-            self.send(RequestBody::ZTableChunk { index: i as u16, bytes })?;
+            self.send(RequestBody::from(
+                crate::turning::link_messages::TurningRequest::ZTableChunk {
+                    index: i as u16,
+                    bytes,
+                },
+            ))?;
         }
-        self.send(RequestBody::ZTableEnd { crc })
+        self.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
+            crc,
+        }))
     }
 }
 
@@ -228,13 +237,15 @@ fn is_douglass(t: &LinkTable) -> bool {
 fn new_requests_round_trip_and_fit_a_frame() {
     let (h, b) = douglass();
     let bodies = [
-        RequestBody::ZTableBegin(h),
-        RequestBody::ZTableChunk {
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
             index: u16::MAX,
             bytes: BlockBytes::from_slice(&b[..MAX_Z_CHUNK]).unwrap(),
-        },
-        RequestBody::ZTableEnd { crc: u32::MAX },
-        RequestBody::StartZ(ZJobSpec {
+        }),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
+            crc: u32::MAX,
+        }),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(ZJobSpec {
             x_start_in_q24: i32::MIN,
             x_end_in_q24: i32::MIN,
             x_feed_in_q24_per_tick: i32::MIN,
@@ -248,10 +259,11 @@ fn new_requests_round_trip_and_fit_a_frame() {
             x_steps_per_in: u32::MAX,
             output: ZOutputSpec::Dac { codes_per_in: u32::MAX, mid_code: u16::MAX },
             ..spec()
-        }),
+        })),
     ];
     let kinds: std::vec::Vec<u8> = bodies.iter().map(|b| b.kind()).collect();
-    assert_eq!(kinds, [18, 19, 20, 21]);
+    // The envelope's capability kinds start at 64; turning is second (8 kinds each).
+    assert_eq!(kinds, [72, 73, 74, 75]);
     for body in bodies {
         let req = Request { seq: u32::MAX, body };
         let mut buf = [0u8; MAX_FRAME_LINK];
@@ -270,7 +282,10 @@ fn new_requests_round_trip_and_fit_a_frame() {
     let mut r = Rig::new(0);
     let big = BlockBytes::from_slice(&[0; MAX_Z_CHUNK + 1]).unwrap();
     assert_eq!(
-        r.send(RequestBody::ZTableChunk { index: 0, bytes: big }),
+        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+            index: 0,
+            bytes: big
+        })),
         Err((ErrorCode::OutOfRange, NakDetail::None))
     );
 }
@@ -295,16 +310,17 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert!(is_douglass(r.t.job.table()));
     // Out of order: the NAK names the chunk expected; the upload is still open at it.
-    r.send(RequestBody::ZTableBegin(h)).unwrap();
-    r.send(RequestBody::ZTableChunk {
+    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
+        .unwrap();
+    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
         index: 0,
         bytes: BlockBytes::from_slice(&half[..100]).unwrap(),
-    })
+    }))
     .unwrap();
-    let e = r.send(RequestBody::ZTableChunk {
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
         index: 2,
         bytes: BlockBytes::from_slice(&half[100..200]).unwrap(),
-    });
+    }));
     assert_eq!(
         e,
         Err((
@@ -314,7 +330,9 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert_eq!(r.t.req.expected(), Some(1));
     // End before every byte: Short, nothing replaced.
-    let e = r.send(RequestBody::ZTableEnd { crc: CRC32.checksum(&half) });
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
+        crc: CRC32.checksum(&half),
+    }));
     assert_eq!(
         e,
         Err((
@@ -324,10 +342,10 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert!(is_douglass(r.t.job.table()));
     // A chunk without an upload.
-    let e = r.send(RequestBody::ZTableChunk {
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
         index: 0,
         bytes: BlockBytes::from_slice(&half[..4]).unwrap(),
-    });
+    }));
     assert_eq!(
         e,
         Err((
@@ -336,7 +354,9 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
         ))
     );
     // A bad header.
-    let e = r.send(RequestBody::ZTableBegin(ZTableHeader { form: 9, ..h }));
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
+        ZTableHeader { form: 9, ..h },
+    )));
     assert_eq!(
         e,
         Err((
@@ -349,9 +369,12 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     let LinkTable::Power(p) = r.t.job.table() else { panic!() };
     assert_eq!(p.row(40).unwrap()[1], DOUGLASS_POWER.row(40).unwrap()[1] / 2);
     // A retransmitted chunk is answered from memory, not applied twice.
-    r.send(RequestBody::ZTableBegin(h)).unwrap();
-    let c0 =
-        RequestBody::ZTableChunk { index: 0, bytes: BlockBytes::from_slice(&b[..100]).unwrap() };
+    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
+        .unwrap();
+    let c0 = RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+        index: 0,
+        bytes: BlockBytes::from_slice(&b[..100]).unwrap(),
+    });
     r.send(c0.clone()).unwrap();
     let again = r.b.handle(&Request { seq: r.seq - 1, body: c0 }, &mut r.t);
     assert!(matches!(again, Response::Ack { .. }));
@@ -362,20 +385,22 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
 fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing() {
     let mut r = Rig::new(0);
     let before = (r.t.sim.clone(), r.t.job.state_code(), r.t.z_active);
-    let e = r.send(RequestBody::StartZ(spec()));
+    let e =
+        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Ready))));
     assert_eq!((r.t.sim.clone(), r.t.job.state_code(), r.t.z_active), before);
     let (h, b) = douglass();
     r.upload(h, &b, MAX_Z_CHUNK, CRC32.checksum(&b)).unwrap();
     // A spec out of range (X axis = Z axis): OutOfRange, nothing started.
-    let e = r.send(RequestBody::StartZ(ZJobSpec { x_axis: 0, ..spec() }));
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
+        ZJobSpec { x_axis: 0, ..spec() },
+    )));
     assert_eq!(e, Err((ErrorCode::OutOfRange, NakDetail::None)));
     assert!(!r.t.job.is_running());
     // The spindle below the spec's minimum: the pre-start check's fault in the detail.
-    let e = r.send(RequestBody::StartZ(ZJobSpec {
-        min_speed_turn_q32_per_tick: u32::MAX >> 1,
-        ..spec()
-    }));
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
+        ZJobSpec { min_speed_turn_q32_per_tick: u32::MAX >> 1, ..spec() },
+    )));
     assert_eq!(
         e,
         Err((
@@ -388,15 +413,20 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
         ))
     );
     assert_eq!(r.t.sim.machine, MachineState::Ready);
-    r.send(RequestBody::StartZ(spec())).unwrap();
+    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())))
+        .unwrap();
     assert_eq!(r.t.sim.machine, MachineState::Running);
     // Running: a second start and every upload step are refused (Start/Queue columns pass in
     // Running or not, the Z job refuses), the table stays.
-    let e = r.send(RequestBody::StartZ(spec()));
+    let e =
+        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())));
     assert_eq!(e.unwrap_err().0, ErrorCode::OutOfState);
-    let e = r.send(RequestBody::ZTableBegin(h));
+    let e =
+        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Running))));
-    let e = r.send(RequestBody::ZTableEnd { crc: 0 });
+    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
+        crc: 0,
+    }));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Running))));
     assert!(is_douglass(r.t.job.table()));
     // Status carries the Z fields: engaging (state 2: following with the weight ramping up),
@@ -407,7 +437,8 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
     assert!((s.z_spindle_rpm_milli - 360_000).abs() <= 1, "{}", s.z_spindle_rpm_milli);
     // Abort ends it; an upload is accepted again.
     r.send(RequestBody::Abort).unwrap();
-    r.send(RequestBody::ZTableBegin(h)).unwrap();
+    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
+        .unwrap();
 }
 
 #[cfg(feature = "sim-inputs")]

@@ -9,6 +9,7 @@ pub mod command;
 pub mod dac_code;
 pub mod douglass_table;
 pub mod link_job;
+pub mod link_messages;
 pub mod link_requests;
 pub mod output;
 pub mod plant;

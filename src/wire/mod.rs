@@ -11,6 +11,7 @@ pub mod controller;
 pub mod history;
 pub mod job;
 pub mod link_job;
+pub mod link_messages;
 pub mod machine;
 pub mod scenario;
 

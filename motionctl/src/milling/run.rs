@@ -269,7 +269,11 @@ pub fn run_resumable(
     }
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
-    query(&mut s, RequestBody::ArmForce(params), "ArmForce")?;
+    query(
+        &mut s,
+        RequestBody::from(motion::milling::link_messages::MillingRequest::ArmForce(params)),
+        "ArmForce",
+    )?;
     let seg = resume.map_or_else(|| setup.segment(), |r| r.rest);
     let batch = SegmentBatch::from_slice(&[seg]).ok_or_else(|| anyhow!("segment batch"))?;
     query(&mut s, RequestBody::QueueSegments(batch), "QueueSegments")?;

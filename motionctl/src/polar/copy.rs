@@ -223,7 +223,11 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
         });
         query(&mut s, body, "Sim(Encoders)")?;
     }
-    let body = RequestBody::StartCopy { m: opts.scale.m, k: opts.scale.k, teach: opts.teach };
+    let body = RequestBody::from(motion::polar::link_messages::PolarRequest::StartCopy {
+        m: opts.scale.m,
+        k: opts.scale.k,
+        teach: opts.teach,
+    });
     query(&mut s, body, "StartCopy")?;
     say(&format!(
         "copying at size {}:{} from encoder counts {origin:?}",
@@ -234,8 +238,13 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
     let mut next_block = 0u16;
     let mut read_teach = |s: &mut Session, report: &mut CopyReport| -> anyhow::Result<bool> {
         loop {
-            let Reply::Teach(c) =
-                query(s, RequestBody::ReadTeach { block: next_block }, "ReadTeach")?
+            let Reply::Teach(c) = query(
+                s,
+                RequestBody::from(motion::polar::link_messages::PolarRequest::ReadTeach {
+                    block: next_block,
+                }),
+                "ReadTeach",
+            )?
             else {
                 bail!("the board answered ReadTeach without a block");
             };

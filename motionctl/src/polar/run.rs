@@ -319,7 +319,11 @@ pub fn run_with(
             let bytes = BlockBytes::from_slice(blocks[next])
                 .ok_or_else(|| anyhow!("block {next} is longer than a link block"))?;
             let last = next + 1 == blocks.len();
-            let seq = s.send(RequestBody::QueueEvents(EventBlock { bytes, last })).map_err(link)?;
+            let seq = s
+                .send(RequestBody::from(motion::polar::link_messages::PolarRequest::QueueEvents(
+                    EventBlock { bytes, last },
+                )))
+                .map_err(link)?;
             pending.insert(seq, Pending::Block);
             next += 1;
         }
@@ -328,7 +332,11 @@ pub fn run_with(
         let queued_all = acked == next && (next == blocks.len() || s.host.event_credits() == 0);
         if start_seq.is_none() && acked > 0 && queued_all {
             start_tick = Some(latest.tick);
-            let body = RequestBody::StartPlayback { m: opts.scale.m, k: opts.scale.k };
+            let body =
+                RequestBody::from(motion::polar::link_messages::PolarRequest::StartPlayback {
+                    m: opts.scale.m,
+                    k: opts.scale.k,
+                });
             let seq = s.send(body).map_err(link)?;
             pending.insert(seq, Pending::Start);
             start_seq = Some(seq);

@@ -117,7 +117,7 @@ pub fn run_with(
         }
     };
     let params = WireJobParams { segments: segments.len() as u32, ..opts.params };
-    if !motion::protocol::wire_params_ok(&params) {
+    if !motion::wire::link_messages::wire_params_ok(&params) {
         bail!("unusable wire-job parameters {params:?}");
     }
     let mut s = Session::new(transport, opts.host);
@@ -146,7 +146,11 @@ pub fn run_with(
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
     let base = status(&mut s)?;
-    query(&mut s, RequestBody::ArmWire(params), "ArmWire")?;
+    query(
+        &mut s,
+        RequestBody::from(motion::wire::link_messages::WireRequest::ArmWire(params)),
+        "ArmWire",
+    )?;
     say(&format!("armed a wire job of {} segments", segments.len()));
 
     let mut report = WireRunReport {

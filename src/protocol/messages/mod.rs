@@ -23,7 +23,7 @@ pub use status::{BoardCounters, LinkState, Status};
 
 use crate::segment::Rate;
 
-pub const PROTOCOL_VERSION: u16 = 9;
+pub const PROTOCOL_VERSION: u16 = 10;
 /// Sensor channels reported in [`Status`].
 pub const SENSOR_CHANNELS: usize = 4;
 /// Longest firmware name in [`HelloInfo`].

@@ -2,14 +2,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::jobs::{ForceJobParams, WireJobParams};
 use super::link_config::{HomingConfig, LinkConfig};
+use crate::capabilities::requests::CapabilityRequest;
 use crate::machine::ProbeKind;
-use crate::protocol::bounded::{BlockBytes, EventBlock, SegmentBatch};
+use crate::protocol::bounded::SegmentBatch;
 use crate::protocol::program_outputs::ProgramOutputs;
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
-use crate::turning::link_job::{ZJobSpec, ZTableHeader};
 
 /// Host -> board.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -52,68 +51,8 @@ pub enum RequestBody {
     Home,
     /// Replace the homing parameters (a `SetConfig` that keeps the machine config; loses homing).
     SetHoming(HomingConfig),
-    /// Queue one block of a recorded step-event stream (v1, with its CRC) for an event job.
-    /// Checked whole (CRC, every event, block sequence from 0) before anything is queued; costs
-    /// one *event* credit (`Status::event_credits`, `Reply::EventCredits`). Refused while
-    /// segments are queued (a job is either segments or events).
-    QueueEvents(EventBlock),
-    /// Start the event job: play the queued events with radial size scale `m`:`k` (each 1..=4,
-    /// else `OutOfRange`); speed scale = the feed override (0.25..=2). Needs queued events.
-    StartPlayback {
-        m: u8,
-        k: u8,
-    },
     /// After a limit fault: move the tripped axes slowly off their switches (`Fault` only).
     JogOffLimit,
-    /// Arm a wire-manipulator job (`Ready`, nothing queued; needs `CAP_WIRE_JOB`): the next
-    /// `segments` segments queued with `QueueSegments` (4 axes: X, Y, beta, alpha) form the
-    /// job, and `Start` runs it through the wire-stall retrace controller instead of the plain
-    /// feeder. Parameters out of range -> `OutOfRange`.
-    ArmWire(WireJobParams),
-    // -- Z-slide job --
-    /// Opens a Z coefficient-table upload (drops an unfinished one). Queue column; refused
-    /// (`OutOfState`) while a Z job runs; a bad header -> `InvalidTable`.
-    ZTableBegin(ZTableHeader),
-    /// Table bytes `index` (0, 1, ... in order; at most [`MAX_Z_CHUNK`](super::MAX_Z_CHUNK)
-    /// bytes): little-endian `i32` coefficients, row after row. Out of order or too long ->
-    /// `InvalidTable` (the upload is dropped, the active table stays).
-    ZTableChunk {
-        index: u16,
-        bytes: BlockBytes,
-    },
-    /// Ends the upload: every byte, the CRC-32 over them and the table checks, then the table
-    /// replaces the active one. Any refusal replaces nothing.
-    ZTableEnd {
-        crc: u32,
-    },
-    /// Starts a Z job with the active table (Start column; `Ready`, nothing queued). No table
-    /// or a job already there -> `OutOfState`; spec out of range -> `OutOfRange`; the pre-start
-    /// check (spindle speed, slide limits) -> `OutOfRange` with `NakDetail::Turning { fault }`.
-    StartZ(ZJobSpec),
-    // -- force job --
-    /// Arm the constant-force loop for the next segment job (`Ready`, nothing queued, no other
-    /// job armed; needs `CAP_MILLING_JOB`): from its `Start` on, force samples run through the
-    /// force chain and the control law, whose feed override drives the DDA; force faults hold
-    /// the feed through the machine's fault model. Parameters out of range -> `OutOfRange` with
-    /// `NakDetail::Config` naming the field.
-    ArmForce(ForceJobParams),
-    // -- copy mode --
-    /// Start a copy job (`Ready`, nothing queued; needs `CAP_COPY_JOB`): from the next tick the
-    /// arm and carriage encoders drive theta and r live, r scaled `m`:`k` (each 1..=4, else
-    /// `OutOfRange`); the encoders' counts now are the job's origin. With `teach`, every
-    /// encoder count is recorded with its tick interval for `ReadTeach` (a new recording; the
-    /// last one is dropped). Runs until `Abort` or a fault; `Hold`/`Resume` as for a job.
-    StartCopy {
-        m: u8,
-        k: u8,
-        teach: bool,
-    },
-    /// The recording's stream block `block` (v1, seq from 0), answered with `Reply::Teach`.
-    /// Asking for `block` tells the board the host has every block before it (they are
-    /// dropped); asking again for the same block answers it again. Accepted in every state.
-    ReadTeach {
-        block: u16,
-    },
     /// The spindle (off, clockwise, counterclockwise) and coolant (mist, flood) a program
     /// switches, all at once, from the next tick on; the wire power and the Z DAC are left as
     /// they are. Not a machine command: accepted in every state but refused (`OutOfState`,
@@ -129,6 +68,10 @@ pub enum RequestBody {
     /// rest of the move, and the job ends in `Ready`; see `src/machine/probe.rs` and
     /// `Status::probe_phase`.
     ArmProbe(ProbeKind),
+    /// A capability's request (`crate::capabilities::requests`): the envelope's variant index
+    /// names the capability, then its own enum's index the request. The session hands it to
+    /// its owner; see each capability's `link_messages`.
+    Capability(CapabilityRequest),
     /// A simulator board's test hook ([`SimRequest`]; only with `CAP_SIM_INPUTS`, else
     /// `Unsupported`). Compiled only with the `sim-inputs` feature: a board built without it
     /// does not decode the variant and answers it `Unsupported` all the same.
@@ -141,10 +84,12 @@ pub enum RequestBody {
 
 /// The postcard index of `RequestBody::Sim`, known with and without the `sim-inputs` feature
 /// (a board without it recognises the request it cannot decode).
-pub const KIND_SIM: u8 = 27;
+pub const KIND_SIM: u8 = 18;
 
 impl RequestBody {
-    /// Stable small number per variant (its postcard index).
+    /// Stable small number per request: its postcard variant index, or for a capability's
+    /// request [`KIND_BASE`](crate::capabilities::requests::KIND_BASE) + 8 x the capability's
+    /// place + the request's own index (what the session's result memory tells requests by).
     pub const fn kind(&self) -> u8 {
         match self {
             RequestBody::Hello { .. } => 0,
@@ -161,22 +106,11 @@ impl RequestBody {
             RequestBody::ClearFault => 11,
             RequestBody::Home => 12,
             RequestBody::SetHoming(_) => 13,
-            RequestBody::QueueEvents(_) => 14,
-            RequestBody::StartPlayback { .. } => 15,
-            RequestBody::JogOffLimit => 16,
-            RequestBody::ArmWire(_) => 17,
-            // -- Z-slide job --
-            RequestBody::ZTableBegin(_) => 18,
-            RequestBody::ZTableChunk { .. } => 19,
-            RequestBody::ZTableEnd { .. } => 20,
-            RequestBody::StartZ(_) => 21,
-            // -- force job --
-            RequestBody::ArmForce(_) => 22,
-            // -- copy mode --
-            RequestBody::StartCopy { .. } => 23,
-            RequestBody::ReadTeach { .. } => 24,
-            RequestBody::SetProgramOutputs(_) => 25,
-            RequestBody::ArmProbe(_) => 26,
+            RequestBody::JogOffLimit => 14,
+            RequestBody::SetProgramOutputs(_) => 15,
+            RequestBody::ArmProbe(_) => 16,
+            // Postcard index 17, then the capability's place and its own index.
+            RequestBody::Capability(c) => c.kind(),
             #[cfg(feature = "sim-inputs")]
             RequestBody::Sim(_) => KIND_SIM,
         }
@@ -185,7 +119,7 @@ impl RequestBody {
     /// Event blocks this request queues if it succeeds (one event credit each).
     pub fn block_count(&self) -> u16 {
         match self {
-            RequestBody::QueueEvents(_) => 1,
+            RequestBody::Capability(c) => c.event_blocks(),
             _ => 0,
         }
     }

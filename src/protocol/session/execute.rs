@@ -1,17 +1,15 @@
 //! Each request's own checks and its call on the target, once the sequence rules let it run.
 
-use super::commands::{command_kind, wire_params_ok};
+#[cfg(feature = "sim-inputs")]
+use super::capability::range_nak;
+use super::capability::{config_nak, plain, RequestContext};
+use super::commands::command_kind;
 use super::target::LinkTarget;
 use super::BoardLink;
-use crate::config::ConfigError;
-use crate::machine::{cell, Cell, MachineState};
-use crate::polar::feed::check_block;
-use crate::polar::playback::SizeScale;
-use crate::protocol::bounded::FixedStr;
+use crate::machine::{cell, Cell};
 use crate::protocol::errors::{ErrorCode, SegmentReason};
 use crate::protocol::messages::*;
 use crate::segment::Rate;
-use crate::turning::link_requests::ZNak;
 
 #[cfg(feature = "sim-inputs")]
 use crate::protocol::sim::messages::SimRequest;
@@ -29,7 +27,6 @@ impl BoardLink {
                 return out_of_state;
             }
         }
-        let plain = |code: ErrorCode| (code, NakDetail::None);
         let queue_empty = t.credits() == t.queue_capacity();
         match &req.body {
             // Handled before sequencing; never reaches here.
@@ -92,29 +89,6 @@ impl BoardLink {
                 t.start().map_err(plain)?;
                 Ok(Reply::None)
             }
-            RequestBody::QueueEvents(block) => {
-                if t.event_credits() == 0 {
-                    return Err(plain(ErrorCode::QueueFull));
-                }
-                let expected = t.next_event_block();
-                check_block(&block.bytes, expected).map_err(|e| {
-                    (ErrorCode::InvalidSegment, NakDetail::Block { reason: e.code(), expected })
-                })?;
-                t.queue_events(&block.bytes, block.last).map_err(|code| match code {
-                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
-                    _ => plain(code),
-                })?;
-                Ok(Reply::None)
-            }
-            RequestBody::StartPlayback { m, k } => {
-                let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
-                t.config().validate().map_err(config_nak)?;
-                t.start_playback(scale).map_err(|code| match code {
-                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
-                    _ => plain(code),
-                })?;
-                Ok(Reply::None)
-            }
             RequestBody::Hold => {
                 t.hold().map_err(plain)?;
                 Ok(Reply::None)
@@ -153,64 +127,9 @@ impl BoardLink {
                 self.status_due_ms = None;
                 Ok(Reply::None)
             }
-            RequestBody::ArmWire(p) => {
-                if !wire_params_ok(p) {
-                    return Err(plain(ErrorCode::OutOfRange));
-                }
-                t.config().validate().map_err(config_nak)?;
-                t.arm_wire(p).map_err(|code| match code {
-                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
-                    _ => plain(code),
-                })?;
-                Ok(Reply::None)
-            }
-            // -- Z-slide job --
-            RequestBody::ZTableBegin(h) => {
-                t.z_table_begin(h).map_err(|e| state_detail(e, machine))?;
-                Ok(Reply::None)
-            }
-            RequestBody::ZTableChunk { index, bytes } => {
-                if bytes.len() > MAX_Z_CHUNK {
-                    return Err(plain(ErrorCode::OutOfRange));
-                }
-                t.z_table_chunk(*index, bytes).map_err(|e| state_detail(e, machine))?;
-                Ok(Reply::None)
-            }
-            RequestBody::ZTableEnd { crc } => {
-                t.z_table_end(*crc).map_err(|e| state_detail(e, machine))?;
-                Ok(Reply::None)
-            }
-            RequestBody::StartZ(spec) => {
-                t.config().validate().map_err(config_nak)?;
-                t.start_z(spec).map_err(|e| state_detail(e, machine))?;
-                Ok(Reply::None)
-            }
-            // -- copy mode --
-            RequestBody::StartCopy { m, k, teach } => {
-                let scale = SizeScale::new(*m, *k).ok_or(plain(ErrorCode::OutOfRange))?;
-                t.config().validate().map_err(config_nak)?;
-                t.start_copy(scale, *teach).map_err(|code| match code {
-                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
-                    _ => plain(code),
-                })?;
-                Ok(Reply::None)
-            }
-            // -- force job --
-            RequestBody::ArmForce(p) => {
-                if self.capabilities & CAP_MILLING_JOB == 0 {
-                    return Err(plain(ErrorCode::Unsupported));
-                }
-                crate::milling::link_job::check_job(p).map_err(range_nak)?;
-                t.config().validate().map_err(config_nak)?;
-                t.arm_force(p).map_err(|code| match code {
-                    ErrorCode::OutOfState => (code, NakDetail::State(machine)),
-                    ErrorCode::OutOfRange => range_nak("sample_hz"),
-                    _ => plain(code),
-                })?;
-                Ok(Reply::None)
-            }
-            RequestBody::ReadTeach { block } => {
-                Ok(Reply::Teach(t.read_teach(*block).map_err(plain)?))
+            RequestBody::Capability(c) => {
+                let cx = RequestContext { machine, capabilities: self.capabilities };
+                c.execute(&cx, t)
             }
             #[cfg(feature = "sim-inputs")]
             RequestBody::Sim(s) => {
@@ -265,26 +184,4 @@ fn sim(
         crate::milling::link_job::check_sim(p).map_err(range_nak)?;
     }
     t.sim(req).map_err(|code| (code, NakDetail::None))
-}
-
-/// A target's refusal with the machine state filled into a bare `OutOfState`.
-fn state_detail(e: ZNak, machine: MachineState) -> (ErrorCode, NakDetail) {
-    match e {
-        (ErrorCode::OutOfState, NakDetail::None) => {
-            (ErrorCode::OutOfState, NakDetail::State(machine))
-        }
-        other => other,
-    }
-}
-
-/// `OutOfRange` naming the parameter (a force job's field).
-fn range_nak(field: &'static str) -> (ErrorCode, NakDetail) {
-    (ErrorCode::OutOfRange, NakDetail::Config { field: FixedStr::truncated(field), axis: None })
-}
-
-fn config_nak(e: ConfigError) -> (ErrorCode, NakDetail) {
-    (
-        ErrorCode::InvalidConfig,
-        NakDetail::Config { field: FixedStr::truncated(e.field), axis: e.axis },
-    )
 }

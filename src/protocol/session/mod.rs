@@ -33,13 +33,13 @@
 //! | Hold | motion to hold (the target refuses an idle DDA with nothing to feed) |
 //! | ClearFault | no fault cause still active (the target refuses with `OutOfState`) |
 //! | JogOffLimit | a latched LimitSwitch with a switch still closed and nothing else present |
-//! | QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
-//! | StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
-//! | ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::Turning`) |
-//! | StartZ (Start column) | a table (`OutOfState`), nothing queued, a spec in range and the pre-start check (`OutOfRange`) |
-//! | StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
-//! | ReadTeach (not a command) | nothing |
-//! | ArmForce (Start column) | `CAP_MILLING_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
+//! | polar: QueueEvents (Queue column) | an event credit, a block that passes every stream check and is the next in sequence (`InvalidSegment` + `NakDetail::Block`), no segments queued (`OutOfState`) |
+//! | polar: StartPlayback (Start column) | m, k in 1..=4 (`OutOfRange`), queued events (`OutOfState`) |
+//! | turning: ZTableBegin/Chunk/End (Queue column) | no Z job running (`OutOfState`), chunks in order with the announced length and the CRC (`InvalidTable` + `NakDetail::Turning`) |
+//! | turning: StartZ (Start column) | a table (`OutOfState`), nothing queued, a spec in range and the pre-start check (`OutOfRange`) |
+//! | polar: StartCopy (Start column) | m, k in 1..=4 (`OutOfRange`), nothing queued and no job (`OutOfState`) |
+//! | polar: ReadTeach (not a command) | nothing |
+//! | milling: ArmForce (Start column) | `CAP_MILLING_JOB` (`Unsupported`), every parameter in range (`OutOfRange` + `NakDetail::Config` naming it), nothing queued or armed (`OutOfState`) |
 //! | SetProgramOutputs (not a command) | no e-stop latched or pressed (`OutOfState`) |
 //! | ArmProbe (Start column) | `CAP_PROBE` (`Unsupported`), nothing queued, no other job armed, motion at rest (`OutOfState`) |
 //! | Sim (not a command; `sim-inputs` feature) | `CAP_SIM_INPUTS`, for `Milling` also `CAP_MILLING_JOB`, for `Probe` also `CAP_PROBE` (`Unsupported`); `Milling`'s parameters in range (`OutOfRange` naming the field) |
@@ -49,18 +49,20 @@
 //!
 //! The parts: `target` is what the link drives ([`LinkTarget`]), `sequencing` the sequence rules
 //! (sessions, the result memory, retransmissions, frames that do not decode), `execute` each
-//! request's checks and its call on the target, `commands` which requests are machine commands.
+//! request's checks and its call on the target, `commands` which requests are machine commands,
+//! `capability` the contract a capability's requests fill ([`CapabilityRequests`]: their
+//! column, checks and replays, run in their owner's folder; the rows marked with a capability
+//! above are theirs).
 //! The board's link state is here.
 
+mod capability;
 mod commands;
 mod execute;
 mod sequencing;
 mod target;
 
-pub use commands::{command_kind, wire_params_ok};
-// The protocol tests check it against `RequestBody::QueueEvents`'s kind.
-#[cfg(test)]
-pub(crate) use sequencing::KIND_QUEUE_EVENTS;
+pub use capability::{config_nak, plain, range_nak, CapabilityRequests, Nak, RequestContext};
+pub use commands::command_kind;
 pub use target::LinkTarget;
 
 use crate::protocol::bounded::FixedStr;

@@ -3,6 +3,7 @@
 
 use super::target::LinkTarget;
 use super::{BoardLink, Memo, Outcome, Session, RESULT_MEMORY};
+use crate::capabilities::requests::{self as capability_requests, is_capability_kind};
 use crate::protocol::bounded::FixedStr;
 use crate::protocol::errors::ErrorCode;
 use crate::protocol::frame::FrameError;
@@ -23,8 +24,6 @@ const MALFORMED_KIND: u8 = 0xFF;
 const KIND_HELLO: u8 = RequestBody::Hello { version: 0, nonce: 0 }.kind();
 const KIND_GET_CONFIG: u8 = RequestBody::GetConfig.kind();
 const KIND_GET_STATUS: u8 = RequestBody::GetStatus.kind();
-pub(crate) const KIND_QUEUE_EVENTS: u8 = 14;
-const KIND_READ_TEACH: u8 = RequestBody::ReadTeach { block: 0 }.kind();
 
 fn is_before(a: u32, b: u32) -> bool {
     (a.wrapping_sub(b) as i32) < 0
@@ -223,10 +222,6 @@ impl BoardLink {
         match result {
             Ok(reply) => {
                 self.remember(seq, kind, credits, Ok(()));
-                let reply = match kind {
-                    KIND_QUEUE_EVENTS => Reply::EventCredits(credits.1),
-                    _ => reply,
-                };
                 Response::Ack { seq, credits: credits.0, reply }
             }
             Err((code, detail)) => {
@@ -252,8 +247,11 @@ impl BoardLink {
                         KIND_HELLO => Reply::Hello(self.hello_info(t)),
                         KIND_GET_CONFIG => Reply::Config(t.config()),
                         KIND_GET_STATUS => Reply::Status(self.status(t)),
-                        KIND_QUEUE_EVENTS => Reply::EventCredits(m.event_credits),
-                        KIND_READ_TEACH => t.teach_resend().map_or(Reply::None, Reply::Teach),
+                        // A capability's request: its owner says (queue credits, a block
+                        // held for a resend).
+                        k if is_capability_kind(k) => {
+                            capability_requests::replay(k, t, m.event_credits)
+                        }
                         _ => Reply::None,
                     };
                     Response::Ack { seq, credits: m.credits, reply }

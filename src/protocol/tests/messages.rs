@@ -126,56 +126,71 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
                 home_pos_steps: i64::MIN,
             }; MAX_AXES],
         }),
-        RequestBody::QueueEvents(EventBlock {
+        RequestBody::from(crate::polar::link_messages::PolarRequest::QueueEvents(EventBlock {
             bytes: BlockBytes::from_slice(&[0xFF; MAX_EVENT_BLOCK]).unwrap(),
             last: true,
+        })),
+        RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
+            m: u8::MAX,
+            k: u8::MAX,
         }),
-        RequestBody::StartPlayback { m: u8::MAX, k: u8::MAX },
-        RequestBody::ArmWire(WireJobParams {
+        RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(WireJobParams {
             debounce_ticks: u16::MAX,
             retrace_limit_steps: u64::MAX,
             retrace_override_bits: u32::MAX,
             resume_override_bits: u32::MAX,
             resume_segments: u32::MAX,
             segments: u32::MAX,
-        }),
+        })),
         // -- Z-slide job --
-        RequestBody::ZTableBegin(crate::turning::link_job::ZTableHeader {
-            form: u8::MAX,
-            rows: u16::MAX,
-            x0_in_q24: i32::MIN,
-            dx_in_q24: i32::MIN,
-        }),
-        RequestBody::ZTableChunk {
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
+            crate::turning::link_job::ZTableHeader {
+                form: u8::MAX,
+                rows: u16::MAX,
+                x0_in_q24: i32::MIN,
+                dx_in_q24: i32::MIN,
+            },
+        )),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
             index: u16::MAX,
             bytes: BlockBytes::from_slice(&[0xFF; MAX_Z_CHUNK]).unwrap(),
-        },
-        RequestBody::ZTableEnd { crc: u32::MAX },
-        RequestBody::StartZ(crate::turning::link_job::ZJobSpec {
-            output: crate::turning::link_job::ZOutputSpec::Steps {
-                axis: u8::MAX,
-                steps_per_in: u32::MAX,
-            },
-            x_axis: u8::MAX,
-            x_steps_per_in: u32::MAX,
-            x_negative: true,
-            x_start_in_q24: i32::MIN,
-            x_end_in_q24: i32::MIN,
-            x_feed_in_q24_per_tick: i32::MIN,
-            cubic: true,
-            advance_ticks_q16: u32::MAX,
-            engage_ticks: u32::MAX,
-            blend_start_x_in_q24: i32::MIN,
-            blend_end_x_in_q24: i32::MIN,
-            max_velocity_uin_per_s: u32::MAX,
-            max_accel_uin_per_s2: u32::MAX,
-            min_speed_turn_q32_per_tick: u32::MAX,
         }),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
+            crc: u32::MAX,
+        }),
+        RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
+            crate::turning::link_job::ZJobSpec {
+                output: crate::turning::link_job::ZOutputSpec::Steps {
+                    axis: u8::MAX,
+                    steps_per_in: u32::MAX,
+                },
+                x_axis: u8::MAX,
+                x_steps_per_in: u32::MAX,
+                x_negative: true,
+                x_start_in_q24: i32::MIN,
+                x_end_in_q24: i32::MIN,
+                x_feed_in_q24_per_tick: i32::MIN,
+                cubic: true,
+                advance_ticks_q16: u32::MAX,
+                engage_ticks: u32::MAX,
+                blend_start_x_in_q24: i32::MIN,
+                blend_end_x_in_q24: i32::MIN,
+                max_velocity_uin_per_s: u32::MAX,
+                max_accel_uin_per_s2: u32::MAX,
+                min_speed_turn_q32_per_tick: u32::MAX,
+            },
+        )),
         // -- force job --
-        RequestBody::ArmForce(crate::protocol::tests_milling::extreme_force_params()),
+        RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
+            crate::protocol::tests_milling::extreme_force_params(),
+        )),
         // -- copy mode --
-        RequestBody::StartCopy { m: u8::MAX, k: u8::MAX, teach: true },
-        RequestBody::ReadTeach { block: u16::MAX },
+        RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
+            m: u8::MAX,
+            k: u8::MAX,
+            teach: true,
+        }),
+        RequestBody::from(crate::polar::link_messages::PolarRequest::ReadTeach { block: u16::MAX }),
         RequestBody::SetProgramOutputs(crate::protocol::ProgramOutputs {
             spindle: crate::protocol::SpindleDir::Ccw,
             mist: true,
@@ -284,14 +299,26 @@ fn largest_messages_fit_the_frame_buffers() {
 
 #[test]
 fn request_kinds_are_postcard_indices() {
+    use crate::capabilities::requests::{KIND_BASE, MAX_REQUESTS_PER_CAPABILITY};
+    let mut capability_requests = 0;
     for r in extreme_requests() {
         let mut buf = [0u8; 1024];
         let b = postcard::to_slice(&r.body, &mut buf).unwrap();
-        // Every kind is its postcard variant index (the job blocks were renumbered at merge).
-        assert_eq!(b[0], r.body.kind(), "{:?}", r.body);
+        match &r.body {
+            // The envelope's index, the capability's place in it, the request's own index.
+            RequestBody::Capability(c) => {
+                let (place, index) = (b[1], b[2]);
+                assert_eq!(c.place_and_index(), (place, index), "{:?}", r.body);
+                assert!(index < MAX_REQUESTS_PER_CAPABILITY);
+                assert_eq!(r.body.kind(), KIND_BASE + place * MAX_REQUESTS_PER_CAPABILITY + index);
+                capability_requests += 1;
+            }
+            // Every other kind is its postcard variant index.
+            _ => assert_eq!(b[0], r.body.kind(), "{:?}", r.body),
+        }
+        assert!(r.body.kind() < KIND_BASE || matches!(r.body, RequestBody::Capability(_)));
     }
-    let block = RequestBody::QueueEvents(EventBlock::default());
-    assert_eq!(block.kind(), crate::protocol::session::KIND_QUEUE_EVENTS);
+    assert_eq!(capability_requests, 10, "every capability request is in extreme_requests");
 }
 
 #[test]
