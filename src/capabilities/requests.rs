@@ -20,7 +20,12 @@ pub const KIND_BASE: u8 = 0x40;
 pub const MAX_REQUESTS_PER_CAPABILITY: u8 = 8;
 
 macro_rules! capability_requests {
-    ($($place:literal: $name:ident($request:path),)+) => {
+    ($($place:literal: $name:ident($request:path, $target:path),)+) => {
+        /// What every capability's requests need of the board: each capability's target trait
+        /// (every method with a default, so a target fills only its capabilities').
+        pub trait CapabilityTargets: $($target+)+ {}
+        impl<T: $($target+)+> CapabilityTargets for T {}
+
         /// A capability's request, in its place in the envelope.
         #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
         pub enum CapabilityRequest {
@@ -82,10 +87,16 @@ macro_rules! capability_requests {
 }
 
 capability_requests! {
-    0: Polar(crate::polar::link_messages::PolarRequest),
-    1: Turning(crate::turning::link_messages::TurningRequest),
-    2: Milling(crate::milling::link_messages::MillingRequest),
-    3: Wire(crate::wire::link_messages::WireRequest),
+    0: Polar(crate::polar::link_messages::PolarRequest, crate::polar::link_messages::PolarTarget),
+    1: Turning(
+        crate::turning::link_messages::TurningRequest,
+        crate::turning::link_messages::TurningTarget
+    ),
+    2: Milling(
+        crate::milling::link_messages::MillingRequest,
+        crate::milling::link_messages::MillingTarget
+    ),
+    3: Wire(crate::wire::link_messages::WireRequest, crate::wire::link_messages::WireTarget),
 }
 
 impl CapabilityRequest {

@@ -49,3 +49,14 @@ impl CapabilityRequests for MillingRequest {
         Ok(Reply::None)
     }
 }
+
+/// What milling's request needs of the board: a force job armed. Defaults to `Unsupported`,
+/// for a target without force jobs.
+pub trait MillingTarget {
+    /// Arms a force job with checked parameters (`Ready`, empty queue, no events, no other job
+    /// armed; else `OutOfState`). `OutOfRange` from the target means the sample rate does not
+    /// fit the board (the NAK names `sample_hz`). Targets without force jobs: `Unsupported`.
+    fn arm_force(&mut self, _params: &ForceJobParams) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+}

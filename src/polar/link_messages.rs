@@ -9,7 +9,7 @@ use super::playback::SizeScale;
 use crate::machine::CommandKind;
 use crate::protocol::bounded::EventBlock;
 use crate::protocol::session::{config_nak, plain, CapabilityRequests, Nak, RequestContext};
-use crate::protocol::{ErrorCode, LinkTarget, NakDetail, Reply};
+use crate::protocol::{ErrorCode, LinkTarget, NakDetail, Reply, TeachChunk};
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 // Fixed capacity is the point (no allocation on the board); boxing is not an option.
@@ -108,5 +108,38 @@ impl CapabilityRequests for PolarRequest {
             READ_TEACH => t.teach_resend().map_or(Reply::None, Reply::Teach),
             _ => Reply::None,
         }
+    }
+}
+
+/// What polar's requests need of the board: event jobs and copy jobs. Every method has a
+/// default for a target without them (`Unsupported`, or nothing to resend).
+pub trait PolarTarget {
+    /// The stream block seq the target takes next (0 for a new job); `None` once the host
+    /// marked a block as the last.
+    fn next_event_block(&self) -> Option<u16> {
+        None
+    }
+    /// Called with a block that passed every stream check and is `next_event_block()`, only
+    /// with an event credit free.
+    fn queue_events(&mut self, _block: &[u8], _last: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// Starts the event job with radial size scale `scale` (checked).
+    fn start_playback(&mut self, _scale: SizeScale) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// Starts a copy job with a checked size scale (`Ready`, nothing queued, no job; else
+    /// `OutOfState`). Targets without copy jobs: `Unsupported`.
+    fn start_copy(&mut self, _scale: SizeScale, _teach: bool) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// `ReadTeach { block }` (see `polar::copy_link::TeachRecorder::read`).
+    fn read_teach(&mut self, _block: u16) -> Result<TeachChunk, ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+    /// The answer a retransmitted `ReadTeach` gets again: the oldest block still held (the one
+    /// the last `ReadTeach` asked for), read without dropping anything.
+    fn teach_resend(&self) -> Option<TeachChunk> {
+        None
     }
 }

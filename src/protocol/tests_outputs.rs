@@ -98,6 +98,11 @@ fn an_estop_switches_everything_off_and_refuses_switching_on() {
 #[test]
 fn a_target_without_program_outputs_refuses_them_as_unsupported() {
     struct Plain(SimTarget);
+    // No capability's hooks: every one answers `Unsupported`.
+    impl crate::polar::link_messages::PolarTarget for Plain {}
+    impl crate::turning::link_messages::TurningTarget for Plain {}
+    impl crate::milling::link_messages::MillingTarget for Plain {}
+    impl crate::wire::link_messages::WireTarget for Plain {}
     impl LinkTarget for Plain {
         fn state(&self) -> LinkState {
             self.0.state()

@@ -106,6 +106,19 @@ impl LinkTarget for ZTarget {
     fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
         self.sim.jog_off_limit()
     }
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
+        match *req {
+            SimRequest::Spindle { rpm_milli, .. } => self.sim_rpm_milli = Some(rpm_milli),
+            _ => return Err(ErrorCode::Unsupported),
+        }
+        Ok(())
+    }
+}
+
+impl crate::polar::link_messages::PolarTarget for ZTarget {}
+
+impl crate::turning::link_messages::TurningTarget for ZTarget {
     fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
         self.req.begin(h, self.z_active)
     }
@@ -132,15 +145,11 @@ impl LinkTarget for ZTarget {
         self.sim.machine = MachineState::Running;
         Ok(())
     }
-    #[cfg(feature = "sim-inputs")]
-    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
-        match *req {
-            SimRequest::Spindle { rpm_milli, .. } => self.sim_rpm_milli = Some(rpm_milli),
-            _ => return Err(ErrorCode::Unsupported),
-        }
-        Ok(())
-    }
 }
+
+impl crate::milling::link_messages::MillingTarget for ZTarget {}
+
+impl crate::wire::link_messages::WireTarget for ZTarget {}
 
 fn douglass() -> (ZTableHeader, std::vec::Vec<u8>) {
     let mut buf = std::vec![0u8; MAX_TABLE_BYTES];

@@ -6,10 +6,11 @@
 use serde::{Deserialize, Serialize};
 
 use super::link_job::{ZJobSpec, ZTableHeader};
+use super::link_requests::ZNak;
 use crate::machine::CommandKind;
 use crate::protocol::bounded::BlockBytes;
 use crate::protocol::session::{config_nak, plain, CapabilityRequests, Nak, RequestContext};
-use crate::protocol::{ErrorCode, LinkTarget, Reply, MAX_Z_CHUNK};
+use crate::protocol::{ErrorCode, LinkTarget, NakDetail, Reply, MAX_Z_CHUNK};
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 // Fixed capacity is the point (no allocation on the board); boxing is not an option.
@@ -68,5 +69,27 @@ impl CapabilityRequests for TurningRequest {
         }
         .map_err(|e| cx.with_state(e))?;
         Ok(Reply::None)
+    }
+}
+
+/// What turning's requests need of the board: the Z table upload and the Z job's start.
+/// Every method defaults to `Unsupported`, for a target without Z jobs.
+pub trait TurningTarget {
+    /// `ZTableBegin` (see `motion::turning::link_requests::ZRequests`). A refusal changes
+    /// nothing; `OutOfState` with `NakDetail::None` gets the machine state filled in.
+    fn z_table_begin(&mut self, _h: &ZTableHeader) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `ZTableChunk` with at most `MAX_Z_CHUNK` bytes.
+    fn z_table_chunk(&mut self, _index: u16, _bytes: &[u8]) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `ZTableEnd`: the checked table replaces the active one, or nothing changes.
+    fn z_table_end(&mut self, _crc: u32) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
+    }
+    /// `StartZ` (Start column passed, config valid).
+    fn start_z(&mut self, _spec: &ZJobSpec) -> Result<(), ZNak> {
+        Err((ErrorCode::Unsupported, NakDetail::None))
     }
 }

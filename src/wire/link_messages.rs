@@ -50,3 +50,13 @@ impl CapabilityRequests for WireRequest {
         Ok(Reply::None)
     }
 }
+
+/// What the wire manipulator's request needs of the board: a wire job armed. Defaults to
+/// `Unsupported`, for a target without wire jobs.
+pub trait WireTarget {
+    /// Arms a wire job with checked parameters (`Ready`, empty queue, no events); refused
+    /// with `OutOfState` otherwise. Targets without wire jobs: `Unsupported`.
+    fn arm_wire(&mut self, _params: &WireJobParams) -> Result<(), ErrorCode> {
+        Err(ErrorCode::Unsupported)
+    }
+}

@@ -12,10 +12,10 @@ use motion::polar::copy_link::{TeachRecorder, TEACH_BLOCKS};
 use motion::protocol::Status;
 
 use super::link_job::{LinkJob, Readings, StepReadings};
-use super::{copy, milling, turning, wire, Motion};
+use super::{milling, polar, turning, wire, Motion};
 
 /// Every capability's link module, in the order Status fills them.
-pub type Capabilities = (wire::Wire, turning::Turning, copy::Polar, milling::Milling);
+pub type Capabilities = (wire::Wire, turning::Turning, polar::Polar, milling::Milling);
 
 /// The tick's walk over the capabilities. Each capability's job excludes the others'
 /// ([`LinkJob::live`]), so at most one `tick` answers.

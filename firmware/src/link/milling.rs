@@ -14,6 +14,8 @@
 //! never preempt each other) hands each half buffer (`DECIMATION` frames = one control update)
 //! to [`on_adc_frames`]: the chain per frame, the control law once, the override into the DDA.
 
+mod requests;
+
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::{Command, StepOutput};
 use motion::machine::{Inputs, MachineState, TickOut};

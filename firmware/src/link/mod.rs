@@ -44,8 +44,6 @@ use board_contract::{CopyEncoders as _, MachineIo as _};
 
 /// The list of the capabilities' link modules, walked by the target.
 pub mod capabilities;
-/// Copy-mode jobs (`StartCopy`, `ReadTeach`).
-pub mod copy;
 mod feed;
 mod host_port;
 mod last_job;
@@ -53,6 +51,8 @@ mod last_job;
 pub mod link_job;
 /// Constant-force milling jobs (`ArmForce`).
 pub mod milling;
+/// Copy-mode jobs (`StartCopy`, `ReadTeach`).
+pub mod polar;
 mod session;
 /// The simulator board's test hooks (`Sim` requests).
 #[cfg(feature = "sim-inputs")]
@@ -129,7 +129,7 @@ pub struct Motion {
     /// The Z-slide job: the active table and the current (or last) run.
     pub z: ZJob,
     /// The copy job (the last one, for its counts, until the next `StartCopy`).
-    pub copy: copy::CopyState,
+    pub copy: polar::CopyState,
     /// The simulated plant the next force job samples.
     pub milling: milling::ForceSlot,
     /// The simulated probe surface (`Sim(Probe)`), evaluated from the step counters every tick.
@@ -164,7 +164,7 @@ impl Motion {
                 playback: Playback::new(SizeScale::ONE),
                 job: LastJob::None,
                 z: ZJob::new(),
-                copy: copy::CopyState::new(),
+                copy: polar::CopyState::new(),
                 milling: milling::ForceSlot::default(),
                 #[cfg(feature = "sim-inputs")]
                 sim_probe: None,

@@ -197,7 +197,7 @@ impl Link {
 
     /// The status task's teach work: taught events into stream blocks for `ReadTeach`.
     pub fn drain_teach(&mut self, motion: &mut impl Mutex<T = Motion>) {
-        copy::drain_teach(&mut self.feed.teach, motion);
+        polar::drain_teach(&mut self.feed.teach, motion);
     }
 
     /// Milliseconds of DDA time since boot (division: never call from the tick).

@@ -7,22 +7,16 @@ use core::sync::atomic::Ordering::Relaxed;
 use motion::config::MAX_AXES;
 use motion::dda::{Command, Preparer};
 use motion::machine::{BoardConfig, MachineCommand, MachineState, ProbeKind, Refusal};
-use motion::polar::playback::{Playback, SizeScale, QUEUE_DEPTH};
-use motion::polar::StepEvent;
-use motion::polar::PLAYBACK_JOB;
 use motion::protocol::{
-    BoardCounters, ErrorCode, ForceJobParams, HomingConfig, LinkConfig, LinkState, LinkTarget,
-    ProgramOutputs, Status, TeachChunk, WireJobParams, SENSOR_CHANNELS,
+    BoardCounters, ErrorCode, HomingConfig, LinkConfig, LinkState, LinkTarget, ProgramOutputs,
+    Status, SENSOR_CHANNELS,
 };
 use motion::segment::{Rate, Segment};
-use motion::turning::link_job::{ZJobSpec, ZTableHeader};
-use motion::turning::link_requests::ZNak;
-use motion::turning::TURNING_JOB;
 use motion::Dda;
 use rtic::Mutex;
 
 use crate::board;
-use board_contract::{ConfigStorage as _, CopyEncoders as _, TickRate as _};
+use board_contract::{ConfigStorage as _, TickRate as _};
 
 use super::capabilities::Capabilities;
 use super::feed::Feed;
@@ -33,8 +27,8 @@ use super::*;
 /// through `&self`, and an RTIC lock needs `&mut`, hence the `RefCell` (never borrowed twice: no
 /// method calls another while it holds the lock).
 pub struct Target<'a, M: Mutex<T = Motion>> {
-    link: &'a mut Feed,
-    motion: RefCell<&'a mut M>,
+    pub(super) link: &'a mut Feed,
+    pub(super) motion: RefCell<&'a mut M>,
     /// The feeder has work.
     pub wake_feeder: bool,
 }
@@ -44,19 +38,19 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
         Target { link, motion: RefCell::new(motion), wake_feeder: false }
     }
 
-    fn with<R>(&self, f: impl FnOnce(&mut Motion) -> R) -> R {
+    pub(super) fn with<R>(&self, f: impl FnOnce(&mut Motion) -> R) -> R {
         self.motion.borrow_mut().lock(f)
     }
 
     /// One machine command; a refusal changes nothing and becomes the NAK code.
-    fn command(&mut self, cmd: MachineCommand<'_>) -> Result<MachineState, ErrorCode> {
+    pub(super) fn command(&mut self, cmd: MachineCommand<'_>) -> Result<MachineState, ErrorCode> {
         let r = self.motion.get_mut().lock(|m| m.machine.command(cmd, &mut m.dda));
         r.map_err(|e: Refusal| e.error_code())
     }
 
     /// After a command that stops and drops the job: the queue goes too, and the feeder runs the
     /// machine's background (the abort of the frozen DDA).
-    fn drop_job(&mut self) {
+    pub(super) fn drop_job(&mut self) {
         self.motion.get_mut().lock(|m| {
             Capabilities::drop_job(m);
         });
@@ -68,7 +62,7 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
 
     /// Installs `cfg` (a validated board config): the machine first (it refuses out of state),
     /// then a DDA and preparer for a changed machine config, retimed in one critical section.
-    fn install(&mut self, cfg: &BoardConfig) -> Result<(), ErrorCode> {
+    pub(super) fn install(&mut self, cfg: &BoardConfig) -> Result<(), ErrorCode> {
         let preparer = Preparer::new(&cfg.link.machine).map_err(|_| ErrorCode::InvalidConfig)?;
         let old = self.with(|m| m.machine.config().link.machine);
         let tick_hz = cfg.link.machine.tick_hz;
@@ -273,134 +267,11 @@ impl<M: Mutex<T = Motion>> LinkTarget for Target<'_, M> {
         }
     }
 
-    fn next_event_block(&self) -> Option<u16> {
-        if self.with(|m| m.machine.source_queued()) {
-            self.link.events.expected()
-        } else {
-            Some(0)
-        }
-    }
-
     fn events_pending(&self) -> bool {
         // A wire job is a source job too, but its segments come through QueueSegments.
         self.with(|m| {
             (m.machine.source_queued() || m.machine.source_job().is_some()) && !wire::live(m)
         })
-    }
-
-    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
-        if self.with(|m| Capabilities::live(m)) {
-            return Err(ErrorCode::OutOfState);
-        }
-        let fresh = !self.with(|m| m.machine.source_queued());
-        let state = self.command(MachineCommand::QueueSource)?;
-        if fresh {
-            // The machine had no events: whatever the feed holds is a finished job's.
-            self.link.events.clear();
-        }
-        // Checked by BoardLink against `next_event_block` and `event_credits`: a refusal here
-        // is a link bug. (The machine's flag stays set: the job has nothing new to play.)
-        self.link.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
-        EVENTS_WAITING.store(true, Relaxed);
-        self.wake_feeder |= state != MachineState::Ready;
-        Ok(())
-    }
-
-    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
-        if self.with(|m| wire::live(m)) {
-            return Err(ErrorCode::OutOfState);
-        }
-        // Decode the first events outside the lock, from a copy (a refused start changes
-        // nothing), then start the job and fill its playback in one critical section: the
-        // first tick of the job already has events.
-        let mut feed = self.link.events.clone();
-        let mut first = [StepEvent::default(); QUEUE_DEPTH];
-        let (n, finished) = feed.take(&mut first);
-        let (head, _) = first.split_at(n);
-        let r = self.motion.get_mut().lock(|m| {
-            m.machine.command(MachineCommand::StartQueued(PLAYBACK_JOB), &mut m.dda)?;
-            m.playback = Playback::new(scale);
-            for &ev in head {
-                // Cannot fail: a fresh playback holds QUEUE_DEPTH events.
-                let _ = m.playback.push(ev);
-            }
-            if finished {
-                m.playback.finish();
-            }
-            Ok(())
-        });
-        r.map_err(|e: Refusal| e.error_code())?;
-        self.link.events = feed;
-        self.wake_feeder = true;
-        Ok(())
-    }
-
-    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
-        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
-        // An armed force job owns the next segment job.
-        let empty = empty && !self.with(|m| milling::live(m));
-        self.motion.get_mut().lock(|m| wire::arm(m, empty, params))
-    }
-
-    fn z_table_begin(&mut self, h: &ZTableHeader) -> Result<(), ZNak> {
-        let active = self.with(|m| m.machine.runs(TURNING_JOB));
-        self.link.z.begin(h, active)
-    }
-
-    fn z_table_chunk(&mut self, index: u16, bytes: &[u8]) -> Result<(), ZNak> {
-        let active = self.with(|m| m.machine.runs(TURNING_JOB));
-        self.link.z.chunk(index, bytes, active)
-    }
-
-    fn z_table_end(&mut self, crc: u32) -> Result<(), ZNak> {
-        // Checked outside the lock; the install (a copy) inside it.
-        let active = self.with(|m| m.machine.runs(TURNING_JOB));
-        let table = self.link.z.end(crc, active)?;
-        let copy = table.clone();
-        self.motion.get_mut().lock(|m| turning::install(m, table))?;
-        self.link.z.installed(copy);
-        Ok(())
-    }
-
-    fn start_z(&mut self, spec: &ZJobSpec) -> Result<(), ZNak> {
-        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
-        let (tick_hz, speed, active) = self.with(|m| {
-            let tick_hz = m.machine.config().link.machine.tick_hz;
-            (tick_hz, m.z.sensed_speed_turn_q32_per_tick(), m.machine.runs(TURNING_JOB))
-        });
-        // The generator is built here, outside the lock (see `turning`).
-        let prepared = self.link.z.prepare(spec, tick_hz, speed, active)?;
-        self.motion.get_mut().lock(|m| turning::start(m, empty, prepared))
-    }
-
-    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
-        let empty = self.link.queue.is_empty() && self.link.events.blocks() == 0;
-        self.motion.get_mut().lock(|m| {
-            let wire_live = wire::live(m);
-            milling::arm(m, empty, wire_live, params)
-        })
-    }
-
-    fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
-        if !board::CopyEncoders::ROUTED {
-            return Err(ErrorCode::Unsupported);
-        }
-        if !self.link.queue.is_empty() || self.link.events.blocks() != 0 {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.motion.get_mut().lock(|m| copy::start(m, scale, teach))?;
-        // A new recording (the last one's unread blocks go).
-        self.link.teach.reset(teach);
-        Ok(())
-    }
-
-    fn read_teach(&mut self, block: u16) -> Result<TeachChunk, ErrorCode> {
-        let rec = &mut self.link.teach;
-        Ok(self.motion.get_mut().lock(|m| copy::read(rec, m, block)))
-    }
-
-    fn teach_resend(&self) -> Option<TeachChunk> {
-        Some(self.with(|m| copy::resend(&self.link.teach, m)))
     }
 
     /// The next `Start` runs a probe move: nothing queued or armed besides it.

@@ -12,6 +12,8 @@
 //! the table, milliseconds on the F405) in the USART task on the link's copy of the active
 //! table, outside the `Motion` lock; the lock only begins the prepared run.
 
+mod requests;
+
 use motion::dda::StepOutput;
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::protocol::{ErrorCode, NakDetail, Status};

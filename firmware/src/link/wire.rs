@@ -10,6 +10,8 @@
 //! `Motion` lock because the controller pushes straight into the DDA (a few microseconds per
 //! segment: one `Preparer::prepare`, or one `Dda::abort` after a stop).
 
+mod requests;
+
 use motion::dda::StepOutput;
 use motion::machine::{Inputs, MachineCommand, MachineState, TickOut};
 use motion::protocol::{ErrorCode, Status, WireJobParams};

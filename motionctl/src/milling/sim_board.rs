@@ -256,9 +256,6 @@ impl LinkTarget for MillingSimTarget {
     fn jog_off_limit(&mut self) -> Result<(), ErrorCode> {
         self.inner.jog_off_limit()
     }
-    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
-        self.inner.arm_force(params)
-    }
     fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
         self.inner.sim(req)
     }
@@ -269,6 +266,18 @@ impl LinkTarget for MillingSimTarget {
         Err(ErrorCode::Unsupported)
     }
 }
+
+impl motion::polar::link_messages::PolarTarget for MillingSimTarget {}
+
+impl motion::turning::link_messages::TurningTarget for MillingSimTarget {}
+
+impl motion::milling::link_messages::MillingTarget for MillingSimTarget {
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        self.inner.arm_force(params)
+    }
+}
+
+impl motion::wire::link_messages::WireTarget for MillingSimTarget {}
 
 /// The board: link, target, the wall clock it runs on, and an optional power cut.
 pub struct MillingSimBoard {

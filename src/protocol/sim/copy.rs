@@ -183,11 +183,30 @@ impl LinkTarget for CopySim {
     fn event_credits(&self) -> u16 {
         self.inner.event_credits()
     }
-    fn next_event_block(&self) -> Option<u16> {
-        self.inner.next_event_block()
-    }
     fn events_pending(&self) -> bool {
         self.copy_running || self.inner.events_pending()
+    }
+    /// The encoders are this target's; the wire-stall switch the inner one's; no spindle or
+    /// milling plant.
+    #[cfg(feature = "sim-inputs")]
+    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
+        match *req {
+            SimRequest::Encoders { arm_counts, carriage_counts } => {
+                self.encoder_target = [arm_counts, carriage_counts];
+                Ok(())
+            }
+            SimRequest::Inject { .. } => self.inner.sim(req),
+            SimRequest::Spindle { .. }
+            | SimRequest::Milling(_)
+            | SimRequest::Probe { .. }
+            | SimRequest::CorruptConfig => Err(ErrorCode::Unsupported),
+        }
+    }
+}
+
+impl crate::polar::link_messages::PolarTarget for CopySim {
+    fn next_event_block(&self) -> Option<u16> {
+        self.inner.next_event_block()
     }
     fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
         if self.copy_running {
@@ -200,12 +219,6 @@ impl LinkTarget for CopySim {
             return Err(ErrorCode::OutOfState);
         }
         self.inner.start_playback(scale)
-    }
-    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
-        if self.copy_running {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.inner.arm_wire(params)
     }
     fn start_copy(&mut self, scale: SizeScale, teach: bool) -> Result<(), ErrorCode> {
         let busy = self.copy_running
@@ -236,20 +249,17 @@ impl LinkTarget for CopySim {
         let r = self.teach.peek(block);
         Some(self.chunk(block, r.bytes, r.ended))
     }
-    /// The encoders are this target's; the wire-stall switch the inner one's; no spindle or
-    /// milling plant.
-    #[cfg(feature = "sim-inputs")]
-    fn sim(&mut self, req: &SimRequest) -> Result<(), ErrorCode> {
-        match *req {
-            SimRequest::Encoders { arm_counts, carriage_counts } => {
-                self.encoder_target = [arm_counts, carriage_counts];
-                Ok(())
-            }
-            SimRequest::Inject { .. } => self.inner.sim(req),
-            SimRequest::Spindle { .. }
-            | SimRequest::Milling(_)
-            | SimRequest::Probe { .. }
-            | SimRequest::CorruptConfig => Err(ErrorCode::Unsupported),
+}
+
+impl crate::turning::link_messages::TurningTarget for CopySim {}
+
+impl crate::milling::link_messages::MillingTarget for CopySim {}
+
+impl crate::wire::link_messages::WireTarget for CopySim {
+    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
+        if self.copy_running {
+            return Err(ErrorCode::OutOfState);
         }
+        self.inner.arm_wire(params)
     }
 }

@@ -477,56 +477,8 @@ impl LinkTarget for SimTarget {
         self.events.credits()
     }
 
-    fn next_event_block(&self) -> Option<u16> {
-        self.events.expected()
-    }
-
     fn events_pending(&self) -> bool {
         self.event_job || !self.events.is_unused()
-    }
-
-    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
-        if !self.queue.is_empty() {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
-        self.take(CommandKind::Queue);
-        Ok(())
-    }
-
-    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
-        if self.event_job || self.events.is_unused() || !self.queue.is_empty() {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.playback = Playback::new(scale);
-        self.events.fill(&mut self.playback);
-        self.event_base = self.positions;
-        self.event_job = true;
-        self.running = true;
-        self.take(CommandKind::Start);
-        Ok(())
-    }
-
-    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
-        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
-        if self.machine != MachineState::Ready || busy || self.wire_armed.is_some() {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.wire_armed = Some(*params);
-        self.mutations += 1;
-        Ok(())
-    }
-
-    // -- force job --
-    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
-        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
-        let armed = self.wire_armed.is_some() || self.force_armed.is_some();
-        if self.machine != MachineState::Ready || busy || armed {
-            return Err(ErrorCode::OutOfState);
-        }
-        self.force_armed = Some(*params);
-        self.mutations += 1;
-        Ok(())
     }
 
     /// The wire-stall switch and the milling plant; no spindle or encoders (`CopySim` has
@@ -562,6 +514,60 @@ impl LinkTarget for SimTarget {
             return Err(ErrorCode::OutOfState);
         }
         self.outputs = o.applied_to(self.outputs);
+        self.mutations += 1;
+        Ok(())
+    }
+}
+
+impl crate::polar::link_messages::PolarTarget for SimTarget {
+    fn next_event_block(&self) -> Option<u16> {
+        self.events.expected()
+    }
+    fn queue_events(&mut self, block: &[u8], last: bool) -> Result<(), ErrorCode> {
+        if !self.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.events.push(block, last).map_err(|_| ErrorCode::Internal)?;
+        self.take(CommandKind::Queue);
+        Ok(())
+    }
+    fn start_playback(&mut self, scale: SizeScale) -> Result<(), ErrorCode> {
+        if self.event_job || self.events.is_unused() || !self.queue.is_empty() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.playback = Playback::new(scale);
+        self.events.fill(&mut self.playback);
+        self.event_base = self.positions;
+        self.event_job = true;
+        self.running = true;
+        self.take(CommandKind::Start);
+        Ok(())
+    }
+}
+
+impl crate::turning::link_messages::TurningTarget for SimTarget {}
+
+impl crate::milling::link_messages::MillingTarget for SimTarget {
+    // -- force job --
+    fn arm_force(&mut self, params: &ForceJobParams) -> Result<(), ErrorCode> {
+        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
+        let armed = self.wire_armed.is_some() || self.force_armed.is_some();
+        if self.machine != MachineState::Ready || busy || armed {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.force_armed = Some(*params);
+        self.mutations += 1;
+        Ok(())
+    }
+}
+
+impl crate::wire::link_messages::WireTarget for SimTarget {
+    fn arm_wire(&mut self, params: &WireJobParams) -> Result<(), ErrorCode> {
+        let busy = !self.queue.is_empty() || self.event_job || self.events.blocks() != 0;
+        if self.machine != MachineState::Ready || busy || self.wire_armed.is_some() {
+            return Err(ErrorCode::OutOfState);
+        }
+        self.wire_armed = Some(*params);
         self.mutations += 1;
         Ok(())
     }

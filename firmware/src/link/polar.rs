@@ -1,4 +1,8 @@
-//! Copy-mode jobs on the link firmware (`motion::polar::copy_link`): `StartCopy` makes a
+//! Polar contouring on the link firmware: its `LinkJob` ([`Polar`]: the playback's and the copy
+//! job's ticks) and the board's side of its link requests (`PolarTarget` for [`Target`]: event
+//! blocks, playback, copy, teach).
+//!
+//! Copy-mode jobs (`motion::polar::copy_link`): `StartCopy` makes a
 //! [`CopyMode`] in [`Motion`] from the encoders' counts now and starts the machine's
 //! `StartCopy` in the same critical section; the tick feeds it the board's encoder counts every
 //! tick through `Machine::tick_with` ([`tick`]); the status task moves taught events into
@@ -7,6 +11,9 @@
 //! The tick's copy work is `CopyMode::tick` (at most 2 counts per axis, compares and adds, no
 //! division); the block encoding (varints, CRC) runs in the status task, never in the tick.
 
+mod requests;
+
+use crate::board;
 use motion::machine::{Inputs, MachineCommand, TickOut};
 use motion::polar::copy::CopyMode;
 use motion::polar::copy_link::{
