@@ -4,6 +4,7 @@
 
 mod protocol_support;
 
+use motion::wire::link_messages::WireJobParams;
 use std::collections::HashSet;
 
 use motion::machine::MachineState;

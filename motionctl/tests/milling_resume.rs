@@ -7,7 +7,8 @@
 //! after the resume as in the uncut run. `--resume` with no journal, or with another kind of
 //! run's journal, fails before the link with a message naming the journal.
 
-use motion::protocol::{ForcePhase, HostConfig, SimForceFault};
+use motion::milling::link_params::ForcePhase;
+use motion::protocol::{HostConfig, SimForceFault};
 use motionctl::journal;
 use motionctl::milling::job::{self, MillingJob};
 use motionctl::milling::resume::MillingResume;

@@ -28,9 +28,9 @@ pub use ticks::{
     mrev_s_from_turn_q32_per_tick, phase_of,
 };
 
-use crate::protocol::{
-    FaultCode, ForceJobParams, ForcePhase, SimForceFault, SimMillingParams, Status,
-};
+use crate::milling::link_params::ForceJobParams;
+use crate::milling::link_params::ForcePhase;
+use crate::protocol::{FaultCode, SimForceFault, SimMillingParams, Status};
 use crate::segment::Rate;
 
 use super::chain::{ChainOutput, ForceChain, MAX_CHANNELS};

@@ -4,9 +4,10 @@ use super::*;
 use crate::dda::Dda;
 use crate::machine::{BoardConfig, MachineCommand};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
+use crate::milling::link_params::ForceStrategy;
 use crate::milling::scenario::{self as sc, MillingScenario, Variant};
+use crate::protocol::MAX_OVERRIDE_BITS;
 use crate::protocol::{AxisScale, HomingConfig, LinkConfig};
-use crate::protocol::{ForceStrategy, MAX_OVERRIDE_BITS};
 use crate::scenario::run_to_end;
 
 fn board() -> BoardConfig {

@@ -2,6 +2,7 @@
 //! the link's envelope (`RequestBody::Capability`); the session hands it to
 //! [`MillingRequest::execute`].
 
+use crate::milling::link_params::ForceJobParams;
 use serde::{Deserialize, Serialize};
 
 use super::link_job::check_job;
@@ -9,7 +10,7 @@ use crate::machine::CommandKind;
 use crate::protocol::session::{
     config_nak, plain, range_nak, CapabilityRequests, Nak, RequestContext,
 };
-use crate::protocol::{ErrorCode, ForceJobParams, LinkTarget, Reply, CAP_MILLING_JOB};
+use crate::protocol::{ErrorCode, LinkTarget, Reply, CAP_MILLING_JOB};
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum MillingRequest {

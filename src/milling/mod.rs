@@ -12,6 +12,7 @@ pub mod control;
 pub mod dma_frames;
 pub mod link_job;
 pub mod link_messages;
+pub mod link_params;
 pub mod peak;
 pub mod plant;
 pub mod sample_timer;

@@ -7,6 +7,7 @@ use crate::machine::MachineState;
 use crate::milling::link_job::case_a_job;
 #[cfg(feature = "sim-inputs")]
 use crate::milling::link_job::case_a_sim;
+use crate::milling::link_params::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy};
 use crate::segment::Rate;
 
 pub(crate) fn extreme_force_params() -> ForceJobParams {

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::machine::CommandKind;
 use crate::protocol::session::{config_nak, plain, CapabilityRequests, Nak, RequestContext};
-use crate::protocol::{ErrorCode, LinkTarget, Reply, WireJobParams, MAX_OVERRIDE_BITS};
+use crate::protocol::{ErrorCode, LinkTarget, Reply, MAX_OVERRIDE_BITS};
 
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum WireRequest {
@@ -59,4 +59,20 @@ pub trait WireTarget {
     fn arm_wire(&mut self, _params: &WireJobParams) -> Result<(), ErrorCode> {
         Err(ErrorCode::Unsupported)
     }
+}
+
+/// A wire job's stall handling (`motion::wire::controller::StallParams`) and length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WireJobParams {
+    /// Consecutive ticks the stall switch must agree before a change counts (>= 1).
+    pub debounce_ticks: u16,
+    /// Largest retraced distance of one stall, sum of absolute steps over the four axes (>= 1).
+    pub retrace_limit_steps: u64,
+    /// Feed override while retracing and after the return, `Rate` bits (0 < x <= 2.0).
+    pub retrace_override_bits: u32,
+    pub resume_override_bits: u32,
+    /// Job segments run at `resume_override_bits` after a return.
+    pub resume_segments: u32,
+    /// Segments in the job (>= 1).
+    pub segments: u32,
 }

@@ -20,7 +20,8 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use motion::dda::{Command, StepOutput};
 use motion::machine::{Inputs, MachineState, TickOut};
 use motion::milling::link_job::{self, mrev_s_from_turn_q32_per_tick, ForceJob};
-use motion::protocol::{ErrorCode, FaultCode, ForceJobParams, SimMillingParams, Status};
+use motion::milling::link_params::ForceJobParams;
+use motion::protocol::{ErrorCode, FaultCode, SimMillingParams, Status};
 
 use super::link_job::{LinkJob, Readings, StepReadings};
 use super::{LastJob, Motion};

@@ -14,10 +14,11 @@ mod requests;
 
 use motion::dda::StepOutput;
 use motion::machine::{Inputs, MachineCommand, MachineState, TickOut};
-use motion::protocol::{ErrorCode, Status, WireJobParams};
+use motion::protocol::{ErrorCode, Status};
 use motion::segment::{Rate, Segment};
 use motion::wire::controller::StallParams;
 use motion::wire::link_job::{self, WireJob};
+use motion::wire::link_messages::WireJobParams;
 use motion::wire::WIRE_JOB;
 
 use super::link_job::{LinkJob, Readings, StepReadings};

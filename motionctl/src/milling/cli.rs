@@ -287,7 +287,9 @@ fn after_resume(r: &run::MillingRunReport) -> Option<AfterResume> {
     let cut: Vec<_> = r
         .trace
         .iter()
-        .filter(|p| p.x_steps >= from && p.phase == motion::protocol::ForcePhase::Cutting)
+        .filter(|p| {
+            p.x_steps >= from && p.phase == motion::milling::link_params::ForcePhase::Cutting
+        })
         .collect();
     let last = cut.last()?;
     Some(AfterResume {

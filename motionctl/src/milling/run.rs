@@ -21,10 +21,11 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::milling::link_job::{job_params, sim_params};
+use motion::milling::link_params::ForcePhase;
 use motion::milling::scenario as sc;
 use motion::protocol::{
-    AxisScale, FaultCode, ForcePhase, HostConfig, HostEvent, LinkConfig, Reply, RequestBody,
-    SegmentBatch, SimForceFault, SimRequest, Status, CAP_SIM_INPUTS,
+    AxisScale, FaultCode, HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch,
+    SimForceFault, SimRequest, Status, CAP_SIM_INPUTS,
 };
 use std::path::Path;
 use std::time::{Duration, Instant};

@@ -18,10 +18,11 @@ use crate::transport::Transport;
 use motion::dda::{Command, Dda, Preparer};
 use motion::machine::{MachineState, ProbeKind};
 use motion::milling::link_job::ForceJob;
+use motion::milling::link_params::ForceJobParams;
 use motion::protocol::{
-    BoardLink, ErrorCode, FaultCode, ForceJobParams, HomingConfig, LinkConfig, LinkState,
-    LinkTarget, ProgramOutputs, SimRequest, SimTarget, Status, CAP_DDA, CAP_HOLD_RESUME,
-    CAP_MILLING_JOB, CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
+    BoardLink, ErrorCode, FaultCode, HomingConfig, LinkConfig, LinkState, LinkTarget,
+    ProgramOutputs, SimRequest, SimTarget, Status, CAP_DDA, CAP_HOLD_RESUME, CAP_MILLING_JOB,
+    CAP_OVERRIDE, CAP_SIM_INPUTS, CAP_SOFT_LIMITS, CAP_STATUS_STREAM,
 };
 use motion::segment::Segment;
 use motion::{Rate, MAX_AXES};

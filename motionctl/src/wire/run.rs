@@ -17,10 +17,11 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::protocol::{
-    HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch, SimRequest, WireJobParams,
+    HostConfig, HostEvent, LinkConfig, Reply, RequestBody, SegmentBatch, SimRequest,
     CAP_SIM_INPUTS, MAX_SEGMENTS_PER_FRAME,
 };
 use motion::segment::Segment;
+use motion::wire::link_messages::WireJobParams;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 

@@ -1,9 +1,9 @@
 //! A force job's link parameters and the setups they stand for: the control law's, the chain's
 //! and the simulated plant's, both ways, with every check `ArmForce` and `Sim(Milling)` make.
 
-use crate::protocol::{
-    ForceJobParams, ForceStrategy, SimForceFault, SimMillingParams, MAX_OVERRIDE_BITS,
-};
+use crate::milling::link_params::ForceJobParams;
+use crate::milling::link_params::ForceStrategy;
+use crate::protocol::{SimForceFault, SimMillingParams, MAX_OVERRIDE_BITS};
 use crate::segment::Rate;
 
 use crate::milling::biquad::BiquadCoeffs;
@@ -219,7 +219,7 @@ pub fn job_params(ctl: &ControlParams, chain: &ChainConfig, axis: u8) -> ForceJo
             }
         }
     };
-    let cal = chain.cal.map(|c| crate::protocol::ForceCal {
+    let cal = chain.cal.map(|c| crate::milling::link_params::ForceCal {
         zero_counts: c.zero_counts,
         mn_per_count_q16: c.mn_per_count_q16,
     });

@@ -4,7 +4,7 @@
 use super::ForceJob;
 use crate::dda::{Command, Dda, StepOutput};
 use crate::machine::{Inputs, Machine, MachineState, TickOut};
-use crate::protocol::ForcePhase;
+use crate::milling::link_params::ForcePhase;
 
 use crate::milling::control::Mode;
 

@@ -4,18 +4,17 @@
 //!
 //! The parts: `requests` (host -> board), `replies` (board -> host: Ack/Nak and what they
 //! carry), `status` (the status report and the board's counters), `link_config` (the config and
-//! homing as set over the link), `jobs` (the force and wire jobs' parameters) and `decode`.
+//! homing as set over the link) and `decode`. A capability's requests and their parameters are
+//! its own (`link_messages` in its folder), carried in `RequestBody::Capability`.
 //! The version, the capability bits and the sizes every part shares are here.
 
 mod decode;
-mod jobs;
 mod link_config;
 mod replies;
 mod requests;
 mod status;
 
 pub use decode::{decode_request, decode_response, Malformed};
-pub use jobs::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy, WireJobParams};
 pub use link_config::{AxisScale, HomingConfig, LinkConfig};
 pub use replies::{HelloInfo, NakDetail, PanicSite, Reply, Response, TeachChunk};
 pub use requests::{Request, RequestBody, KIND_SIM};

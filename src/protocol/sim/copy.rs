@@ -19,6 +19,7 @@ use crate::protocol::messages::*;
 use crate::protocol::session::LinkTarget;
 use crate::protocol::BlockBytes;
 use crate::segment::{Rate, Segment};
+use crate::wire::link_messages::WireJobParams;
 
 /// A [`SimTarget`] that also runs copy jobs.
 #[derive(Clone, Debug)]

@@ -9,6 +9,8 @@
 //! an [`EventFeed`] into a [`Playback`] ticked by [`SimTarget::run_events`] at the feed override,
 //! so the positions and event counts are exactly the board's.
 
+use crate::milling::link_params::ForceJobParams;
+use crate::wire::link_messages::WireJobParams;
 use heapless::Deque;
 
 #[cfg(feature = "sim-inputs")]
@@ -21,9 +23,7 @@ use crate::machine::{
 use crate::polar::feed::EventFeed;
 use crate::polar::playback::{Playback, SizeScale, RATE_MAX, RATE_MIN};
 use crate::protocol::errors::{ErrorCode, FaultCode};
-use crate::protocol::messages::{
-    BoardCounters, ForceJobParams, HomingConfig, LinkConfig, LinkState, Status, WireJobParams,
-};
+use crate::protocol::messages::{BoardCounters, HomingConfig, LinkConfig, LinkState, Status};
 use crate::protocol::program_outputs::ProgramOutputs;
 use crate::protocol::session::LinkTarget;
 use crate::segment::{Rate, Segment};

@@ -2,6 +2,7 @@
 //! kind is its postcard index, and the board counters' differences survive a wrap.
 
 use super::*;
+use crate::wire::link_messages::WireJobParams;
 
 fn extreme_config() -> LinkConfig {
     LinkConfig {

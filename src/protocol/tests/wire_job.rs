@@ -2,6 +2,7 @@
 //! the sim's stall injection needs the capability.
 
 use super::*;
+use crate::wire::link_messages::WireJobParams;
 
 fn wire_params() -> WireJobParams {
     WireJobParams {

@@ -40,9 +40,9 @@ pub(super) fn wire_job_machine(cfg: &motion::MachineConfig, origin: [f64; 4]) ->
 }
 
 /// The thesis's stall handling for a wire job of `segments` segments.
-fn stall_params(segments: usize) -> motion::protocol::WireJobParams {
+fn stall_params(segments: usize) -> motion::wire::link_messages::WireJobParams {
     use motion::wire::scenario::STALL_PARAMS as P;
-    motion::protocol::WireJobParams {
+    motion::wire::link_messages::WireJobParams {
         debounce_ticks: P.debounce_ticks,
         retrace_limit_steps: P.retrace_limit_steps,
         retrace_override_bits: P.retrace_override.to_bits(),
@@ -88,7 +88,7 @@ pub struct WireBoardJob {
     pub job_segments: usize,
     pub segments: Vec<motion::segment::Segment>,
     pub cfg: motion::protocol::LinkConfig,
-    pub params: motion::protocol::WireJobParams,
+    pub params: motion::wire::link_messages::WireJobParams,
     /// The host model's final X, Y, beta, alpha steps from the start, and its duration, ticks.
     pub expected: [i64; 4],
     pub model_ticks: u64,

@@ -1,8 +1,8 @@
-//! The jobs' parameters on the link: the force job's (and its phase in the status), the wire job's.
+//! The force job's parameters on the link (`ArmForce`), in the firmware's units, and its phase
+//! in `Status`.
 
 use serde::{Deserialize, Serialize};
 
-// -- force job --
 /// Contact strategy of a force job (`motion::milling::control::ContactStrategy`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ForceStrategy {
@@ -129,20 +129,4 @@ impl ForcePhase {
             ForcePhase::Ended => "ended",
         }
     }
-}
-
-/// A wire job's stall handling (`motion::wire::controller::StallParams`) and length.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct WireJobParams {
-    /// Consecutive ticks the stall switch must agree before a change counts (>= 1).
-    pub debounce_ticks: u16,
-    /// Largest retraced distance of one stall, sum of absolute steps over the four axes (>= 1).
-    pub retrace_limit_steps: u64,
-    /// Feed override while retracing and after the return, `Rate` bits (0 < x <= 2.0).
-    pub retrace_override_bits: u32,
-    pub resume_override_bits: u32,
-    /// Job segments run at `resume_override_bits` after a return.
-    pub resume_segments: u32,
-    /// Segments in the job (>= 1).
-    pub segments: u32,
 }
