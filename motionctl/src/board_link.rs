@@ -112,7 +112,7 @@ impl LinkArgs {
                 );
                 (Box::new(tcp), Some(q))
             }
-            other => (transport::open(other)?, None),
+            other => (open_transport(other)?, None),
         };
         if self.noise > 0.0 {
             eprintln!(
@@ -300,6 +300,20 @@ pub fn require_capability(info: &HelloInfo, cap: &Capability) -> Result<()> {
         info.firmware.as_str(),
         cap.name
     )
+}
+
+/// Opens the link to a serial, TCP or simulated target. QEMU goes through
+/// [`crate::qemu::Qemu::start`], which owns the emulator process.
+fn open_transport(target: &LinkTarget) -> std::io::Result<Box<dyn Transport>> {
+    match target {
+        LinkTarget::Serial { port, baud } => Ok(Box::new(transport::Serial::open(port, *baud)?)),
+        LinkTarget::Tcp { addr } => Ok(Box::new(transport::Tcp::connect(addr)?)),
+        LinkTarget::Sim => Ok(Box::new(crate::sim_board::SimBoard::bench_machine())),
+        LinkTarget::Qemu { .. } => Err(std::io::Error::new(
+            std::io::ErrorKind::Unsupported,
+            "QEMU is started by motionctl run --qemu (use --tcp HOST:PORT for a running QEMU)",
+        )),
+    }
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! probability `rate` either corrupted (one random bit flipped) or dropped, 50/50, from a seeded
 //! generator. `--noise 0.01 --seed 7` is the "proxy that corrupts or drops 1 % of bytes".
 
+pub use crate::transport::NoiseStats;
 use crate::transport::Transport;
 use std::io;
 use std::time::Duration;
@@ -30,14 +31,6 @@ impl XorShift {
     pub fn unit(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
-}
-
-/// Counts of what the noise did, per direction.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct NoiseStats {
-    pub bytes: u64,
-    pub corrupted: u64,
-    pub dropped: u64,
 }
 
 /// One direction of noise.

@@ -1,9 +1,8 @@
 //! The byte link to the board: a serial port, a TCP socket (the QEMU board's UART, see
-//! [`crate::qemu`]), the in-process simulated board ([`crate::sim_board`]) or an in-memory
+//! [`crate::qemu`]), the in-process simulated board (`crate::sim_board`) or an in-memory
 //! [`Loopback`] for tests. Everything above (the CLI's link commands, the job runner) talks to a
 //! `dyn Transport` only.
 
-use crate::noise::NoiseStats;
 use std::fmt;
 use std::io::{self, Read, Write};
 use std::net::{TcpStream, ToSocketAddrs};
@@ -14,6 +13,14 @@ use std::time::Duration;
 pub const DEFAULT_BAUD: u32 = 460_800;
 /// Longest a TCP connect may take before it is reported.
 pub const TCP_CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
+
+/// Counts of what a noise proxy (`crate::noise`) did, per direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoiseStats {
+    pub bytes: u64,
+    pub corrupted: u64,
+    pub dropped: u64,
+}
 
 /// A bidirectional byte stream to the board.
 pub trait Transport {
@@ -211,20 +218,6 @@ impl Transport for Tcp {
     }
 }
 
-/// Opens the link to a serial, TCP or simulated target. QEMU goes through
-/// [`crate::qemu::Qemu::start`], which owns the emulator process.
-pub fn open(target: &LinkTarget) -> io::Result<Box<dyn Transport>> {
-    match target {
-        LinkTarget::Serial { port, baud } => Ok(Box::new(Serial::open(port, *baud)?)),
-        LinkTarget::Tcp { addr } => Ok(Box::new(Tcp::connect(addr)?)),
-        LinkTarget::Sim => Ok(Box::new(crate::sim_board::SimBoard::bench_machine())),
-        LinkTarget::Qemu { .. } => Err(io::Error::new(
-            io::ErrorKind::Unsupported,
-            "QEMU is started by motionctl run --qemu (use --tcp HOST:PORT for a running QEMU)",
-        )),
-    }
-}
-
 /// An in-memory transport: what is sent can be read back with [`Loopback::sent`], and `recv`
 /// returns bytes queued with [`Loopback::queue`]. For tests of code above the link.
 #[derive(Debug, Default)]
@@ -269,8 +262,7 @@ mod tests {
 
     #[test]
     fn missing_serial_port_is_named() {
-        let t = LinkTarget::Serial { port: "/dev/ttyNOPE9".into(), baud: DEFAULT_BAUD };
-        let Err(e) = open(&t) else { panic!("no such port") };
+        let Err(e) = Serial::open("/dev/ttyNOPE9", DEFAULT_BAUD) else { panic!("no such port") };
         assert!(e.to_string().starts_with("port /dev/ttyNOPE9 not found: "), "{e}");
     }
 
