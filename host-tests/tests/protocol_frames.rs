@@ -4,7 +4,9 @@
 
 mod protocol_support;
 
+use motion::polar::link_messages::PolarRequest;
 use motion::wire::link_messages::WireJobParams;
+use motion::wire::link_messages::WireRequest;
 use std::collections::HashSet;
 
 use motion::machine::MachineState;
@@ -38,12 +40,12 @@ fn all_requests() -> Vec<Request> {
         RequestBody::Home,
         RequestBody::SetHoming(HomingConfig::NONE),
         RequestBody::JogOffLimit,
-        RequestBody::from(motion::polar::link_messages::PolarRequest::QueueEvents(EventBlock {
+        RequestBody::from(PolarRequest::QueueEvents(EventBlock {
             bytes: BlockBytes::from_slice(&[0xB5, 1, 2, 3]).unwrap(),
             last: false,
         })),
-        RequestBody::from(motion::polar::link_messages::PolarRequest::StartPlayback { m: 3, k: 2 }),
-        RequestBody::from(motion::wire::link_messages::WireRequest::ArmWire(WireJobParams {
+        RequestBody::from(PolarRequest::StartPlayback { m: 3, k: 2 }),
+        RequestBody::from(WireRequest::ArmWire(WireJobParams {
             debounce_ticks: 50,
             retrace_limit_steps: 40_000,
             retrace_override_bits: 1 << 29,

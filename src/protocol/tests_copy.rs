@@ -3,6 +3,7 @@
 use super::tests::config;
 use super::*;
 use crate::machine::MachineState;
+use crate::polar::link_messages::PolarRequest;
 #[cfg(feature = "sim-inputs")]
 use crate::polar::stream::net_steps;
 
@@ -39,12 +40,8 @@ fn teach(r: &Response) -> TeachChunk {
 fn copy_requests_round_trip() {
     #[allow(unused_mut)]
     let mut bodies = vec![
-        RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-            m: 3,
-            k: 2,
-            teach: true,
-        }),
-        RequestBody::from(crate::polar::link_messages::PolarRequest::ReadTeach { block: 513 }),
+        RequestBody::from(PolarRequest::StartCopy { m: 3, k: 2, teach: true }),
+        RequestBody::from(PolarRequest::ReadTeach { block: 513 }),
     ];
     #[cfg(feature = "sim-inputs")]
     bodies
@@ -62,39 +59,18 @@ fn start_copy_checks_scale_state_and_capability() {
     let caps = CAP_COPY_JOB | CAP_SIM_INPUTS;
     let (mut link, mut t) = open(caps);
     let r = link.handle(
-        &req(
-            1,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-                m: 5,
-                k: 1,
-                teach: false,
-            }),
-        ),
+        &req(1, RequestBody::from(PolarRequest::StartCopy { m: 5, k: 1, teach: false })),
         &mut t,
     );
     assert_eq!(nak_code(&r), Some(ErrorCode::OutOfRange));
     let r = link.handle(
-        &req(
-            2,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-                m: 1,
-                k: 0,
-                teach: false,
-            }),
-        ),
+        &req(2, RequestBody::from(PolarRequest::StartCopy { m: 1, k: 0, teach: false })),
         &mut t,
     );
     assert_eq!(nak_code(&r), Some(ErrorCode::OutOfRange));
     assert!(!t.copy_running);
     let r = link.handle(
-        &req(
-            3,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-                m: 2,
-                k: 1,
-                teach: false,
-            }),
-        ),
+        &req(3, RequestBody::from(PolarRequest::StartCopy { m: 2, k: 1, teach: false })),
         &mut t,
     );
     assert!(matches!(r, Response::Ack { .. }), "{r:?}");
@@ -102,14 +78,7 @@ fn start_copy_checks_scale_state_and_capability() {
     assert_eq!(t.inner.machine, MachineState::Running);
     // Running: a second start and a segment job are refused, the copy goes on.
     let r = link.handle(
-        &req(
-            4,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-                m: 2,
-                k: 1,
-                teach: false,
-            }),
-        ),
+        &req(4, RequestBody::from(PolarRequest::StartCopy { m: 2, k: 1, teach: false })),
         &mut t,
     );
     assert_eq!(nak_code(&r), Some(ErrorCode::OutOfState));
@@ -135,14 +104,7 @@ fn start_copy_checks_scale_state_and_capability() {
     let mut link = BoardLink::new("plain", 0);
     link.handle(&req(0, RequestBody::Hello { version: PROTOCOL_VERSION, nonce: 1 }), &mut plain);
     let r = link.handle(
-        &req(
-            1,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-                m: 1,
-                k: 1,
-                teach: true,
-            }),
-        ),
+        &req(1, RequestBody::from(PolarRequest::StartCopy { m: 1, k: 1, teach: true })),
         &mut plain,
     );
     assert_eq!(nak_code(&r), Some(ErrorCode::Unsupported));
@@ -163,11 +125,7 @@ fn teach_is_read_back_whole_through_retransmissions() {
     let (r, _) = send(
         &mut link,
         &mut t,
-        RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-            m: 3,
-            k: 2,
-            teach: true,
-        }),
+        RequestBody::from(PolarRequest::StartCopy { m: 3, k: 2, teach: true }),
     );
     assert!(matches!(r, Response::Ack { .. }), "{r:?}");
     // A template path: out and back on both axes, read while it runs.
@@ -184,27 +142,15 @@ fn teach_is_read_back_whole_through_retransmissions() {
         assert!(matches!(r, Response::Ack { .. }), "{r:?}");
         for _ in 0..20 {
             t.run_copy(200);
-            let (r, s) = send(
-                &mut link,
-                &mut t,
-                RequestBody::from(crate::polar::link_messages::PolarRequest::ReadTeach {
-                    block: next,
-                }),
-            );
+            let (r, s) =
+                send(&mut link, &mut t, RequestBody::from(PolarRequest::ReadTeach { block: next }));
             let c = teach(&r);
             if !c.bytes.is_empty() {
                 if !retransmitted {
                     // The answer was lost: the same seq again gets the same block.
                     retransmitted = true;
                     let again = teach(&link.handle(
-                        &req(
-                            s,
-                            RequestBody::from(
-                                crate::polar::link_messages::PolarRequest::ReadTeach {
-                                    block: next,
-                                },
-                            ),
-                        ),
+                        &req(s, RequestBody::from(PolarRequest::ReadTeach { block: next })),
                         &mut t,
                     ));
                     assert_eq!(again.bytes, c.bytes);
@@ -223,11 +169,8 @@ fn teach_is_read_back_whole_through_retransmissions() {
     assert!(matches!(r, Response::Ack { .. }), "{r:?}");
     let end = loop {
         t.run_copy(1);
-        let (r, _) = send(
-            &mut link,
-            &mut t,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::ReadTeach { block: next }),
-        );
+        let (r, _) =
+            send(&mut link, &mut t, RequestBody::from(PolarRequest::ReadTeach { block: next }));
         let c = teach(&r);
         bytes.extend_from_slice(&c.bytes);
         if !c.bytes.is_empty() {

@@ -7,6 +7,7 @@ use crate::machine::MachineState;
 use crate::milling::link_job::case_a_job;
 #[cfg(feature = "sim-inputs")]
 use crate::milling::link_job::case_a_sim;
+use crate::milling::link_messages::MillingRequest;
 use crate::milling::link_params::{ForceCal, ForceJobParams, ForcePhase, ForceStrategy};
 use crate::segment::Rate;
 
@@ -109,10 +110,8 @@ fn named(field: &str) -> Option<(ErrorCode, NakDetail)> {
 fn force_requests_round_trip_and_keep_their_kinds() {
     #[allow(unused_mut)]
     let mut bodies = vec![
-        RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(case_a_job())),
-        RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-            extreme_force_params(),
-        )),
+        RequestBody::from(MillingRequest::ArmForce(case_a_job())),
+        RequestBody::from(MillingRequest::ArmForce(extreme_force_params())),
     ];
     #[cfg(feature = "sim-inputs")]
     bodies.extend([
@@ -126,15 +125,12 @@ fn force_requests_round_trip_and_keep_their_kinds() {
         assert_eq!(decode_request(bytes), Ok(req.clone()));
     }
     assert_eq!(
-        RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(case_a_job()))
-            .kind(),
+        RequestBody::from(MillingRequest::ArmForce(case_a_job())).kind(),
         // The envelope's capability kinds start at 64; milling is third (8 kinds each).
         64 + 2 * 8
     );
     assert_eq!(
-        command_kind(&RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-            case_a_job()
-        ))),
+        command_kind(&RequestBody::from(MillingRequest::ArmForce(case_a_job()))),
         command_kind(&RequestBody::Start)
     );
     for p in ForcePhase::ALL {
@@ -159,21 +155,16 @@ fn arm_force_refusals_name_the_field_and_change_nothing() {
     for (f, field) in bad {
         let mut p = case_a_job();
         f(&mut p);
-        let r =
-            l.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(p)));
+        let r = l.send(RequestBody::from(MillingRequest::ArmForce(p)));
         assert_eq!(nak(&r), named(field), "{p:?}");
     }
-    let r = l.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-        extreme_force_params(),
-    )));
+    let r = l.send(RequestBody::from(MillingRequest::ArmForce(extreme_force_params())));
     assert!(matches!(nak(&r), Some((ErrorCode::OutOfRange, NakDetail::Config { .. }))));
     assert_eq!(l.t, before, "refusals change nothing");
     // Without the capability: Unsupported, nothing changes.
     let mut plain = Link::new(CAP_DDA | CAP_SIM_INPUTS);
     let before = plain.t.clone();
-    let r = plain.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-        case_a_job(),
-    )));
+    let r = plain.send(RequestBody::from(MillingRequest::ArmForce(case_a_job())));
     assert_eq!(nak(&r).map(|n| n.0), Some(ErrorCode::Unsupported));
     assert_eq!(plain.t, before);
 }
@@ -207,26 +198,21 @@ fn sim_milling_needs_both_capabilities_and_names_bad_fields() {
 fn arm_force_arms_once_in_ready_and_the_table_refuses_it_in_fault() {
     let mut l = Link::new(CAPS);
     assert!(matches!(
-        l.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-            case_a_job()
-        ))),
+        l.send(RequestBody::from(MillingRequest::ArmForce(case_a_job()))),
         Response::Ack { .. }
     ));
     assert_eq!(l.t.force_armed, Some(case_a_job()));
     // Armed twice: refused with the state, the first arming stays.
     let armed = l.t.clone();
     let again = ForceJobParams { fnom_mn: 5_000_000, ..case_a_job() };
-    let r =
-        l.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(again)));
+    let r = l.send(RequestBody::from(MillingRequest::ArmForce(again)));
     assert_eq!(nak(&r), Some((ErrorCode::OutOfState, NakDetail::State(MachineState::Ready))));
     assert_eq!(l.t, armed);
     // In Fault the command table refuses it before the target sees it.
     let mut f = Link::new(CAPS);
     f.t.raise_fault(FaultCode::ForceStuck);
     let faulted = f.t.clone();
-    let r = f.send(RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
-        case_a_job(),
-    )));
+    let r = f.send(RequestBody::from(MillingRequest::ArmForce(case_a_job())));
     assert_eq!(nak(&r), Some((ErrorCode::OutOfState, NakDetail::State(MachineState::Fault))));
     assert_eq!(f.t, faulted);
 }

@@ -12,6 +12,7 @@ use crate::turning::douglass_table::DOUGLASS_POWER;
 use crate::turning::link_job::{
     table_link_bytes, LinkTable, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, MAX_TABLE_BYTES,
 };
+use crate::turning::link_messages::TurningRequest;
 use crate::turning::link_requests::{self as zr, ZNak, ZRequests};
 use crate::turning::scenario as sc;
 
@@ -219,21 +220,12 @@ impl Rig {
         chunk: usize,
         crc: u32,
     ) -> Result<(), (ErrorCode, NakDetail)> {
-        self.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
-            h,
-        )))?;
+        self.send(RequestBody::from(TurningRequest::ZTableBegin(h)))?;
         for (i, c) in b.chunks(chunk).enumerate() {
             let bytes = BlockBytes::from_slice(c).unwrap();
-            self.send(RequestBody::from(
-                crate::turning::link_messages::TurningRequest::ZTableChunk {
-                    index: i as u16,
-                    bytes,
-                },
-            ))?;
+            self.send(RequestBody::from(TurningRequest::ZTableChunk { index: i as u16, bytes }))?;
         }
-        self.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
-            crc,
-        }))
+        self.send(RequestBody::from(TurningRequest::ZTableEnd { crc }))
     }
 }
 
@@ -246,15 +238,13 @@ fn is_douglass(t: &LinkTable) -> bool {
 fn new_requests_round_trip_and_fit_a_frame() {
     let (h, b) = douglass();
     let bodies = [
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+        RequestBody::from(TurningRequest::ZTableBegin(h)),
+        RequestBody::from(TurningRequest::ZTableChunk {
             index: u16::MAX,
             bytes: BlockBytes::from_slice(&b[..MAX_Z_CHUNK]).unwrap(),
         }),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
-            crc: u32::MAX,
-        }),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(ZJobSpec {
+        RequestBody::from(TurningRequest::ZTableEnd { crc: u32::MAX }),
+        RequestBody::from(TurningRequest::StartZ(ZJobSpec {
             x_start_in_q24: i32::MIN,
             x_end_in_q24: i32::MIN,
             x_feed_in_q24_per_tick: i32::MIN,
@@ -291,10 +281,7 @@ fn new_requests_round_trip_and_fit_a_frame() {
     let mut r = Rig::new(0);
     let big = BlockBytes::from_slice(&[0; MAX_Z_CHUNK + 1]).unwrap();
     assert_eq!(
-        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
-            index: 0,
-            bytes: big
-        })),
+        r.send(RequestBody::from(TurningRequest::ZTableChunk { index: 0, bytes: big })),
         Err((ErrorCode::OutOfRange, NakDetail::None))
     );
 }
@@ -319,14 +306,13 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert!(is_douglass(r.t.job.table()));
     // Out of order: the NAK names the chunk expected; the upload is still open at it.
-    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
-        .unwrap();
-    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+    r.send(RequestBody::from(TurningRequest::ZTableBegin(h))).unwrap();
+    r.send(RequestBody::from(TurningRequest::ZTableChunk {
         index: 0,
         bytes: BlockBytes::from_slice(&half[..100]).unwrap(),
     }))
     .unwrap();
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+    let e = r.send(RequestBody::from(TurningRequest::ZTableChunk {
         index: 2,
         bytes: BlockBytes::from_slice(&half[100..200]).unwrap(),
     }));
@@ -339,9 +325,7 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert_eq!(r.t.req.expected(), Some(1));
     // End before every byte: Short, nothing replaced.
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
-        crc: CRC32.checksum(&half),
-    }));
+    let e = r.send(RequestBody::from(TurningRequest::ZTableEnd { crc: CRC32.checksum(&half) }));
     assert_eq!(
         e,
         Err((
@@ -351,7 +335,7 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     );
     assert!(is_douglass(r.t.job.table()));
     // A chunk without an upload.
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+    let e = r.send(RequestBody::from(TurningRequest::ZTableChunk {
         index: 0,
         bytes: BlockBytes::from_slice(&half[..4]).unwrap(),
     }));
@@ -363,9 +347,7 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
         ))
     );
     // A bad header.
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
-        ZTableHeader { form: 9, ..h },
-    )));
+    let e = r.send(RequestBody::from(TurningRequest::ZTableBegin(ZTableHeader { form: 9, ..h })));
     assert_eq!(
         e,
         Err((
@@ -378,9 +360,8 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
     let LinkTable::Power(p) = r.t.job.table() else { panic!() };
     assert_eq!(p.row(40).unwrap()[1], DOUGLASS_POWER.row(40).unwrap()[1] / 2);
     // A retransmitted chunk is answered from memory, not applied twice.
-    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
-        .unwrap();
-    let c0 = RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+    r.send(RequestBody::from(TurningRequest::ZTableBegin(h))).unwrap();
+    let c0 = RequestBody::from(TurningRequest::ZTableChunk {
         index: 0,
         bytes: BlockBytes::from_slice(&b[..100]).unwrap(),
     });
@@ -394,22 +375,20 @@ fn upload_installs_the_table_in_order_and_refusals_replace_nothing() {
 fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing() {
     let mut r = Rig::new(0);
     let before = (r.t.sim.clone(), r.t.job.state_code(), r.t.z_active);
-    let e =
-        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())));
+    let e = r.send(RequestBody::from(TurningRequest::StartZ(spec())));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Ready))));
     assert_eq!((r.t.sim.clone(), r.t.job.state_code(), r.t.z_active), before);
     let (h, b) = douglass();
     r.upload(h, &b, MAX_Z_CHUNK, CRC32.checksum(&b)).unwrap();
     // A spec out of range (X axis = Z axis): OutOfRange, nothing started.
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
-        ZJobSpec { x_axis: 0, ..spec() },
-    )));
+    let e = r.send(RequestBody::from(TurningRequest::StartZ(ZJobSpec { x_axis: 0, ..spec() })));
     assert_eq!(e, Err((ErrorCode::OutOfRange, NakDetail::None)));
     assert!(!r.t.job.is_running());
     // The spindle below the spec's minimum: the pre-start check's fault in the detail.
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
-        ZJobSpec { min_speed_turn_q32_per_tick: u32::MAX >> 1, ..spec() },
-    )));
+    let e = r.send(RequestBody::from(TurningRequest::StartZ(ZJobSpec {
+        min_speed_turn_q32_per_tick: u32::MAX >> 1,
+        ..spec()
+    })));
     assert_eq!(
         e,
         Err((
@@ -422,20 +401,15 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
         ))
     );
     assert_eq!(r.t.sim.machine, MachineState::Ready);
-    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())))
-        .unwrap();
+    r.send(RequestBody::from(TurningRequest::StartZ(spec()))).unwrap();
     assert_eq!(r.t.sim.machine, MachineState::Running);
     // Running: a second start and every upload step are refused (Start/Queue columns pass in
     // Running or not, the Z job refuses), the table stays.
-    let e =
-        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(spec())));
+    let e = r.send(RequestBody::from(TurningRequest::StartZ(spec())));
     assert_eq!(e.unwrap_err().0, ErrorCode::OutOfState);
-    let e =
-        r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)));
+    let e = r.send(RequestBody::from(TurningRequest::ZTableBegin(h)));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Running))));
-    let e = r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
-        crc: 0,
-    }));
+    let e = r.send(RequestBody::from(TurningRequest::ZTableEnd { crc: 0 }));
     assert_eq!(e, Err((ErrorCode::OutOfState, NakDetail::State(MachineState::Running))));
     assert!(is_douglass(r.t.job.table()));
     // Status carries the Z fields: engaging (state 2: following with the weight ramping up),
@@ -446,8 +420,7 @@ fn start_without_table_and_uploads_while_running_are_refused_and_change_nothing(
     assert!((s.z_spindle_rpm_milli - 360_000).abs() <= 1, "{}", s.z_spindle_rpm_milli);
     // Abort ends it; an upload is accepted again.
     r.send(RequestBody::Abort).unwrap();
-    r.send(RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(h)))
-        .unwrap();
+    r.send(RequestBody::from(TurningRequest::ZTableBegin(h))).unwrap();
 }
 
 #[cfg(feature = "sim-inputs")]

@@ -21,6 +21,7 @@ use crate::transport::Transport;
 use anyhow::{anyhow, bail};
 use motion::machine::MachineState;
 use motion::milling::link_job::{job_params, sim_params};
+use motion::milling::link_messages::MillingRequest;
 use motion::milling::link_params::ForcePhase;
 use motion::milling::scenario as sc;
 use motion::protocol::{
@@ -270,11 +271,7 @@ pub fn run_resumable(
     }
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
-    query(
-        &mut s,
-        RequestBody::from(motion::milling::link_messages::MillingRequest::ArmForce(params)),
-        "ArmForce",
-    )?;
+    query(&mut s, RequestBody::from(MillingRequest::ArmForce(params)), "ArmForce")?;
     let seg = resume.map_or_else(|| setup.segment(), |r| r.rest);
     let batch = SegmentBatch::from_slice(&[seg]).ok_or_else(|| anyhow!("segment batch"))?;
     query(&mut s, RequestBody::QueueSegments(batch), "QueueSegments")?;

@@ -15,6 +15,7 @@ use crate::link::{LinkFailure, Session};
 use crate::runner;
 use crate::transport::Transport;
 use motion::polar::copy::CopyMode;
+use motion::polar::link_messages::PolarRequest;
 use motion::polar::playback::SizeScale;
 use motion::polar::stream::decode_all;
 use motion::protocol::{
@@ -223,7 +224,7 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
         });
         query(&mut s, body, "Sim(Encoders)")?;
     }
-    let body = RequestBody::from(motion::polar::link_messages::PolarRequest::StartCopy {
+    let body = RequestBody::from(PolarRequest::StartCopy {
         m: opts.scale.m,
         k: opts.scale.k,
         teach: opts.teach,
@@ -240,9 +241,7 @@ pub fn copy(transport: &mut dyn Transport, opts: &CopyOptions) -> anyhow::Result
         loop {
             let Reply::Teach(c) = query(
                 s,
-                RequestBody::from(motion::polar::link_messages::PolarRequest::ReadTeach {
-                    block: next_block,
-                }),
+                RequestBody::from(PolarRequest::ReadTeach { block: next_block }),
                 "ReadTeach",
             )?
             else {

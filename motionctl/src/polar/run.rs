@@ -15,6 +15,7 @@ use crate::runner;
 use crate::runner::{fault_names, seq_at_or_after};
 use crate::transport::Transport;
 use motion::machine::MachineState;
+use motion::polar::link_messages::PolarRequest;
 use motion::polar::playback::{Playback, SizeScale};
 use motion::polar::stream::decode_all;
 use motion::protocol::{BlockBytes, EventBlock, HostConfig, HostEvent, Reply, RequestBody};
@@ -320,9 +321,7 @@ pub fn run_with(
                 .ok_or_else(|| anyhow!("block {next} is longer than a link block"))?;
             let last = next + 1 == blocks.len();
             let seq = s
-                .send(RequestBody::from(motion::polar::link_messages::PolarRequest::QueueEvents(
-                    EventBlock { bytes, last },
-                )))
+                .send(RequestBody::from(PolarRequest::QueueEvents(EventBlock { bytes, last })))
                 .map_err(link)?;
             pending.insert(seq, Pending::Block);
             next += 1;
@@ -333,10 +332,7 @@ pub fn run_with(
         if start_seq.is_none() && acked > 0 && queued_all {
             start_tick = Some(latest.tick);
             let body =
-                RequestBody::from(motion::polar::link_messages::PolarRequest::StartPlayback {
-                    m: opts.scale.m,
-                    k: opts.scale.k,
-                });
+                RequestBody::from(PolarRequest::StartPlayback { m: opts.scale.m, k: opts.scale.k });
             let seq = s.send(body).map_err(link)?;
             pending.insert(seq, Pending::Start);
             start_seq = Some(seq);

@@ -29,6 +29,7 @@ use motion::spindle::{QuadratureEncoder, SimSpindle};
 use motion::turning::link_job::{
     table_link_bytes, ZJob, ZJobSpec, ZOutputSpec, ZTableHeader, ZTableUpload, MAX_TABLE_BYTES,
 };
+use motion::turning::link_messages::TurningRequest;
 use motion::turning::scenario as sc;
 use motion::turning::TURNING_JOB;
 use std::time::{Duration, Instant};
@@ -386,31 +387,16 @@ pub fn run_with(
             "Sim(Spindle)",
         )?;
     }
-    query(
-        &mut s,
-        RequestBody::from(motion::turning::link_messages::TurningRequest::ZTableBegin(
-            table.header,
-        )),
-        "ZTableBegin",
-    )?;
+    query(&mut s, RequestBody::from(TurningRequest::ZTableBegin(table.header)), "ZTableBegin")?;
     for (i, c) in table.bytes.chunks(MAX_Z_CHUNK).enumerate() {
         let bytes = BlockBytes::from_slice(c).ok_or_else(|| anyhow!("chunk too long"))?;
         query(
             &mut s,
-            RequestBody::from(motion::turning::link_messages::TurningRequest::ZTableChunk {
-                index: i as u16,
-                bytes,
-            }),
+            RequestBody::from(TurningRequest::ZTableChunk { index: i as u16, bytes }),
             "ZTableChunk",
         )?;
     }
-    query(
-        &mut s,
-        RequestBody::from(motion::turning::link_messages::TurningRequest::ZTableEnd {
-            crc: table.crc(),
-        }),
-        "ZTableEnd",
-    )?;
+    query(&mut s, RequestBody::from(TurningRequest::ZTableEnd { crc: table.crc() }), "ZTableEnd")?;
     say(&format!(
         "table uploaded: {} rows, {} bytes, CRC {:#010x}",
         table.header.rows,
@@ -436,9 +422,7 @@ pub fn run_with(
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
     let base = status(&mut s)?;
-    let start_seq = s
-        .send(RequestBody::from(motion::turning::link_messages::TurningRequest::StartZ(spec)))
-        .map_err(link)?;
+    let start_seq = s.send(RequestBody::from(TurningRequest::StartZ(spec))).map_err(link)?;
     let mut started = false;
     let mut latest = base.clone();
     let mut start_tick: Option<u64> = None;

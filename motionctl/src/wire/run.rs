@@ -22,6 +22,7 @@ use motion::protocol::{
 };
 use motion::segment::Segment;
 use motion::wire::link_messages::WireJobParams;
+use motion::wire::link_messages::WireRequest;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
@@ -147,11 +148,7 @@ pub fn run_with(
     query(&mut s, RequestBody::SetStatusPeriod { ms: STATUS_PERIOD_MS }, "SetStatusPeriod")?;
     s.streaming = true;
     let base = status(&mut s)?;
-    query(
-        &mut s,
-        RequestBody::from(motion::wire::link_messages::WireRequest::ArmWire(params)),
-        "ArmWire",
-    )?;
+    query(&mut s, RequestBody::from(WireRequest::ArmWire(params)), "ArmWire")?;
     say(&format!("armed a wire job of {} segments", segments.len()));
 
     let mut report = WireRunReport {

@@ -2,6 +2,7 @@
 //! blocks, the machine's table deciding the state.
 
 use super::*;
+use crate::polar::link_messages::PolarRequest;
 
 /// The blocks of the built-in limacon stream.
 fn stream_blocks() -> Vec<&'static [u8]> {
@@ -11,7 +12,7 @@ fn stream_blocks() -> Vec<&'static [u8]> {
 fn events(seq: u32, block: &[u8], last: bool) -> Request {
     req(
         seq,
-        RequestBody::from(crate::polar::link_messages::PolarRequest::QueueEvents(EventBlock {
+        RequestBody::from(PolarRequest::QueueEvents(EventBlock {
             bytes: BlockBytes::from_slice(block).unwrap(),
             last,
         })),
@@ -59,38 +60,14 @@ fn event_blocks_are_checked_whole_before_anything_is_queued() {
     let r = b.handle(&events(3, &two, false), &mut t);
     assert!(matches!(r, Response::Nak { detail: NakDetail::Block { reason: 9, .. }, .. }), "{r:?}");
     // Size scale outside 1..=4, and a start with nothing queued.
-    let r = b.handle(
-        &req(
-            4,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-                m: 5,
-                k: 1,
-            }),
-        ),
-        &mut t,
-    );
+    let r =
+        b.handle(&req(4, RequestBody::from(PolarRequest::StartPlayback { m: 5, k: 1 })), &mut t);
     assert_eq!(code(&r), Some(ErrorCode::OutOfRange));
-    let r = b.handle(
-        &req(
-            5,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-                m: 1,
-                k: 0,
-            }),
-        ),
-        &mut t,
-    );
+    let r =
+        b.handle(&req(5, RequestBody::from(PolarRequest::StartPlayback { m: 1, k: 0 })), &mut t);
     assert_eq!(code(&r), Some(ErrorCode::OutOfRange));
-    let r = b.handle(
-        &req(
-            6,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-                m: 1,
-                k: 1,
-            }),
-        ),
-        &mut t,
-    );
+    let r =
+        b.handle(&req(6, RequestBody::from(PolarRequest::StartPlayback { m: 1, k: 1 })), &mut t);
     assert_eq!(code(&r), Some(ErrorCode::OutOfState));
     assert_eq!(t, before, "refusals change nothing");
     assert_eq!(t.events.events_admitted, 0);
@@ -138,29 +115,13 @@ fn event_credits_count_blocks_and_the_machine_table_decides_the_state() {
     s += 1;
     assert_eq!(code(&r), Some(ErrorCode::OutOfState));
     // Start (Ready -> Running, the table's Start column); a second start is refused by it.
-    let r = b.handle(
-        &req(
-            s,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-                m: 3,
-                k: 2,
-            }),
-        ),
-        &mut t,
-    );
+    let r =
+        b.handle(&req(s, RequestBody::from(PolarRequest::StartPlayback { m: 3, k: 2 })), &mut t);
     s += 1;
     assert!(matches!(r, Response::Ack { .. }), "{r:?}");
     assert_eq!(t.machine_state(), crate::machine::MachineState::Running);
-    let r = b.handle(
-        &req(
-            s,
-            RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-                m: 3,
-                k: 2,
-            }),
-        ),
-        &mut t,
-    );
+    let r =
+        b.handle(&req(s, RequestBody::from(PolarRequest::StartPlayback { m: 3, k: 2 })), &mut t);
     s += 1;
     assert!(matches!(
         r,

@@ -2,7 +2,11 @@
 //! kind is its postcard index, and the board counters' differences survive a wrap.
 
 use super::*;
+use crate::milling::link_messages::MillingRequest;
+use crate::polar::link_messages::PolarRequest;
+use crate::turning::link_messages::TurningRequest;
 use crate::wire::link_messages::WireJobParams;
+use crate::wire::link_messages::WireRequest;
 
 fn extreme_config() -> LinkConfig {
     LinkConfig {
@@ -127,15 +131,12 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
                 home_pos_steps: i64::MIN,
             }; MAX_AXES],
         }),
-        RequestBody::from(crate::polar::link_messages::PolarRequest::QueueEvents(EventBlock {
+        RequestBody::from(PolarRequest::QueueEvents(EventBlock {
             bytes: BlockBytes::from_slice(&[0xFF; MAX_EVENT_BLOCK]).unwrap(),
             last: true,
         })),
-        RequestBody::from(crate::polar::link_messages::PolarRequest::StartPlayback {
-            m: u8::MAX,
-            k: u8::MAX,
-        }),
-        RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(WireJobParams {
+        RequestBody::from(PolarRequest::StartPlayback { m: u8::MAX, k: u8::MAX }),
+        RequestBody::from(WireRequest::ArmWire(WireJobParams {
             debounce_ticks: u16::MAX,
             retrace_limit_steps: u64::MAX,
             retrace_override_bits: u32::MAX,
@@ -144,54 +145,44 @@ pub(crate) fn extreme_requests() -> Vec<Request> {
             segments: u32::MAX,
         })),
         // -- Z-slide job --
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableBegin(
-            crate::turning::link_job::ZTableHeader {
-                form: u8::MAX,
-                rows: u16::MAX,
-                x0_in_q24: i32::MIN,
-                dx_in_q24: i32::MIN,
-            },
-        )),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableChunk {
+        RequestBody::from(TurningRequest::ZTableBegin(crate::turning::link_job::ZTableHeader {
+            form: u8::MAX,
+            rows: u16::MAX,
+            x0_in_q24: i32::MIN,
+            dx_in_q24: i32::MIN,
+        })),
+        RequestBody::from(TurningRequest::ZTableChunk {
             index: u16::MAX,
             bytes: BlockBytes::from_slice(&[0xFF; MAX_Z_CHUNK]).unwrap(),
         }),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::ZTableEnd {
-            crc: u32::MAX,
-        }),
-        RequestBody::from(crate::turning::link_messages::TurningRequest::StartZ(
-            crate::turning::link_job::ZJobSpec {
-                output: crate::turning::link_job::ZOutputSpec::Steps {
-                    axis: u8::MAX,
-                    steps_per_in: u32::MAX,
-                },
-                x_axis: u8::MAX,
-                x_steps_per_in: u32::MAX,
-                x_negative: true,
-                x_start_in_q24: i32::MIN,
-                x_end_in_q24: i32::MIN,
-                x_feed_in_q24_per_tick: i32::MIN,
-                cubic: true,
-                advance_ticks_q16: u32::MAX,
-                engage_ticks: u32::MAX,
-                blend_start_x_in_q24: i32::MIN,
-                blend_end_x_in_q24: i32::MIN,
-                max_velocity_uin_per_s: u32::MAX,
-                max_accel_uin_per_s2: u32::MAX,
-                min_speed_turn_q32_per_tick: u32::MAX,
+        RequestBody::from(TurningRequest::ZTableEnd { crc: u32::MAX }),
+        RequestBody::from(TurningRequest::StartZ(crate::turning::link_job::ZJobSpec {
+            output: crate::turning::link_job::ZOutputSpec::Steps {
+                axis: u8::MAX,
+                steps_per_in: u32::MAX,
             },
-        )),
+            x_axis: u8::MAX,
+            x_steps_per_in: u32::MAX,
+            x_negative: true,
+            x_start_in_q24: i32::MIN,
+            x_end_in_q24: i32::MIN,
+            x_feed_in_q24_per_tick: i32::MIN,
+            cubic: true,
+            advance_ticks_q16: u32::MAX,
+            engage_ticks: u32::MAX,
+            blend_start_x_in_q24: i32::MIN,
+            blend_end_x_in_q24: i32::MIN,
+            max_velocity_uin_per_s: u32::MAX,
+            max_accel_uin_per_s2: u32::MAX,
+            min_speed_turn_q32_per_tick: u32::MAX,
+        })),
         // -- force job --
-        RequestBody::from(crate::milling::link_messages::MillingRequest::ArmForce(
+        RequestBody::from(MillingRequest::ArmForce(
             crate::protocol::tests_milling::extreme_force_params(),
         )),
         // -- copy mode --
-        RequestBody::from(crate::polar::link_messages::PolarRequest::StartCopy {
-            m: u8::MAX,
-            k: u8::MAX,
-            teach: true,
-        }),
-        RequestBody::from(crate::polar::link_messages::PolarRequest::ReadTeach { block: u16::MAX }),
+        RequestBody::from(PolarRequest::StartCopy { m: u8::MAX, k: u8::MAX, teach: true }),
+        RequestBody::from(PolarRequest::ReadTeach { block: u16::MAX }),
         RequestBody::SetProgramOutputs(crate::protocol::ProgramOutputs {
             spindle: crate::protocol::SpindleDir::Ccw,
             mist: true,

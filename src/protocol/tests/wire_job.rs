@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::wire::link_messages::WireJobParams;
+use crate::wire::link_messages::WireRequest;
 
 fn wire_params() -> WireJobParams {
     WireJobParams {
@@ -38,11 +39,7 @@ fn arm_wire_checks_its_parameters_and_the_state_and_refusals_change_nothing() {
     for f in bad {
         let mut p = wire_params();
         f(&mut p);
-        let r = send(
-            &mut b,
-            &mut t,
-            RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(p)),
-        );
+        let r = send(&mut b, &mut t, RequestBody::from(WireRequest::ArmWire(p)));
         assert_eq!(code(&r), Some(ErrorCode::OutOfRange), "{p:?}");
     }
     // No simulated inputs on this board.
@@ -60,22 +57,14 @@ fn arm_wire_checks_its_parameters_and_the_state_and_refusals_change_nothing() {
     );
     assert!(matches!(r, Response::Ack { .. }), "{r:?}");
     let queued = t.clone();
-    let r = send(
-        &mut b,
-        &mut t,
-        RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(wire_params())),
-    );
+    let r = send(&mut b, &mut t, RequestBody::from(WireRequest::ArmWire(wire_params())));
     assert_eq!(code(&r), Some(ErrorCode::OutOfState));
     assert_eq!(t, queued);
     // In Fault the table refuses it before the target sees it.
     let _ = send(&mut b, &mut t, RequestBody::Abort);
     t.raise_fault(FaultCode::LimitSwitch);
     let faulted = t.clone();
-    let r = send(
-        &mut b,
-        &mut t,
-        RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(wire_params())),
-    );
+    let r = send(&mut b, &mut t, RequestBody::from(WireRequest::ArmWire(wire_params())));
     assert!(
         matches!(
             r,
@@ -95,20 +84,14 @@ fn arm_wire_in_ready_arms_and_sim_inject_needs_the_capability() {
     let mut t = SimTarget::new(config(), 4);
     let mut b = BoardLink::new("test", CAP_DDA | CAP_WIRE_JOB | CAP_SIM_INPUTS);
     b.handle(&hello(0, 1), &mut t);
-    let r = b.handle(
-        &req(1, RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(wire_params()))),
-        &mut t,
-    );
+    let r = b.handle(&req(1, RequestBody::from(WireRequest::ArmWire(wire_params()))), &mut t);
     assert!(matches!(r, Response::Ack { seq: 1, .. }), "{r:?}");
     assert_eq!(t.wire_armed, Some(wire_params()));
     // Armed twice: refused, the first arming stays.
     let r = b.handle(
         &req(
             2,
-            RequestBody::from(crate::wire::link_messages::WireRequest::ArmWire(WireJobParams {
-                segments: 3,
-                ..wire_params()
-            })),
+            RequestBody::from(WireRequest::ArmWire(WireJobParams { segments: 3, ..wire_params() })),
         ),
         &mut t,
     );
