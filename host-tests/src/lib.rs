@@ -64,6 +64,11 @@ impl PinChecker {
         }
     }
 
+    /// Some STEP pin is high: a pulse whose fall has not come yet.
+    pub fn any_high(&self) -> bool {
+        self.high_since.iter().any(Option::is_some)
+    }
+
     fn fail(&mut self, msg: String) {
         if self.violations.len() < 20 {
             self.violations.push(msg);
@@ -120,8 +125,6 @@ pub fn run_segments_observed(
     let mut segment_ends = Vec::new();
     let mut position_mismatches = 0;
     let mut done = dda.segments_done();
-    // STEP pins still high: an idle DDA may owe the last pulse its fall.
-    let mut high = 0u8;
     while dda.now() < max_ticks {
         while next < segments.len() && dda.ready_free() > 0 {
             let p = prep.prepare(&segments[next]).expect("valid segment");
@@ -135,13 +138,13 @@ pub fn run_segments_observed(
             dda.apply(c);
             cmds.next();
         }
-        if next == segments.len() && dda.is_idle() && cmds.peek().is_none() && high == 0 {
+        // An idle DDA may still owe the last pulse its fall.
+        if next == segments.len() && dda.is_idle() && cmds.peek().is_none() && !pins.any_high() {
             break;
         }
         let out = dda.tick();
         let now = dda.now();
         observe(now, &out);
-        high = (high & !out.fall()) | out.rise();
         rec.record(now, &out);
         pins.check(now, &out);
         if out.rise() != 0 {
