@@ -88,24 +88,37 @@ pub struct TickTiming {
 const NS_PER_S: u64 = 1_000_000_000;
 /// Slowest tick the DDA supports (timing resolution 100 us).
 pub const MIN_TICK_HZ: u32 = 10_000;
-/// Fastest tick (a 168 MHz core has ~670 cycles per tick here).
+/// Fastest tick a tick interrupt is asked for (a 168 MHz core has ~670 cycles per tick here);
+/// the boards' tick timers refuse faster ones.
 pub const MAX_TICK_HZ: u32 = 250_000;
+/// Fastest tick of all: a streamed step output's slot clock (`dda::edge_stream`), 250 kHz per
+/// axis. Past [`MAX_TICK_HZ`] the DIR setup must be at least one tick, as a stream needs.
+pub const MAX_STREAM_TICK_HZ: u32 = 500_000;
 
 impl MachineConfig {
     pub fn tick_ns(&self) -> u32 {
         (NS_PER_S / self.tick_hz.max(1) as u64) as u32
     }
 
-    /// Checks every field and derives the tick-quantised timing, for a tick interrupt (at most
-    /// [`MAX_TICK_HZ`]).
+    /// Checks every field and derives the tick-quantised timing. Ticks up to
+    /// [`MAX_STREAM_TICK_HZ`]; past [`MAX_TICK_HZ`], only a streamed output's, with a DIR setup
+    /// of at least one tick. Whether the board's tick can run the rate is the board's to say.
     pub fn validate(&self) -> Result<TickTiming, ConfigError> {
-        self.validate_up_to(MAX_TICK_HZ, "must be within 10 kHz..=250 kHz")
+        let t = self.validate_up_to(MAX_STREAM_TICK_HZ, "must be within 10 kHz..=500 kHz")?;
+        if self.tick_hz > MAX_TICK_HZ && t.setup_ticks == 0 {
+            return Err(ConfigError {
+                field: "dir_setup_ns",
+                axis: None,
+                reason: "must be > 0 past a 250 kHz tick (a streamed step output's)",
+            });
+        }
+        Ok(t)
     }
 
     /// [`MachineConfig::validate`] with ticks up to `max_tick_hz` (`range` says so in the
     /// error): a step output whose ticks are not interrupts runs them faster
     /// (`dda::edge_stream`).
-    pub(crate) fn validate_up_to(
+    fn validate_up_to(
         &self,
         max_tick_hz: u32,
         range: &'static str,
@@ -185,6 +198,14 @@ pub(crate) mod tests {
         let mut c = cfg();
         c.tick_hz = 1;
         assert_eq!(c.validate().unwrap_err().field, "tick_hz");
+        c.tick_hz = MAX_STREAM_TICK_HZ + 1;
+        assert_eq!(c.validate().unwrap_err().field, "tick_hz");
+        // Past a tick interrupt's rate, a DIR write needs a tick of its own.
+        c.tick_hz = MAX_TICK_HZ + 10_000;
+        c.timing.dir_setup_ns = 0;
+        assert_eq!(c.validate().unwrap_err().field, "dir_setup_ns");
+        c.tick_hz = MAX_TICK_HZ;
+        assert!(c.validate().is_ok());
         // Unused axes are not checked.
         let mut c = cfg();
         c.axes[3] = AxisLimits::UNUSED;

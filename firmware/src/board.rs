@@ -26,6 +26,21 @@ pub type ForceAdc = <Selected as Contract>::ForceAdc;
 pub type Spindle = <Selected as Contract>::Spindle;
 pub type CycleCounter = <Selected as Contract>::CycleCounter;
 
+/// The streamed step output (`board_contract::StepStream`), on a board that has one; nothing
+/// in a build whose tick writes the port (the app's resource list is the same in both).
+// A late fill on a real board lets the DMA play the half's last words again: steps nobody
+// asked for. Every machine state's fill must first fit its half at the stream's slot clocks
+// (today a state that runs full ticks on every slot does not: BENCHMARKS.md).
+#[cfg(all(feature = "step-stream", feature = "board-f405-motion"))]
+compile_error!(
+    "step-stream runs on the QEMU board only: the F405's TIM1/DMA2 stream waits until every \
+     machine state's fill fits its half"
+);
+#[cfg(all(feature = "step-stream", not(feature = "board-f405-motion")))]
+pub use board_netduinoplus2::StepStream;
+#[cfg(not(feature = "step-stream"))]
+pub type StepStream = ();
+
 pub const NAME: &str = <Selected as Contract>::NAME;
 pub const HOST_BAUD: u32 = <Selected as Contract>::HOST_BAUD;
 pub const LINK_TIMEOUT_MS: u64 = <Selected as Contract>::LINK_TIMEOUT_MS;

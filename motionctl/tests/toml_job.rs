@@ -187,7 +187,7 @@ fn every_error_names_its_field() {
         (
             "tick_hz = 100_000",
             "tick_hz = 1_000",
-            &["machine.tick_hz: must be within 10 kHz..=250 kHz (is 1000)"],
+            &["machine.tick_hz: must be within 10 kHz..=500 kHz (is 1000)"],
         ),
         (
             "pulse_ns = 2_500",

@@ -31,7 +31,7 @@ mod fast;
 mod source;
 mod watch;
 pub use command::{MachineCommand, Refusal};
-pub use fast::SUPERVISE_TICKS;
+pub use fast::{supervise_ticks, MAX_SUPERVISE_TICKS, SUPERVISE_HZ, SUPERVISE_TICKS};
 pub use source::{DdaSource, SourceJob, StepSource};
 
 /// Slack, in virtual ticks, between the point where a starved job is held and the last point
@@ -182,6 +182,8 @@ pub struct Machine {
     /// Step-only ticks left before the next full tick ([`Machine::fast_tick`]); 0 after any
     /// command, fault or state change.
     fast_left: u8,
+    /// Ticks from one full tick to the next while quiet, at the config's tick rate.
+    supervise_ticks: u8,
     /// The probe move (G38.x): armed, watched, its result.
     probe: ProbeRun,
 }
@@ -234,6 +236,7 @@ impl Machine {
                 cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz),
             ),
             fast_left: 0,
+            supervise_ticks: fast::supervise_ticks(cfg.link.machine.tick_hz),
             probe: ProbeRun::new(),
         }
     }
@@ -282,6 +285,7 @@ impl Machine {
         self.limits = SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count);
         self.raw_limits = self.limits.minus(&self.offset);
         self.switch_filter.set_ticks(cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz));
+        self.supervise_ticks = fast::supervise_ticks(cfg.link.machine.tick_hz);
         self.cfg = cfg;
         self.config_set = true;
         self.active &= !CONFIG_FAULTS;

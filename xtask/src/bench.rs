@@ -419,10 +419,24 @@ How these are measured:
   tick pends it on each plant sample and it runs right after the tick), traced the same way:
   `isr_force_cycles_max` is its longest run. `isr_cpu_percent_default_tick`: the largest job's
   mean cycles per tick, the tick handler's plus the force interrupt's spread over the ticks,
-  x 100 kHz / 168 MHz. `step_rate_max_hz_per_axis`: the DDA steps an axis at most every other
-  tick, at the fastest tick the worst case fits in (168 MHz / the largest job's longest tick
-  plus its longest force interrupt, as if both fell on one tick; at most the default 100 kHz); `_aggregate`: four axes at that rate (the
-  profiled case). The board can time its own handler: the link firmware built with the
+  x 100 kHz / 168 MHz. `tick_irq_step_rate_max_hz_per_axis`: with a tick interrupt, the DDA
+  steps an axis at most every other tick, at the fastest tick the worst case fits in (168 MHz /
+  the largest job's longest tick plus its longest force interrupt, as if both fell on one tick;
+  at most the default 100 kHz).
+  `step_rate_max_hz_per_axis`, `_aggregate` and `stream_*`: the link firmware built with the
+  streamed step output (`--features step-stream`, QEMU board: TIM2 at the fill rate stands in
+  for the DMA's half interrupt), traced the same way on a job of four axes at 250 kHz each from
+  a 500 kHz slot clock with 1-tick (1 us) pulses (`cargo xtask isr-profile streamed`). Each
+  handler run fills a half buffer of 40 slots, one machine tick per slot, and must end before
+  the DMA has played the other half: 40 slots = 13 440 cycles at 500 kHz. Over the fills that
+  moved: `stream_fill_cycles_max` the longest, `step_rate_max_hz_per_axis` half the slot clock
+  it holds (168 MHz x 40 / that, at most 500 kHz), `_aggregate` four axes at that rate,
+  `stream_cycles_per_slot_mean` and `stream_cpu_percent_500khz` the mean fill per slot and its
+  share of the core at 500 kHz. `stream_fill_cycles_max_full_ticks`: the longest fill with no
+  motion, the boot's (the machine in Fault until the host sends a config, at the safe default's
+  50 kHz): a state that runs a full tick on every slot, which at 500 kHz does not fit its half
+  (the F405's stream driver waits for that: a late fill on a board lets the DMA play the last
+  half's words again). The board can time its own handler: the link firmware built with the
   `isr-cycles` feature reads its cycle counter on entry and before return and logs a histogram
   every 100 ms over defmt (`firmware/src/isr_cycles.rs`). On an F405 that is DWT CYCCNT, the
   check of this cycle model: `cargo run --release -p motion-firmware --bin link
@@ -440,19 +454,19 @@ How these are measured:
   `kernel_tick_apply_instr_*` adds the board's step-port `apply` (on QEMU: the `StepRecorder`
   that stands in for the GPIO pins). One function in a loop: a part of the handler, not the
   handler (see `isr_*`).
-- `kernel_stream_*`: the step output past the tick interrupt's ceiling, not yet in the link
-  firmware. One interrupt per tick pays its entry, exit and bookkeeping every tick, so the step
+- `kernel_stream_*`: the step output past the tick interrupt's ceiling (in the link firmware
+  for the QEMU board: `stream_*` above). One interrupt per tick pays its entry, exit and bookkeeping every tick, so the step
   rate ends where the handler fills the core (`step_rate_max_hz_per_axis`). The chosen design, as
   the fastest grblHAL and Klipper drivers do: a timer at the slot rate requests DMA of one word
   per slot from a circular buffer into the step port's set/reset register (the F405's GPIOC
-  `BSRR`; TIM8's update on DMA2), and the half-transfer interrupt runs the DDA for the half just
+  `BSRR`; TIM1's update on DMA2 stream 5, TIM8 being the force ADC's), and the half-transfer interrupt runs the DDA for the half just
   played, one tick per slot (`motion::dda::edge_stream`: `PortWords::fill`). It keeps the DDA
   as it is (the step generator proven equal to the host model, exact counts and the half-step
   line by construction) and costs per slot whatever number of axes step. Output compare per
   axis (an interrupt per step, as Klipper schedules them: 46 cycles per step on an F407) needs
   each step's time computed ahead, a different step generator, and two timers for six axes; it
   was not built to compare. QEMU models
-  neither the DMA nor TIM8, so the counts and timing are proven on the host model
+  neither the DMA nor TIM1, so the counts and timing are proven on the host model
   (host-tests/tests/edge_stream.rs: random jobs, overrides and holds at a 500 kHz slot clock
   replayed through a model of `BSRR`: the pins rise on exactly the DDA's slots and axes, every
   step within half a step of the line, pulse, setup and hold met, and four axes at 250 kHz each,

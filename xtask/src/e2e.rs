@@ -404,6 +404,59 @@ pub fn test(root: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Where the link firmware built with the streamed step output goes.
+pub const STREAM_FW_DIR: &str = "target/fw-netduinoplus2-link-stream";
+
+/// The link firmware with the streamed step output (`step-stream`), for the QEMU board.
+pub fn stream_firmware(root: &Path) -> Result<PathBuf> {
+    firmware::build_into(root, "link", Board::Netduinoplus2, &["step-stream"], STREAM_FW_DIR)
+}
+
+/// The `cargo xtask test` step for the streamed step output: the same 2000 segments on the link
+/// firmware built with `step-stream`, its slot clock at the stream's fastest (500 kHz), no
+/// noise: every segment once, in order, and the end positions the host model's.
+pub fn stream_test(root: &Path) -> Result<()> {
+    let p = prepare(root)?;
+    let elf = stream_firmware(root)?;
+    let from = format!("tick_hz = {TICK_HZ}\n");
+    let toml = std::fs::read_to_string(&p.job)?;
+    if !toml.contains(&from) {
+        bail!("the sample job has no `{}` line to raise", from.trim());
+    }
+    let slot_hz = motion::config::MAX_STREAM_TICK_HZ;
+    let job = root.join("target/e2e-stream-job.toml");
+    std::fs::write(&job, toml.replacen(&from, &format!("tick_hz = {slot_hz}\n"), 1))?;
+    let p = Prepared { job, elf, ..p };
+    let (ok, stdout, wall) = run_motionctl(root, &p.bin, &base_args(&p))?;
+    if !ok {
+        bail!("motionctl run on the streamed firmware failed (see its output above)");
+    }
+    let m = summary(&stdout)?;
+    let get = |k: &str| m.get(k).copied().unwrap_or(f64::NAN);
+    let mut problems = Vec::new();
+    for (k, want) in [
+        ("ok", 1.0),
+        ("hash_ok", 1.0),
+        ("positions_ok", 1.0),
+        ("segments", SEGMENTS as f64),
+        ("done", SEGMENTS as f64),
+    ] {
+        if get(k) != want {
+            problems.push(format!("motionctl reported {k}={}, want {want}", get(k)));
+        }
+    }
+    println!(
+        "  {SEGMENTS} segments at a {} kHz slot clock in {:.1} s wall; positions equal the host \
+         model's",
+        slot_hz / 1000,
+        wall.as_secs_f64()
+    );
+    if !problems.is_empty() {
+        bail!("streamed-output check failed: {}", problems.join("; "));
+    }
+    Ok(())
+}
+
 /// `cargo xtask bench` figures: sustained segments/s acknowledged over the QEMU link (no noise)
 /// and the status rate (board time) at the default 40 ms period.
 pub fn bench(root: &Path) -> Result<Vec<(&'static str, f64)>> {

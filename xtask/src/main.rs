@@ -386,6 +386,20 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
             clippy_thumb(Board::F405Motion, &[]),
         ),
         (
+            "clippy (link firmware with the streamed step output, netduinoplus2)",
+            Box::new(|| {
+                run_status(
+                    "clippy",
+                    cargo(root)
+                        .args(["clippy", "--release", "--target", firmware::TARGET])
+                        .args(["-p", firmware::PACKAGE, "--bin", "link"])
+                        .args(["--no-default-features", "--features"])
+                        .arg(firmware::features(Board::Netduinoplus2, &["step-stream"]))
+                        .args(["--target-dir", "target/clippy-thumb", "--", "-D", "warnings"]),
+                )
+            }),
+        ),
+        (
             "clippy (firmware, f405-motion with the SPI resolver, then the SPI force ADC)",
             Box::new(|| {
                 clippy_thumb(Board::F405Motion, &["board-f405-motion/resolver-spi"])()?;
@@ -413,7 +427,7 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         ),
         ("firmware build (netduinoplus2 bench)", build(Board::Netduinoplus2, &["bench"])),
         (
-            "no software divide reachable from TIM2 (demo and link on both boards, scenarios)",
+            "no software divide reachable from TIM2 (demo and link on both boards, streamed link, scenarios)",
             Box::new(|| {
                 for (board, features) in [
                     (Board::Netduinoplus2, &[][..]),
@@ -424,6 +438,8 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
                     let elf = firmware::build(root, board, features)?;
                     divcheck::check_elf(&elf)?;
                 }
+                // The streamed output's fill interrupt (the same TIM2 vector).
+                divcheck::check_elf(&e2e::stream_firmware(root)?)?;
                 // The scenario firmware's tick runs every capability's interrupt-rate code.
                 let elf = firmware::build_bin(root, "scenarios", Board::Netduinoplus2, &[])?;
                 divcheck::check_elf(&elf)
@@ -435,6 +451,10 @@ fn test(root: &Path, skip: &[String]) -> Result<()> {
         (
             "end to end: motionctl streams 2000 segments to QEMU through 1 % noise",
             Box::new(|| e2e::test(root)),
+        ),
+        (
+            "end to end: the streamed step output (500 kHz slots) runs the 2000 segments on QEMU",
+            Box::new(|| e2e::stream_test(root)),
         ),
         (
             "end to end: motionctl plays the limacon event stream on QEMU (speed 2, size 3:2)",

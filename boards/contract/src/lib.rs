@@ -8,6 +8,7 @@
 //! | --- | --- | --- |
 //! | DDA tick | [`TickTimer`], [`TickRate`] | start/stop/clear/update pending; retime, supported rates |
 //! | step/dir/enable | [`StepPort`] | one store-level word write per tick; [`PinStepPort`] over `OutputPin`s |
+//! | streamed steps | [`StepStream`] | a half buffer of set/reset words per fill interrupt (timer + DMA) |
 //! | e-stop, limits, probe, outputs | [`MachineIo`], [`EStopLine`] | read raw (the machine debounces limits and e-stop); the probe through [`Debounced`] |
 //! | host link | [`HostSerial`] | bytes in/out, interrupts |
 //! | watchdog | [`Watchdog`] | start, feed, stretch |
@@ -37,7 +38,7 @@ pub use sensors::{
     FORCE_CHANNEL_COUNT,
 };
 pub use serial::HostSerial;
-pub use step::{PinStepPort, StepPort};
+pub use step::{PinStepPort, StepPort, StepStream, STREAM_SLOTS};
 pub use tick::{TickRate, TickTimer, Watchdog};
 
 use motion::machine::ResetCause;

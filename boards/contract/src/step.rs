@@ -8,7 +8,25 @@
 //! for boards whose pins are scattered (and as the reference the word ports are held to).
 
 use embedded_hal::digital::{OutputPin, PinState};
+use motion::dda::edge_stream::PortWords;
 use motion::StepOutput;
+
+/// Slots per half buffer of a [`StepStream`]: ticks per fill interrupt. 40 divides the tick
+/// rates configs use (the 50 kHz safe default, 100, 250, 500 kHz): 80 us of slots at 500 kHz.
+pub const STREAM_SLOTS: usize = 40;
+
+/// A step output played by hardware (`motion::dda::edge_stream`): a timer at the slot rate
+/// requests a DMA transfer of the next word of a circular buffer into the step port's
+/// set/reset register, and the DMA's half interrupt fills the half it has just played, one
+/// machine tick per slot. The board's tick timer is then that interrupt's source, and its
+/// rate control takes the slot rate. The [`StepPort`] keeps the enable and the safe state.
+pub trait StepStream {
+    /// Where the STEP and DIR pins sit on the port.
+    fn layout(&self) -> PortWords;
+    /// The half the hardware has just played and plays again after the other: the fill
+    /// interrupt writes all of it, one word per slot, in slot order.
+    fn half(&mut self) -> &mut [u32; STREAM_SLOTS];
+}
 
 pub trait StepPort {
     /// One tick's output: falling edges, DIR writes, rising edges. Bounded, no division.

@@ -4,7 +4,7 @@
 //!
 //! | resource | use |
 //! | --- | --- |
-//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU; its ticks counted as the sim spindle's clock |
+//! | TIM2 | DDA tick (update interrupt at `tick_hz`), 1 GHz input clock under QEMU; its ticks counted as the sim spindle's clock. With `step-stream`: the stand-in for the DMA's half interrupt, at `tick_hz / STREAM_SLOTS` |
 //! | TIM5 | free-running 32-bit cycle counter for benchmarks (1 count = 1 instruction with `-icount shift=0`) |
 //! | IWDG | started by the link firmware; not modelled by QEMU (never bites) |
 //! | (none) | copy-mode encoders: simulated A/B levels (`Sim(Encoders)`) decoded by `board_drivers::quadrature::SoftDecoder` (`sim_io.rs`) |
@@ -22,15 +22,19 @@ mod log;
 mod sim_io;
 mod spindle;
 mod step_port;
+#[cfg(feature = "step-stream")]
+mod step_stream;
 mod tick_timer;
 
-pub use board_stm32f405::{pac, HostSerial, TickRate, Watchdog};
+pub use board_stm32f405::{pac, HostSerial, Watchdog};
 pub use config_ram::RamConfig;
 pub use cycles::CycleCounter;
 pub use sim_io::{CopyEncoders, MachineIo};
 pub use spindle::Spindle;
 pub use step_port::StepPort;
-pub use tick_timer::TickTimer;
+#[cfg(feature = "step-stream")]
+pub use step_stream::StepStream;
+pub use tick_timer::{TickRate, TickTimer};
 
 use board_contract::{NoForceAdc, Parts};
 use motion::machine::ResetCause;

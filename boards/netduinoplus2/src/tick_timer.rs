@@ -19,28 +19,53 @@ pub(crate) fn ticks() -> u32 {
 
 pub struct TickTimer(board_stm32f405::TickTimer);
 
+/// Ticks per TIM2 update: one, or a stream's half buffer of slots (`step_stream.rs`).
+#[cfg(not(feature = "step-stream"))]
+const TICKS_PER_UPDATE: u32 = 1;
+#[cfg(feature = "step-stream")]
+const TICKS_PER_UPDATE: u32 = board_contract::STREAM_SLOTS as u32;
+
 impl TickTimer {
+    /// TIM2 at `tick_hz`, or with the streamed step output at the fill rate, `tick_hz` slots
+    /// per second / `STREAM_SLOTS`.
     pub fn new(tim: pac::TIM2, timer_clock_hz: u32, tick_hz: u32) -> Self {
-        TickTimer(board_stm32f405::TickTimer::new(tim, timer_clock_hz, tick_hz))
+        let update_hz = tick_hz / TICKS_PER_UPDATE;
+        TickTimer(board_stm32f405::TickTimer::new(tim, timer_clock_hz, update_hz))
+    }
+}
+
+/// TIM2's rate control in ticks (slots) per second.
+pub struct TickRate(board_stm32f405::TickRate);
+
+impl board_contract::TickRate for TickRate {
+    /// Whole fills per update, and an update period the timer makes exactly.
+    fn supports(&self, tick_hz: u32) -> bool {
+        tick_hz.is_multiple_of(TICKS_PER_UPDATE) && self.0.supports(tick_hz / TICKS_PER_UPDATE)
+    }
+
+    fn set(&mut self, tick_hz: u32) -> bool {
+        self.supports(tick_hz) && self.0.set(tick_hz / TICKS_PER_UPDATE)
     }
 }
 
 impl board_contract::TickTimer for TickTimer {
-    type Rate = board_stm32f405::TickRate;
+    type Rate = TickRate;
 
     fn rate_control(&self) -> Self::Rate {
-        self.0.rate_control()
+        TickRate(self.0.rate_control())
     }
 
     fn start(&mut self) {
         self.0.start()
     }
 
-    /// Acknowledges the update interrupt and counts the tick (only the tick task calls this).
+    /// Acknowledges the update interrupt and counts its ticks (only the tick task calls this).
+    /// A stream's fill runs its slots' ticks at once, as on a board whose DMA plays them: the
+    /// spindle, read on each, turns by the whole fill at its start.
     #[inline(always)]
     fn clear_update(&mut self) {
         self.0.clear_update();
-        TICKS.store(TICKS.load(Relaxed).wrapping_add(1), Relaxed);
+        TICKS.store(TICKS.load(Relaxed).wrapping_add(TICKS_PER_UPDATE), Relaxed);
     }
 
     #[inline(always)]

@@ -74,9 +74,11 @@ pub struct TickRate {
 }
 
 impl board_contract::TickRate for TickRate {
-    /// True if `tick_hz` divides the timer clock exactly (see [`TickTimer::new`]).
+    /// True if `tick_hz` divides the timer clock exactly (see [`TickTimer::new`]) and an
+    /// interrupt per tick is asked for at most [`motion::config::MAX_TICK_HZ`].
     fn supports(&self, tick_hz: u32) -> bool {
         tick_hz != 0
+            && tick_hz <= motion::config::MAX_TICK_HZ
             && self.timer_clock_hz.is_multiple_of(tick_hz)
             && self.timer_clock_hz / tick_hz >= 2
     }

@@ -10,6 +10,11 @@
 #![no_std]
 #![no_main]
 
+// The streamed step output changes what the board's tick timer is (the fill interrupt): only
+// the link firmware has the fill.
+#[cfg(feature = "step-stream")]
+compile_error!("step-stream is the link firmware's: build this firmware without it");
+
 use core::sync::atomic::AtomicBool;
 use motion_firmware::board;
 

@@ -57,6 +57,9 @@ mod app {
         // so the tick writes it without a lock.
         #[lock_free]
         step_port: board::StepPort,
+        // The tick's alone (the stream's fill interrupt); `()` without the stream.
+        #[lock_free]
+        step_stream: board::StepStream,
         link: Link,
         host_port: link::HostPort,
     }
@@ -174,7 +177,13 @@ mod app {
         tick_timer.start();
 
         (
-            Shared { motion, step_port, link, host_port: link::HostPort::new(host) },
+            Shared {
+                motion,
+                step_port,
+                step_stream: board::StepStream::default(),
+                link,
+                host_port: link::HostPort::new(host),
+            },
             Local {
                 tick_timer,
                 io,
@@ -207,18 +216,58 @@ mod app {
     /// step-only ticks count it too, and the full tick that comes next wakes the task (at most
     /// `SUPERVISE_TICKS - 1` ticks late), so the machine alone decides which ticks are full ones
     /// (a Z job keeps them off its generator's updates).
-    #[task(binds = TIM2, priority = 3, shared = [motion, step_port],
+    ///
+    /// With the streamed step output (`step-stream`), TIM2's update is the fill interrupt, once
+    /// per `STREAM_SLOTS` slots (the real board's TIM2 counts the slot timer's updates; QEMU's
+    /// runs at the fill rate): the same ticks, one per slot, each a set/reset word into the
+    /// half buffer the DMA has just played, and the overrun check once per fill.
+    #[task(binds = TIM2, priority = 3, shared = [motion, step_port, step_stream],
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: i32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
             plain: bool = false, capability: u8 = 0, spindle_at_rest: bool = false,
             copy_counts: [i32; 2] = [0; 2]])]
     fn tick(mut cx: tick::Context) {
-        let l = cx.local;
         #[cfg(feature = "isr-cycles")]
-        let entry = board_contract::CycleCounter::now(&*l.cycles);
-        l.tick_timer.clear_update();
+        let entry = board_contract::CycleCounter::now(&*cx.local.cycles);
+        cx.local.tick_timer.clear_update();
         let port = cx.shared.step_port;
+        #[cfg(not(feature = "step-stream"))]
+        let full = one_tick(&mut cx.local, &mut cx.shared.motion, port, |p, step| p.write(step));
+        // The stream's half buffer: one machine tick per slot, each a set/reset word. The
+        // supervision below then runs once per fill, whatever the ticks were.
+        #[cfg(feature = "step-stream")]
+        let full = {
+            use board_contract::StepStream as _;
+            let stream = cx.shared.step_stream;
+            let layout = stream.layout();
+            for w in stream.half().iter_mut() {
+                one_tick(&mut cx.local, &mut cx.shared.motion, port, |_, step| {
+                    *w = layout.word(*step)
+                });
+            }
+            true
+        };
+        let l = cx.local;
+        if full {
+            // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
+            let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
+            *l.overran = l.overrun.after_tick(late);
+        }
+        #[cfg(feature = "isr-cycles")]
+        motion_firmware::isr_cycles::BINS
+            .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
+    }
+
+    /// One machine tick, its step output to `emit` (the port's write, or the stream's word);
+    /// true for a full tick (inputs read, the machine's `tick`), false for a step-only one.
+    #[inline(always)]
+    fn one_tick(
+        l: &mut tick::LocalResources<'_>,
+        motion: &mut impl rtic::Mutex<T = Motion>,
+        port: &mut board::StepPort,
+        mut emit: impl FnMut(&mut board::StepPort, &motion::StepOutput),
+    ) -> bool {
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
         // still, a force, event or wire job, or a Z job with step outputs; no e-stop edge. A
@@ -231,7 +280,7 @@ mod app {
         // it (`fast_tick_sensing`), else by the full tick below.
         if *l.plain && !ESTOP_EDGE.load(Relaxed) {
             let (spindle, at_rest) = (&mut *l.spindle, *l.spindle_at_rest);
-            let step = cx.shared.motion.lock(|m| {
+            let step = motion.lock(|m| {
                 let sense = || {
                     if !at_rest {
                         spindle.update();
@@ -240,12 +289,9 @@ mod app {
                 m.machine.fast_tick_sensing(&mut m.dda, &mut DdaSource, sense)
             });
             if let Some(step) = step {
-                port.write(&step);
+                emit(port, &step);
                 *l.wake -= 1;
-                #[cfg(feature = "isr-cycles")]
-                motion_firmware::isr_cycles::BINS
-                    .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
-                return;
+                return false;
             }
         } else if *l.capability != 0 && !ESTOP_EDGE.load(Relaxed) {
             let which = *l.capability;
@@ -254,14 +300,11 @@ mod app {
                 spindle_at_rest: *l.spindle_at_rest,
                 io: &mut *l.io,
             };
-            let step = cx.shared.motion.lock(|m| Capabilities::step_only_tick(which, m, &mut b));
+            let step = motion.lock(|m| Capabilities::step_only_tick(which, m, &mut b));
             if let Some(step) = step {
-                port.write(&step);
+                emit(port, &step);
                 *l.wake -= 1;
-                #[cfg(feature = "isr-cycles")]
-                motion_firmware::isr_cycles::BINS
-                    .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
-                return;
+                return false;
             }
         }
         let raw = l.io.read();
@@ -277,7 +320,7 @@ mod app {
         };
         let still = copy_counts == *l.copy_counts;
         *l.copy_counts = copy_counts;
-        cx.shared.motion.lock(|m| {
+        motion.lock(|m| {
             #[cfg(feature = "sim-inputs")]
             let inputs = link::sim::with_probe(m, &inputs);
             let mut r = Readings {
@@ -298,7 +341,7 @@ mod app {
                 *l.plain = still;
                 m.machine.tick(&mut m.dda, &inputs)
             };
-            port.write(&out.step);
+            emit(port, &out.step);
             l.io.write(&out.outputs);
             // The drivers stay off from an e-stop until its fault is cleared.
             let drivers_on = !m.machine.faults().has(FaultCode::EStop);
@@ -329,12 +372,7 @@ mod app {
             *l.wake -= 1;
         }
         WATCHDOG.tick_alive();
-        // A config save stalls flash fetches, so the tick after it runs late: not an overrun.
-        let late = l.tick_timer.update_pending() && !SAVING_CONFIG.load(Relaxed);
-        *l.overran = l.overrun.after_tick(late);
-        #[cfg(feature = "isr-cycles")]
-        motion_firmware::isr_cycles::BINS
-            .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
+        true
     }
 
     /// Force ADC half buffer (real board): the force job's chain per frame, its control law

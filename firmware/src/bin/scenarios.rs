@@ -11,6 +11,11 @@
 #![no_std]
 #![no_main]
 
+// The streamed step output changes what the board's tick timer is (the fill interrupt): only
+// the link firmware has the fill.
+#[cfg(feature = "step-stream")]
+compile_error!("step-stream is the link firmware's: build this firmware without it");
+
 // The scenario firmware uses only the board's tick timer and cycle counter: the sim board
 // inside each scenario stands in for pins and sensors.
 use motion_firmware::board;

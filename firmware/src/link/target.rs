@@ -72,6 +72,10 @@ impl<'a, M: Mutex<T = Motion>> Target<'a, M> {
             if !self.link.tick_rate.supports(tick_hz) {
                 return Err(ErrorCode::InvalidConfig);
             }
+            // A streamed output writes DIR and STEP in one word: DIR needs a tick of its own.
+            #[cfg(feature = "step-stream")]
+            motion::dda::edge_stream::timing(&cfg.link.machine)
+                .map_err(|_| ErrorCode::InvalidConfig)?;
             Some(Dda::new(&cfg.link.machine).map_err(|_| ErrorCode::InvalidConfig)?)
         };
         let r = self.motion.get_mut().lock(|m| m.machine.set_config(cfg));

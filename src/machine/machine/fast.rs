@@ -8,8 +8,9 @@
 //! a force job is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
 //! [`Machine::fast_tick`]s: the job's step source, the step counters and the soft-limit check on
 //! the axes that stepped, nothing else. The board skips reading its inputs on those ticks too. A
-//! full tick then comes round at least every [`SUPERVISE_TICKS`] ticks, and at once after any
-//! command, fault, output change or background work (each sets the count to 0).
+//! full tick then comes round at least every [`SUPERVISE_TICKS`] ticks ([`supervise_ticks`]: the
+//! same 80 us at a faster tick, up to [`MAX_SUPERVISE_TICKS`]), and at once after any command,
+//! fault, output change or background work (each sets the count to 0).
 //!
 //! What that costs in reaction time, at the 100 kHz default tick: a limit switch or sensor fault
 //! is seen at most `SUPERVISE_TICKS - 1` ticks (70 us) later, against a 2 ms switch debounce; the
@@ -21,9 +22,33 @@ use super::{DdaSource, Inputs, Machine, StepSource, JOB_WATCH_TICKS};
 use crate::dda::{Dda, StepOutput};
 use crate::machine::MachineState;
 
-/// Ticks from one full tick to the next while the machine is quiet (the job bookkeeping's
-/// period, so that a quiet job is watched as often as a busy one).
+/// Ticks from one full tick to the next while the machine is quiet, at the default tick (the
+/// job bookkeeping's period, so that a quiet job is watched as often as a busy one).
 pub const SUPERVISE_TICKS: u8 = JOB_WATCH_TICKS;
+
+/// The supervision period in time: [`SUPERVISE_TICKS`] at the default 100 kHz tick (80 us). A
+/// faster tick (a streamed step output's slot clock) keeps the period, not the count, up to
+/// [`MAX_SUPERVISE_TICKS`]: the full tick's cost is then spread over more slots.
+pub const SUPERVISE_HZ: u32 = 12_500;
+
+/// The longest run between full ticks: the job bookkeeping must come round well inside the
+/// starve margin (at most two virtual ticks pass per tick; 2 x 24 = 48 of 64).
+pub const MAX_SUPERVISE_TICKS: u8 = 24;
+
+/// Ticks from one full tick to the next while the machine is quiet at `tick_hz`: one
+/// [`SUPERVISE_HZ`] period, at least [`SUPERVISE_TICKS`], at most [`MAX_SUPERVISE_TICKS`].
+pub const fn supervise_ticks(tick_hz: u32) -> u8 {
+    let n = tick_hz / SUPERVISE_HZ;
+    if n < SUPERVISE_TICKS as u32 {
+        SUPERVISE_TICKS
+    } else if n > MAX_SUPERVISE_TICKS as u32 {
+        MAX_SUPERVISE_TICKS
+    } else {
+        n as u8
+    }
+}
+
+const _: () = assert!(2 * MAX_SUPERVISE_TICKS as u32 <= super::STARVE_MARGIN_VTICKS * 3 / 4);
 
 impl Machine {
     /// A step-only tick, if the last full tick found everything quiet and fewer than
@@ -80,7 +105,7 @@ impl Machine {
         self.fast_left != 0
     }
 
-    /// End of a full tick: grants the next [`SUPERVISE_TICKS`]` - 1` ticks (or the fewer the
+    /// End of a full tick: grants the next [`supervise_ticks`]` - 1` ticks (or the fewer the
     /// source takes) to [`Machine::fast_tick`] when nothing but the DDA has work. `raw`: this tick's inputs
     /// before the debounce.
     /// `source`: the job's step source, which may refuse step-only ticks
@@ -111,7 +136,7 @@ impl Machine {
             && raw.probe == self.switch_filter.probe_level()
             && self.switch_filter.quiet();
         if quiet {
-            self.fast_left = source.step_only_run(SUPERVISE_TICKS - 1);
+            self.fast_left = source.step_only_run(self.supervise_ticks - 1);
             // The full tick that ends this run keeps the job's books.
             self.job_watch_in = 1;
         } else {

@@ -38,7 +38,8 @@ pub fn run(root: &Path, only: &[String]) -> Result<Vec<Logged>> {
     let work = root.join("target/isr-cycles");
     std::fs::create_dir_all(&work)?;
     let mut out = Vec::new();
-    for job in jobs(root, &work, &elf)? {
+    // The tick interrupt's jobs: the streamed output's fill is the trace's alone.
+    for job in jobs(root, &work, &elf, &elf)?.into_iter().filter(|j| !j.stream) {
         if !only.is_empty() && !only.iter().any(|o| job.name.contains(o.as_str())) {
             continue;
         }

@@ -40,6 +40,10 @@ const PROFILED_AXES: f64 = 4.0;
 /// with a trace of every instruction makes it hundreds of times slower than real time, more on a
 /// loaded machine. The whole job still has [`JOB_TIMEOUT`].
 const TRACED_PATIENCE: u32 = 100;
+/// The streamed step output's job ([`STREAM_JOB_TOML`]).
+const STREAM_JOB: &str = "4 axes at 250 kHz, streamed";
+/// Slots per fill interrupt of the streamed output.
+const STREAM_SLOTS: f64 = board_contract::STREAM_SLOTS as f64;
 /// A traced job that takes longer than this has hung.
 const JOB_TIMEOUT: Duration = Duration::from_secs(20 * 60);
 
@@ -71,6 +75,9 @@ const IDLE: &str = "idle";
 /// One profiled job.
 struct Job {
     name: &'static str,
+    /// Run on the link firmware built with `step-stream`: each handler run fills a half buffer
+    /// of [`STREAM_SLOTS`] slots.
+    stream: bool,
     args: Vec<String>,
     /// Trace only the first this many ticks, then stop the job: for a job whose whole length
     /// would take an hour of single-stepped QEMU.
@@ -80,6 +87,7 @@ struct Job {
 /// What one job's handler did, per situation.
 pub struct JobProfile {
     pub name: &'static str,
+    pub stream: bool,
     pub instances: Vec<trace::Instance>,
     /// Runs of the force interrupt (the force chain, after the tick on the ticks it pends it).
     pub force: Vec<trace::Instance>,
@@ -141,20 +149,27 @@ pub struct Figures {
 /// Profiles every job (or those whose name contains one of `only`) and prints the report.
 pub fn run(root: &Path, only: &[String]) -> Result<Figures> {
     let elf = firmware::build(root, Board::Netduinoplus2, &["link"])?;
+    let stream_elf = crate::e2e::stream_firmware(root)?;
     let bin = build_motionctl(root)?;
-    let prog = disasm::Program::load(root, &elf)?;
-    let entry = prog.irq_handler(TICK_IRQ)?;
-    let force_entry = prog.irq_handler(FORCE_IRQ)?;
+    let load = |elf: &Path| -> Result<(disasm::Program, [u32; 2])> {
+        let prog = disasm::Program::load(root, elf)?;
+        let entries = [prog.irq_handler(TICK_IRQ)?, prog.irq_handler(FORCE_IRQ)?];
+        Ok((prog, entries))
+    };
+    let (tick_prog, tick_entries) = load(&elf)?;
+    let (stream_prog, stream_entries) = load(&stream_elf)?;
     let work = root.join("target/isr-profile");
     std::fs::create_dir_all(&work)?;
     let wrapper_dir = write_wrapper(&work)?;
     let mut profiles = Vec::new();
-    for job in jobs(root, &work, &elf)? {
+    for job in jobs(root, &work, &elf, &stream_elf)? {
         if !only.is_empty() && !only.iter().any(|o| job.name.contains(o.as_str())) {
             continue;
         }
         println!("\n== {}: motionctl {}", job.name, job.args.join(" "));
-        let p = profile_job(root, &prog, [entry, force_entry], &bin, &job, &work, &wrapper_dir)?;
+        let (prog, entries) =
+            if job.stream { (&stream_prog, stream_entries) } else { (&tick_prog, tick_entries) };
+        let p = profile_job(root, prog, entries, &bin, &job, &work, &wrapper_dir)?;
         println!("{}", job_table(&p));
         profiles.push(p);
     }
@@ -294,6 +309,7 @@ fn profile_job(
     top.truncate(12);
     Ok(JobProfile {
         name: job.name,
+        stream: job.stream,
         instances: analyzer.instances,
         force: force.instances,
         wall: start.elapsed(),
@@ -384,7 +400,9 @@ fn job_table(p: &JobProfile) -> String {
     s
 }
 
-fn figures(profiles: &[JobProfile]) -> Result<Figures> {
+fn figures(all_profiles: &[JobProfile]) -> Result<Figures> {
+    let (streamed, profiles): (Vec<&JobProfile>, Vec<&JobProfile>) =
+        all_profiles.iter().partition(|p| p.stream);
     let all = || profiles.iter().flat_map(|p| p.instances.iter());
     let cycles = Stats::of(all().map(|i| i.cycles).collect());
     let idle = Stats::of(
@@ -419,10 +437,9 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
         .fold(0.0, f64::max);
     let tick_hz = DEFAULT_TICK_HZ.min(CORE_HZ / worst.max(1.0));
     let per_axis = (tick_hz * STEPS_PER_TICK_PER_AXIS).floor();
-    let keys = vec![
+    let mut keys = vec![
         ("isr_cycles_cruise_4axes", cruise4.median as f64),
-        ("step_rate_max_hz_per_axis", per_axis),
-        ("step_rate_max_hz_aggregate", per_axis * PROFILED_AXES),
+        ("tick_irq_step_rate_max_hz_per_axis", per_axis),
         ("isr_cycles_p99", cycles.p99 as f64),
         ("isr_cycles_max", cycles.max as f64),
         ("isr_instr_idle", idle.median as f64),
@@ -432,7 +449,7 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
     let mut md = String::from(
         "| job | ticks | cycles median | cycles p99 | cycles max | force interrupt max | mean CPU at 100 kHz |\n|---|---|---|---|---|---|---|\n",
     );
-    for p in profiles {
+    for p in &profiles {
         let c = Stats::of(p.instances.iter().map(|i| i.cycles).collect());
         let f = Stats::of(p.force.iter().map(|i| i.cycles).collect());
         let force: f64 = p.force.iter().map(|i| i.cycles as f64).sum();
@@ -450,11 +467,72 @@ fn figures(profiles: &[JobProfile]) -> Result<Figures> {
         );
     }
     md.push('\n');
-    for p in profiles {
+    for p in &streamed {
+        let (stream_keys, table) = stream_figures(p);
+        keys.extend(stream_keys);
+        md.push_str(&table);
+    }
+    for p in all_profiles {
         md.push_str(&job_table(p));
         md.push('\n');
     }
     Ok(Figures { keys, markdown: md })
+}
+
+/// The streamed output's figures from its job's fills: each handler run ticks
+/// [`STREAM_SLOTS`] slots, and the DMA plays the other half meanwhile, so a fill must end
+/// within [`STREAM_SLOTS`] slot periods. Over the fills that moved (a DDA function ran): the
+/// slot clock the longest holds (at most [`motion::config::MAX_STREAM_TICK_HZ`]) gives the step
+/// rate, one step per axis every other slot, and the mean fill's share of the core at the
+/// stream's fastest clock the CPU figure. The fills with no motion are reported apart: they
+/// include the boot's, at the safe default's 50 kHz, where the machine (in Fault until the host
+/// sends a config) runs a full tick on every slot.
+fn stream_figures(p: &JobProfile) -> (Vec<(&'static str, f64)>, String) {
+    let moving: Vec<u32> =
+        p.instances.iter().filter(|i| JobProfile::situation(i) != IDLE).map(|i| i.cycles).collect();
+    let c = Stats::of(moving);
+    let still = Stats::of(
+        p.instances.iter().filter(|i| JobProfile::situation(i) == IDLE).map(|i| i.cycles).collect(),
+    );
+    let max_slot_hz = motion::config::MAX_STREAM_TICK_HZ as f64;
+    let held_hz = max_slot_hz.min(STREAM_SLOTS * CORE_HZ / (c.max.max(1) as f64));
+    let per_axis = (held_hz * STEPS_PER_TICK_PER_AXIS).floor();
+    let fills_per_s = max_slot_hz / STREAM_SLOTS;
+    let cpu = 100.0 * c.mean * fills_per_s / CORE_HZ;
+    let keys = vec![
+        ("step_rate_max_hz_per_axis", per_axis),
+        ("step_rate_max_hz_aggregate", per_axis * PROFILED_AXES),
+        ("stream_fill_cycles_max", c.max as f64),
+        ("stream_cycles_per_slot_mean", (c.mean / STREAM_SLOTS * 10.0).round() / 10.0),
+        ("stream_cpu_percent_500khz", (cpu * 100.0).round() / 100.0),
+        ("stream_fill_cycles_max_full_ticks", still.max as f64),
+    ];
+    let budget = STREAM_SLOTS * CORE_HZ / max_slot_hz;
+    let table = format!(
+        "Streamed step output ({}): {} fills of {} slots that moved, at {} kHz; cycles per fill \
+         min / median / p99 / max {} / {} / {} / {} (a fill's budget at {} kHz: {:.0} cycles); \
+         mean {:.1} cycles per slot, {:.1} % of the core; the longest holds a {:.0} kHz slot \
+         clock. {} fills with no motion: median {}, max {} cycles (the max: full ticks on every \
+         slot, {:.1} per slot).\n\n",
+        p.name,
+        c.n,
+        STREAM_SLOTS,
+        max_slot_hz / 1e3,
+        c.min,
+        c.median,
+        c.p99,
+        c.max,
+        max_slot_hz / 1e3,
+        budget,
+        c.mean / STREAM_SLOTS,
+        cpu,
+        held_hz / 1e3,
+        still.n,
+        still.median,
+        still.max,
+        still.max as f64 / STREAM_SLOTS
+    );
+    (keys, table)
 }
 
 /// A wire segment of the thesis die takes ~6 s at its area rate; 0.3 s of it is the same
@@ -463,11 +541,13 @@ const WIRE_TICKS: usize = 30_000;
 
 /// The jobs: what a user runs, short enough to trace every instruction (~0.2-0.5 s of
 /// machine time each).
-fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
+fn jobs(root: &Path, work: &Path, elf: &Path, stream_elf: &Path) -> Result<Vec<Job>> {
     let s = |x: &str| x.to_string();
     let fw = [s("--qemu"), s("--firmware"), elf.display().to_string()];
     let job4 = work.join("job4.toml");
     std::fs::write(&job4, FOUR_AXIS_JOB)?;
+    let job4_stream = work.join("job4-stream.toml");
+    std::fs::write(&job4_stream, STREAM_JOB_TOML)?;
     let stream = work.join("limacon-arc.bin");
     std::fs::write(
         &stream,
@@ -481,11 +561,26 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
     Ok(vec![
         Job {
             name: "4-axis segments",
+            stream: false,
             args: with_fw(vec![s("run"), job4.display().to_string()], &["--yes"]),
             max_ticks: None,
         },
         Job {
+            name: STREAM_JOB,
+            stream: true,
+            args: vec![
+                s("run"),
+                job4_stream.display().to_string(),
+                s("--yes"),
+                s("--qemu"),
+                s("--firmware"),
+                stream_elf.display().to_string(),
+            ],
+            max_ticks: None,
+        },
+        Job {
             name: "milling (force loop)",
+            stream: false,
             args: with_fw(
                 vec![
                     s("milling"),
@@ -498,6 +593,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
         },
         Job {
             name: "turning (Z slide)",
+            stream: false,
             args: with_fw(
                 vec![s("turning"), s("run")],
                 &[
@@ -519,6 +615,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
         },
         Job {
             name: "polar playback",
+            stream: false,
             args: with_fw(
                 vec![s("polar"), s("run"), stream.display().to_string()],
                 &["--speed", "2"],
@@ -527,6 +624,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path) -> Result<Vec<Job>> {
         },
         Job {
             name: "wire",
+            stream: false,
             args: with_fw(vec![s("wire"), s("run")], &["--segments", "1..3"]),
             max_ticks: Some(WIRE_TICKS),
         },
@@ -601,4 +699,64 @@ to = { X = 6.0, Y = 7.0, Z = -0.8, A = 3.0 }
 
 [[moves]]
 to = { X = 1.0, Y = 1.5, Z = -0.1, A = 0.5 }
+"#;
+
+/// The streamed output's job: its fastest slot clock (500 kHz, 1-tick pulses: drivers that take
+/// 1 us pulses, as fast steppers' do), four axes at 250 kHz each (1000 steps/mm at 250 mm/s)
+/// in the first move, and back at 250 kHz on the longest axis in the second (the others in
+/// proportion), each move ramping up from and down to a stop.
+const STREAM_JOB_TOML: &str = r#"# cargo xtask isr-profile: four axes stepping at 250 kHz each from a 500 kHz slot clock
+format = "motion-job"
+version = 1
+
+[machine]
+tick_hz = 500_000
+
+[machine.timing]
+pulse_ns = 1_000
+dir_setup_ns = 1_000
+dir_hold_ns = 1_000
+
+[[machine.axes]]
+name = "X"
+steps_per_mm = 1_000.0
+max_rate_mm_s = 250.0
+accel_mm_s2 = 25_000.0
+junction_jerk_mm_s = 5.0
+min_mm = -100.0
+max_mm = 100.0
+
+[[machine.axes]]
+name = "Y"
+steps_per_mm = 1_000.0
+max_rate_mm_s = 250.0
+accel_mm_s2 = 25_000.0
+junction_jerk_mm_s = 5.0
+min_mm = -100.0
+max_mm = 100.0
+
+[[machine.axes]]
+name = "Z"
+steps_per_mm = 1_000.0
+max_rate_mm_s = 250.0
+accel_mm_s2 = 25_000.0
+junction_jerk_mm_s = 5.0
+min_mm = -100.0
+max_mm = 100.0
+
+[[machine.axes]]
+name = "A"
+steps_per_mm = 1_000.0
+max_rate_mm_s = 250.0
+accel_mm_s2 = 25_000.0
+junction_jerk_mm_s = 5.0
+min_mm = -100.0
+max_mm = 100.0
+
+[[moves]]
+to = { X = 15.0, Y = 15.0, Z = 15.0, A = 15.0 }
+feed_mm_min = 60_000.0
+
+[[moves]]
+to = { X = 3.0, Y = 5.0, Z = 7.0, A = 9.0 }
 "#;

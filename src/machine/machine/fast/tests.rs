@@ -1,6 +1,6 @@
 //! The step-only tick against the full tick: the same steps, faults seen within its bound.
 
-use super::SUPERVISE_TICKS;
+use super::{supervise_ticks, MAX_SUPERVISE_TICKS, SUPERVISE_TICKS};
 use crate::dda::{Dda, Preparer, StepOutput};
 use crate::machine::{homed, Inputs, Machine, MachineCommand, MachineState, ProbeKind};
 use crate::planner::{Move, Planner};
@@ -88,6 +88,48 @@ fn a_quiet_job_steps_exactly_as_with_full_ticks_and_mostly_step_only() {
     // All but one tick in SUPERVISE_TICKS is step-only, running or idle.
     let full = JOB_TICKS - fast.fast_ticks;
     assert!(full <= JOB_TICKS / SUPERVISE_TICKS as usize + 2, "{full} full ticks");
+}
+
+#[test]
+fn a_faster_tick_keeps_the_supervision_period_in_time_up_to_its_cap() {
+    assert_eq!(supervise_ticks(10_000), SUPERVISE_TICKS);
+    assert_eq!(supervise_ticks(100_000), SUPERVISE_TICKS);
+    assert_eq!(supervise_ticks(150_000), 12);
+    assert_eq!(supervise_ticks(250_000), 20);
+    assert_eq!(supervise_ticks(500_000), MAX_SUPERVISE_TICKS);
+    assert_eq!(supervise_ticks(u32::MAX), MAX_SUPERVISE_TICKS);
+}
+
+#[test]
+fn at_a_250_khz_tick_a_quiet_job_takes_a_full_tick_every_20_and_steps_the_same() {
+    let mut cfg = config(Case::EStop);
+    cfg.link.machine.tick_hz = 250_000;
+    let job = || {
+        let (mut m, mut dda, mut prep) = homed(cfg);
+        let mut p = Planner::new(&cfg.link.machine);
+        for mv in &JOB {
+            p.push(&Move { steps: [mv[0], mv[1], 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+        }
+        p.finish();
+        while let Some(seg) = p.pop() {
+            m.command(MachineCommand::Queue(&seg), &mut dda).unwrap();
+            dda.push(&prep.prepare(&seg).unwrap()).unwrap();
+        }
+        m.command(MachineCommand::Start, &mut dda).unwrap();
+        (m, dda, prep)
+    };
+    let period = supervise_ticks(250_000) as usize;
+    // The same steps take 2.5 times the ticks.
+    let ticks = JOB_TICKS * 3;
+    let (plain, _) = run(job(), ticks, false, |_| Inputs::QUIET);
+    let (fast, fm) = run(job(), ticks, true, |_| Inputs::QUIET);
+    assert_same_pins(&fast.steps, &plain.steps);
+    assert_eq!(fm.state(), MachineState::Ready);
+    let (end_plain, end_fast) = (plain.left_running.unwrap(), fast.left_running.unwrap());
+    assert!(end_fast >= end_plain && end_fast - end_plain < period);
+    let full = ticks - fast.fast_ticks;
+    assert!(full <= ticks / period + 2, "{full} full ticks");
+    assert!(full > ticks / (period + 1), "{full} full ticks: the run is longer than granted");
 }
 
 #[test]
