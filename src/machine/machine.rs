@@ -28,6 +28,7 @@ use crate::segment::{Segment, SegmentError};
 
 mod command;
 mod fast;
+mod pending;
 mod source;
 mod watch;
 pub use command::{MachineCommand, Refusal};
@@ -182,6 +183,8 @@ pub struct Machine {
     /// Step-only ticks left before the next full tick ([`Machine::fast_tick`]); 0 after any
     /// command, fault or state change.
     fast_left: u8,
+    /// Steps of the step-only ticks since the last full tick, not yet in `raw`.
+    pending: pending::PendingSteps,
     /// Ticks from one full tick to the next while quiet, at the config's tick rate.
     supervise_ticks: u8,
     /// The probe move (G38.x): armed, watched, its result.
@@ -236,6 +239,7 @@ impl Machine {
                 cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz),
             ),
             fast_left: 0,
+            pending: pending::PendingSteps::new(),
             supervise_ticks: fast::supervise_ticks(cfg.link.machine.tick_hz),
             probe: ProbeRun::new(),
         }
@@ -319,16 +323,20 @@ impl Machine {
 
     /// Machine positions (steps on the pins since boot plus the homing offset).
     pub fn positions(&self) -> [i64; MAX_AXES] {
-        let mut p = self.raw;
+        let mut p = self.raw_positions();
         for i in 0..MAX_AXES {
             p[i] = p[i].saturating_add(self.offset[i]);
         }
         p
     }
 
-    /// Steps that reached the pins since boot, per axis (no offset).
+    /// Steps that reached the pins since boot, per axis (no offset), the step-only ticks' too.
     pub fn raw_positions(&self) -> [i64; MAX_AXES] {
-        self.raw
+        let mut p = self.raw;
+        for (p, n) in p.iter_mut().zip(self.pending.net()) {
+            *p += n;
+        }
+        p
     }
 
     /// Machine position after every admitted segment (what `Queue` checks against).
@@ -455,6 +463,7 @@ impl Machine {
         source: &mut impl StepSource,
     ) -> TickOut {
         self.ticks += 1;
+        self.pending.fold_into(&mut self.raw);
         // Faults and jog-off see debounced switches; homing latches on the raw edge.
         let raw = inp;
         let inp = &self.switch_filter.filter(raw);
@@ -510,8 +519,9 @@ impl Machine {
         if self.state == MachineState::Boot {
             return false;
         }
+        let raw = self.raw_positions();
         let cfg = &self.cfg.following;
-        match self.following.check(cfg, &self.raw, measured_steps) {
+        match self.following.check(cfg, &raw, measured_steps) {
             Some(_) => {
                 self.raise(FaultCode::FollowingError);
                 true

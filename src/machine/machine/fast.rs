@@ -6,8 +6,8 @@
 //! probe move, no source job unless its step source allows step-only ticks
 //! ([`StepSource::step_only_ticks`]: a playback, a wire job and a Z job with step outputs do;
 //! a force job is a plain job to the machine) -- the next [`SUPERVISE_TICKS`]` - 1` ticks can be
-//! [`Machine::fast_tick`]s: the job's step source, the step counters and the soft-limit check on
-//! the axes that stepped, nothing else. The board skips reading its inputs on those ticks too. A
+//! [`Machine::fast_tick`]s: the job's step source, the step counters (`pending.rs`; a run is
+//! never longer than every axis's room to its soft limits), nothing else. The board skips reading its inputs on those ticks too. A
 //! full tick then comes round at least every [`SUPERVISE_TICKS`] ticks ([`supervise_ticks`]: the
 //! same 80 us at a faster tick, up to [`MAX_SUPERVISE_TICKS`]), and at once after any command,
 //! fault, output change or background work (each sets the count to 0).
@@ -15,7 +15,7 @@
 //! What that costs in reaction time, at the 100 kHz default tick: a limit switch or sensor fault
 //! is seen at most `SUPERVISE_TICKS - 1` ticks (70 us) later, against a 2 ms switch debounce; the
 //! e-stop's own interrupt has already cut the step drivers, and the board takes a full tick as
-//! soon as it has fired. Soft limits are still checked on every step. The job bookkeeping runs on
+//! soon as it has fired. Soft limits still hold on every step: near one the runs shorten, down to full ticks. The job bookkeeping runs on
 //! every full tick in this mode, so it keeps its [`JOB_WATCH_TICKS`] period and the starve margin.
 
 use super::{DdaSource, Inputs, Machine, StepSource, JOB_WATCH_TICKS};
@@ -52,8 +52,8 @@ const _: () = assert!(2 * MAX_SUPERVISE_TICKS as u32 <= super::STARVE_MARGIN_VTI
 
 impl Machine {
     /// A step-only tick, if the last full tick found everything quiet and fewer than
-    /// [`SUPERVISE_TICKS`] ticks have passed since: the DDA, the step counters and the soft
-    /// limits. `None`: run [`Machine::tick`] (or `tick_with`) instead. Interrupt rate: a few
+    /// [`SUPERVISE_TICKS`] ticks have passed since: the DDA and the step counters.
+    /// `None`: run [`Machine::tick`] (or `tick_with`) instead. Interrupt rate: a few
     /// compares and adds beside the DDA tick.
     #[inline(always)]
     pub fn fast_tick(&mut self, dda: &mut Dda) -> Option<StepOutput> {
@@ -91,10 +91,8 @@ impl Machine {
         self.ticks += 1;
         let step = source.tick(dda, self.paused);
         self.last_dir = step.dir();
-        if step.rise() != 0 {
-            // A soft-limit fault here zeroes `fast_left`: the next tick is a full one.
-            self.count(step);
-        }
+        // No soft-limit check: the run granted stays inside them (`arm_fast`).
+        self.pending.add(step.rise(), step.dir());
         Some(step)
     }
 
@@ -136,7 +134,14 @@ impl Machine {
             && raw.probe == self.switch_filter.probe_level()
             && self.switch_filter.quiet();
         if quiet {
-            self.fast_left = source.step_only_run(self.supervise_ticks - 1);
+            let mut run = self.supervise_ticks - 1;
+            // Soft limits armed: no longer than every axis stays inside them, one step a tick.
+            if self.homed && self.state != MachineState::Homing {
+                let (min, max) = (&self.raw_limits.min_steps, &self.raw_limits.max_steps);
+                let axes = self.cfg.link.machine.axis_count as usize;
+                run = super::pending::room(&self.raw, min, max, axes, run);
+            }
+            self.fast_left = source.step_only_run(run);
             // The full tick that ends this run keeps the job's books.
             self.job_watch_in = 1;
         } else {

@@ -179,8 +179,10 @@ fn a_switch_being_timed_keeps_every_tick_full() {
 }
 
 #[test]
-fn a_soft_limit_crossed_on_a_step_only_tick_latches_on_that_tick() {
+fn a_soft_limit_crossed_in_a_quiet_job_latches_on_the_tick_it_is_crossed() {
     // Admitted inside the limits; the DDA is handed a longer move, as a wrong segment would be.
+    // The step-only runs shorten as the axis nears the limit (they do not check it), down to
+    // full ticks, which do.
     let cfg = config(Case::SoftLimitRun);
     let build = || {
         let (mut m, mut dda, mut prep) = homed(cfg);
