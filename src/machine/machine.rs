@@ -185,6 +185,10 @@ pub struct Machine {
     fast_left: u8,
     /// Steps of the step-only ticks since the last full tick, not yet in `raw`.
     pending: pending::PendingSteps,
+    /// Ticks from `room_since` in which every axis stays inside its soft limits at one step a
+    /// tick (`pending::room`); 0 when the limits change or are not armed.
+    limit_room: u64,
+    room_since: u64,
     /// Ticks from one full tick to the next while quiet, at the config's tick rate.
     supervise_ticks: u8,
     /// The probe move (G38.x): armed, watched, its result.
@@ -240,6 +244,8 @@ impl Machine {
             ),
             fast_left: 0,
             pending: pending::PendingSteps::new(),
+            limit_room: 0,
+            room_since: 0,
             supervise_ticks: fast::supervise_ticks(cfg.link.machine.tick_hz),
             probe: ProbeRun::new(),
         }
@@ -288,6 +294,7 @@ impl Machine {
     fn install(&mut self, cfg: BoardConfig) {
         self.limits = SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count);
         self.raw_limits = self.limits.minus(&self.offset);
+        self.limit_room = 0;
         self.switch_filter.set_ticks(cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz));
         self.supervise_ticks = fast::supervise_ticks(cfg.link.machine.tick_hz);
         self.cfg = cfg;

@@ -92,7 +92,9 @@ impl Machine {
         let step = source.tick(dda, self.paused);
         self.last_dir = step.dir();
         // No soft-limit check: the run granted stays inside them (`arm_fast`).
-        self.pending.add(step.rise(), step.dir());
+        if step.rise() != 0 {
+            self.pending.add(step.rise(), step.dir());
+        }
         Some(step)
     }
 
@@ -137,9 +139,9 @@ impl Machine {
             let mut run = self.supervise_ticks - 1;
             // Soft limits armed: no longer than every axis stays inside them, one step a tick.
             if self.homed && self.state != MachineState::Homing {
-                let (min, max) = (&self.raw_limits.min_steps, &self.raw_limits.max_steps);
-                let axes = self.cfg.link.machine.axis_count as usize;
-                run = super::pending::room(&self.raw, min, max, axes, run);
+                run = self.limit_room_left(run);
+            } else {
+                self.limit_room = 0;
             }
             self.fast_left = source.step_only_run(run);
             // The full tick that ends this run keeps the job's books.
@@ -147,6 +149,22 @@ impl Machine {
         } else {
             self.fast_left = 0;
         }
+    }
+
+    /// Ticks, at most `want`, that every axis stays inside its soft limits at one step a tick:
+    /// what is left of the last [`pending::room`](super::pending::room) (ticks since counted
+    /// off), worked out again only when that is less than `want`.
+    #[inline]
+    fn limit_room_left(&mut self, want: u8) -> u8 {
+        let mut left = self.limit_room.saturating_sub(self.ticks.wrapping_sub(self.room_since));
+        if left < want as u64 {
+            let (min, max) = (&self.raw_limits.min_steps, &self.raw_limits.max_steps);
+            let axes = self.cfg.link.machine.axis_count as usize;
+            self.limit_room = super::pending::room(&self.raw, min, max, axes);
+            self.room_since = self.ticks;
+            left = self.limit_room;
+        }
+        left.min(want as u64) as u8
     }
 }
 

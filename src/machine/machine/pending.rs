@@ -71,23 +71,22 @@ impl PendingSteps {
 }
 
 /// Steps every axis can take, at one per tick in either direction, before one could leave its
-/// soft limits `min..=max` (per axis, the first `axes`): the longest step-only run that needs no
-/// check, at most `cap`. 0 when an axis is on or past a limit.
-#[inline]
+/// soft limits `min..=max` (per axis, the first `axes`): how many ticks need no check. 0 when an
+/// axis is on or past a limit. The machine keeps the answer and counts it down
+/// (`Machine::limit_room_left`), so this runs once in a long while, not on every full tick.
 pub(super) fn room(
     positions: &[i64; MAX_AXES],
     min: &[i64; MAX_AXES],
     max: &[i64; MAX_AXES],
     axes: usize,
-    cap: u8,
-) -> u8 {
-    let mut room = cap as i64;
+) -> u64 {
+    let mut room = i64::MAX;
     for i in 0..axes.min(MAX_AXES) {
         // Saturating: an axis without limits has them at the ends of i64.
         let (down, up) = (positions[i].saturating_sub(min[i]), max[i].saturating_sub(positions[i]));
         room = room.min(down).min(up);
     }
-    room.clamp(0, cap as i64) as u8
+    room.max(0) as u64
 }
 
 #[cfg(test)]
@@ -130,23 +129,23 @@ mod tests {
     }
 
     #[test]
-    fn room_is_the_nearest_limit_on_any_axis_capped() {
+    fn room_is_the_nearest_limit_on_any_axis() {
         let (min, max) = ([-100; MAX_AXES], [100; MAX_AXES]);
         let mut pos = [0; MAX_AXES];
-        assert_eq!(room(&pos, &min, &max, 3, 23), 23);
+        assert_eq!(room(&pos, &min, &max, 3), 100);
         pos[2] = 90;
-        assert_eq!(room(&pos, &min, &max, 3, 23), 10);
+        assert_eq!(room(&pos, &min, &max, 3), 10);
         pos[1] = -95;
-        assert_eq!(room(&pos, &min, &max, 3, 23), 5);
+        assert_eq!(room(&pos, &min, &max, 3), 5);
         // Axes past `axes` do not count.
         pos[4] = 100;
-        assert_eq!(room(&pos, &min, &max, 3, 23), 5);
+        assert_eq!(room(&pos, &min, &max, 3), 5);
         pos[0] = 100;
-        assert_eq!(room(&pos, &min, &max, 3, 23), 0);
+        assert_eq!(room(&pos, &min, &max, 3), 0);
         pos[0] = 101;
-        assert_eq!(room(&pos, &min, &max, 3, 23), 0);
+        assert_eq!(room(&pos, &min, &max, 3), 0);
         // No limits: the ends of i64.
         let (min, max) = ([i64::MIN; MAX_AXES], [i64::MAX; MAX_AXES]);
-        assert_eq!(room(&[-7; MAX_AXES], &min, &max, 6, 23), 23);
+        assert_eq!(room(&[-7; MAX_AXES], &min, &max, 6), i64::MAX as u64 - 6);
     }
 }

@@ -40,7 +40,7 @@ const PROFILED_AXES: f64 = 4.0;
 /// with a trace of every instruction makes it hundreds of times slower than real time, more on a
 /// loaded machine. The whole job still has [`JOB_TIMEOUT`].
 const TRACED_PATIENCE: u32 = 100;
-/// The streamed step output's job ([`STREAM_JOB_TOML`]).
+/// The streamed step output's job ([`stream_job_toml`]).
 const STREAM_JOB: &str = "4 axes at 250 kHz, streamed";
 /// Slots per fill interrupt of the streamed output.
 const STREAM_SLOTS: f64 = board_contract::STREAM_SLOTS as f64;
@@ -547,7 +547,7 @@ fn jobs(root: &Path, work: &Path, elf: &Path, stream_elf: &Path) -> Result<Vec<J
     let job4 = work.join("job4.toml");
     std::fs::write(&job4, FOUR_AXIS_JOB)?;
     let job4_stream = work.join("job4-stream.toml");
-    std::fs::write(&job4_stream, STREAM_JOB_TOML)?;
+    std::fs::write(&job4_stream, stream_job_toml())?;
     let stream = work.join("limacon-arc.bin");
     std::fs::write(
         &stream,
@@ -705,58 +705,39 @@ to = { X = 1.0, Y = 1.5, Z = -0.1, A = 0.5 }
 /// 1 us pulses, as fast steppers' do), four axes at 250 kHz each (1000 steps/mm at 250 mm/s)
 /// in the first move, and back at 250 kHz on the longest axis in the second (the others in
 /// proportion), each move ramping up from and down to a stop.
-const STREAM_JOB_TOML: &str = r#"# cargo xtask isr-profile: four axes stepping at 250 kHz each from a 500 kHz slot clock
-format = "motion-job"
-version = 1
+fn stream_job_toml() -> String {
+    let mut toml = String::from(
+        "# cargo xtask isr-profile: four axes stepping at 250 kHz each from a 500 kHz slot clock\n\
+         format = \"motion-job\"\nversion = 1\n\n[machine]\ntick_hz = 500_000\n\n\
+         [machine.timing]\npulse_ns = 1_000\ndir_setup_ns = 1_000\ndir_hold_ns = 1_000\n",
+    );
+    for axis in ["X", "Y", "Z", "A"] {
+        let _ = write!(
+            toml,
+            "\n[[machine.axes]]\nname = \"{axis}\"\nsteps_per_mm = 1_000.0\nmax_rate_mm_s = 250.0\n\
+             accel_mm_s2 = 25_000.0\njunction_jerk_mm_s = 5.0\nmin_mm = -100.0\nmax_mm = 100.0\n"
+        );
+    }
+    toml.push_str(
+        "\n[[moves]]\nto = { X = 15.0, Y = 15.0, Z = 15.0, A = 15.0 }\nfeed_mm_min = 60_000.0\n\
+         \n[[moves]]\nto = { X = 3.0, Y = 5.0, Z = 7.0, A = 9.0 }\n",
+    );
+    toml
+}
 
-[machine]
-tick_hz = 500_000
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-[machine.timing]
-pulse_ns = 1_000
-dir_setup_ns = 1_000
-dir_hold_ns = 1_000
-
-[[machine.axes]]
-name = "X"
-steps_per_mm = 1_000.0
-max_rate_mm_s = 250.0
-accel_mm_s2 = 25_000.0
-junction_jerk_mm_s = 5.0
-min_mm = -100.0
-max_mm = 100.0
-
-[[machine.axes]]
-name = "Y"
-steps_per_mm = 1_000.0
-max_rate_mm_s = 250.0
-accel_mm_s2 = 25_000.0
-junction_jerk_mm_s = 5.0
-min_mm = -100.0
-max_mm = 100.0
-
-[[machine.axes]]
-name = "Z"
-steps_per_mm = 1_000.0
-max_rate_mm_s = 250.0
-accel_mm_s2 = 25_000.0
-junction_jerk_mm_s = 5.0
-min_mm = -100.0
-max_mm = 100.0
-
-[[machine.axes]]
-name = "A"
-steps_per_mm = 1_000.0
-max_rate_mm_s = 250.0
-accel_mm_s2 = 25_000.0
-junction_jerk_mm_s = 5.0
-min_mm = -100.0
-max_mm = 100.0
-
-[[moves]]
-to = { X = 15.0, Y = 15.0, Z = 15.0, A = 15.0 }
-feed_mm_min = 60_000.0
-
-[[moves]]
-to = { X = 3.0, Y = 5.0, Z = 7.0, A = 9.0 }
-"#;
+    #[test]
+    fn the_streamed_job_is_four_axes_at_250_khz_from_a_500_khz_slot_clock() {
+        let job = motionctl::job::parse_toml(&stream_job_toml()).unwrap();
+        let m = &job.machine;
+        assert_eq!(m.tick_hz, motion::config::MAX_STREAM_TICK_HZ);
+        assert_eq!(m.axes.len(), 4);
+        for a in &m.axes {
+            assert_eq!(a.steps_per_mm * a.max_rate_mm_s, 250_000.0, "{}", a.name);
+        }
+        assert_eq!(job.items.len(), 2);
+    }
+}

@@ -2,7 +2,9 @@
 
 use super::{supervise_ticks, MAX_SUPERVISE_TICKS, SUPERVISE_TICKS};
 use crate::dda::{Dda, Preparer, StepOutput};
-use crate::machine::{homed, Inputs, Machine, MachineCommand, MachineState, ProbeKind};
+use crate::machine::{
+    homed, BoardConfig, Inputs, Machine, MachineCommand, MachineState, ProbeKind,
+};
 use crate::planner::{Move, Planner};
 use crate::protocol::FaultCode;
 use crate::scenarios::faults::{config, Case};
@@ -10,7 +12,11 @@ use crate::scenarios::faults::{config, Case};
 /// A homed machine of `case`'s config running `moves` (steps on X and Y), everything admitted
 /// and in the DDA.
 fn running(case: Case, moves: &[[i32; 2]]) -> (Machine, Dda, Preparer) {
-    let cfg = config(case);
+    running_with(config(case), moves)
+}
+
+/// [`running`] on the machine config `cfg`.
+fn running_with(cfg: BoardConfig, moves: &[[i32; 2]]) -> (Machine, Dda, Preparer) {
     let (mut m, mut dda, mut prep) = homed(cfg);
     let mut p = Planner::new(&cfg.link.machine);
     for mv in moves {
@@ -104,20 +110,7 @@ fn a_faster_tick_keeps_the_supervision_period_in_time_up_to_its_cap() {
 fn at_a_250_khz_tick_a_quiet_job_takes_a_full_tick_every_20_and_steps_the_same() {
     let mut cfg = config(Case::EStop);
     cfg.link.machine.tick_hz = 250_000;
-    let job = || {
-        let (mut m, mut dda, mut prep) = homed(cfg);
-        let mut p = Planner::new(&cfg.link.machine);
-        for mv in &JOB {
-            p.push(&Move { steps: [mv[0], mv[1], 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
-        }
-        p.finish();
-        while let Some(seg) = p.pop() {
-            m.command(MachineCommand::Queue(&seg), &mut dda).unwrap();
-            dda.push(&prep.prepare(&seg).unwrap()).unwrap();
-        }
-        m.command(MachineCommand::Start, &mut dda).unwrap();
-        (m, dda, prep)
-    };
+    let job = || running_with(cfg, &JOB);
     let period = supervise_ticks(250_000) as usize;
     // The same steps take 2.5 times the ticks.
     let ticks = JOB_TICKS * 3;
