@@ -49,6 +49,8 @@ pub const fn supervise_ticks(tick_hz: u32) -> u8 {
 }
 
 const _: () = assert!(2 * MAX_SUPERVISE_TICKS as u32 <= super::STARVE_MARGIN_VTICKS * 3 / 4);
+// A run's steps fit the step counters' byte lanes (`pending.rs`): at most one per tick.
+const _: () = assert!((MAX_SUPERVISE_TICKS as u32) < 256);
 
 impl Machine {
     /// A step-only tick, if the last full tick found everything quiet and fewer than

@@ -25,7 +25,7 @@ const fn spread4(x: u32) -> u32 {
 }
 
 /// Up and down steps per axis since the last fold: axes 0..3 in word 0's bytes, 4..5 in
-/// word 1's. A byte counts to 255; a run is far shorter (`MAX_SUPERVISE_TICKS`).
+/// word 1's. A byte counts to 255; a run is far shorter (`fast.rs` asserts it).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(super) struct PendingSteps {
     up: [u32; 2],
@@ -33,7 +33,6 @@ pub(super) struct PendingSteps {
 }
 
 const _: () = assert!(MAX_AXES <= 2 * LANES);
-const _: () = assert!((super::fast::MAX_SUPERVISE_TICKS as u32) < 256);
 
 impl PendingSteps {
     pub(super) const fn new() -> Self {
