@@ -4,7 +4,6 @@
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
 use nix::pty::openpty;
-use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
 use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
 use std::fs::File;
 use std::io::{self, Read, Write};
@@ -32,17 +31,11 @@ pub trait Endpoint {
 }
 
 /// A pseudo-terminal; `link` points at its slave side.
-///
-/// Who has the slave open is read from inotify's open and close events on the slave's device
-/// node, not from the master's hang-up: a sender that closes and reopens the port at once
-/// leaves no hang-up to see, yet a real grbl resets (and greets) on every open.
 pub struct Pty {
     master: File,
     slave_name: PathBuf,
     link: PathBuf,
-    watch: Inotify,
-    /// Open file descriptions of the slave (senders may open it more than once).
-    opens: u32,
+    connected: bool,
 }
 
 impl Pty {
@@ -69,25 +62,13 @@ impl Pty {
         std::os::unix::fs::symlink(&slave_name, link).map_err(|e| {
             io::Error::new(e.kind(), format!("cannot create the symlink {}: {e}", link.display()))
         })?;
-        // Our slave fd closes before the watch starts: every open and close it sees is a sender's.
+        // Our slave fd closes here: the master then sees a hang-up until a sender opens it.
         drop(pty.slave);
-        let watch_err = |e: nix::errno::Errno| {
-            io::Error::new(
-                io::Error::from(e).kind(),
-                format!("cannot watch {} for senders opening it: {e}", slave_name.display()),
-            )
-        };
-        let watch =
-            Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).map_err(watch_err)?;
-        watch
-            .add_watch(&slave_name, AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE)
-            .map_err(watch_err)?;
         Ok(Pty {
             master: File::from(pty.master),
             slave_name,
             link: link.to_path_buf(),
-            watch,
-            opens: 0,
+            connected: false,
         })
     }
 
@@ -108,69 +89,44 @@ fn ms(d: Duration) -> PollTimeout {
     PollTimeout::try_from(d.as_millis().min(10_000) as u64).unwrap_or(PollTimeout::ZERO)
 }
 
-impl Pty {
-    /// Opens and closes since the last look, in order: `closed` when the last sender's
-    /// description went, `opened` when one came while none was open (both, for a reopen: the
-    /// session handles `closed` first).
-    fn note_opens(&mut self, input: &mut Input) -> io::Result<()> {
-        let events = match self.watch.read_events() {
-            Ok(events) => events,
-            Err(nix::errno::Errno::EAGAIN) => return Ok(()),
-            Err(e) => return Err(e.into()),
-        };
-        for e in events {
-            if e.mask.contains(AddWatchFlags::IN_OPEN) {
-                input.opened |= self.opens == 0;
-                self.opens += 1;
-            } else if e.mask.intersects(AddWatchFlags::IN_CLOSE) && self.opens > 0 {
-                self.opens -= 1;
-                input.closed |= self.opens == 0;
-            }
-        }
-        Ok(())
-    }
-}
-
 impl Endpoint for Pty {
     fn poll(&mut self, timeout: Duration) -> io::Result<Input> {
         let mut input = Input::default();
-        // The master is watched only while a sender has the slave open: without one it reports
-        // a hang-up at once, for ever.
-        let connected = self.opens > 0;
-        let (watch_ready, master_ready) = {
-            let mut fds = [
-                PollFd::new(self.watch.as_fd(), PollFlags::POLLIN),
-                PollFd::new(self.master.as_fd(), PollFlags::POLLIN),
-            ];
-            let n = if connected { 2 } else { 1 };
-            match poll(&mut fds[..n], ms(timeout)) {
-                Ok(_) => {
-                    let ready =
-                        |f: &PollFd| f.revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
-                    (ready(&fds[0]), connected && ready(&fds[1]))
-                }
-                Err(nix::errno::Errno::EINTR) => (false, false),
+        let revents = {
+            let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
+            match poll(&mut fds, ms(timeout)) {
+                Ok(_) => fds[0].revents().unwrap_or(PollFlags::empty()),
+                Err(nix::errno::Errno::EINTR) => PollFlags::empty(),
                 Err(e) => return Err(e.into()),
             }
         };
-        if master_ready {
+        let hup = revents.contains(PollFlags::POLLHUP);
+        if revents.contains(PollFlags::POLLIN) {
             let mut buf = [0u8; 4096];
             match self.master.read(&mut buf) {
                 Ok(n) => input.data.extend_from_slice(&buf[..n]),
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
-                // EIO: the sender closed the slave; its close event says so.
+                // EIO: no sender has the slave open.
                 Err(e) if e.raw_os_error() == Some(nix::libc::EIO) => {}
                 Err(e) => return Err(e),
             }
         }
-        if watch_ready {
-            self.note_opens(&mut input)?;
+        if hup && input.data.is_empty() {
+            if self.connected {
+                self.connected = false;
+                input.closed = true;
+            } else {
+                std::thread::sleep(timeout.min(Duration::from_millis(20)));
+            }
+        } else if !self.connected {
+            self.connected = true;
+            input.opened = true;
         }
         Ok(input)
     }
 
     fn write(&mut self, bytes: &[u8]) {
-        if self.opens == 0 {
+        if !self.connected {
             return;
         }
         let mut rest = bytes;
@@ -271,53 +227,5 @@ impl Endpoint for Tcp {
 
     fn describe(&self) -> String {
         format!("TCP {}", self.addr)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::fs::OpenOptions;
-
-    /// Polls until something happens (at most 2 s).
-    fn next(pty: &mut Pty) -> Input {
-        for _ in 0..100 {
-            let input = pty.poll(Duration::from_millis(20)).unwrap();
-            if input != Input::default() {
-                return input;
-            }
-        }
-        Input::default()
-    }
-
-    fn port(pty: &Pty) -> File {
-        OpenOptions::new().read(true).write(true).open(pty.slave_name()).unwrap()
-    }
-
-    #[test]
-    fn a_sender_that_closes_and_reopens_at_once_is_seen_leaving_and_coming() {
-        let link = std::env::temp_dir().join(format!("motionctl-pty-{}", std::process::id()));
-        let mut pty = Pty::open(&link).unwrap();
-        assert_eq!(pty.poll(Duration::from_millis(10)).unwrap(), Input::default());
-        let mut sender = port(&pty);
-        assert_eq!(next(&mut pty), Input { opened: true, ..Input::default() });
-        sender.write_all(b"?").unwrap();
-        assert_eq!(next(&mut pty), Input { data: b"?".to_vec(), ..Input::default() });
-        // Closed and opened again before the bridge looks: no hang-up is left to see.
-        drop(sender);
-        let mut sender = port(&pty);
-        assert_eq!(next(&mut pty), Input { opened: true, closed: true, data: Vec::new() });
-        // A second description of the same port (a sender's helper) is not a new sender.
-        let helper = port(&pty);
-        drop(helper);
-        assert_eq!(next(&mut pty), Input::default());
-        pty.write(b"ok\r\n");
-        let mut got = [0u8; 4];
-        sender.read_exact(&mut got).unwrap();
-        assert_eq!(&got, b"ok\r\n");
-        drop(sender);
-        assert_eq!(next(&mut pty), Input { closed: true, ..Input::default() });
-        drop(pty);
-        assert!(std::fs::symlink_metadata(&link).is_err(), "the symlink outlived the bridge");
     }
 }

@@ -224,18 +224,17 @@ impl<'a> Bridge<'a> {
         }
         let wait = if self.busy() { 1 } else { 5 };
         let input = self.ep.poll(Duration::from_millis(wait))?;
-        // A sender that closed and reopened the port in one wait: the old one's leaving first.
-        if input.closed {
-            eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
-            self.stop_motion()?;
-            self.rx.clear();
-        }
         if input.opened {
             eprintln!("motionctl: a sender connected on {}", self.ep.describe());
             self.soft_reset()?;
         }
         for b in input.data {
             self.byte(b)?;
+        }
+        if input.closed {
+            eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
+            self.stop_motion()?;
+            self.rx.clear();
         }
         self.lines()?;
         self.link()?;
