@@ -19,11 +19,13 @@ use heapless::{Deque, Vec};
 
 mod control;
 pub mod edge_stream;
+mod fast;
 pub mod feed_arbiter;
 pub mod lane_kernel_check;
 pub mod lanes;
 mod prepare;
 mod step_output;
+pub use fast::FastRun;
 use feed_arbiter::{FeedArbiter, OverrideSource};
 use lanes::{Lane, Lanes};
 pub use prepare::{Prepared, Preparer};
@@ -36,7 +38,7 @@ const MAX_RATE: u32 = 2 * ONE;
 const RING_MASK: u64 = TIMING_RING_TICKS as u64 - 1;
 /// Prepared segments the DDA holds beyond the active one.
 pub const READY_DEPTH: usize = 4;
-/// Ticks of rising edges the cruise path keeps in `Dda::hist` (a byte each in a u32).
+/// Ticks of rising edges a fast run keeps in `Dda::hist` (a byte each in a u32).
 const HIST_TICKS: u32 = 4;
 /// Tick-stamped commands waiting to take effect.
 pub const MAX_SCHEDULED: usize = 8;
@@ -121,12 +123,18 @@ pub struct Dda {
     budget: u64,
     inv_two_dr: u32,
 
-    // Fast paths. Cruise: ticks left (0: off), ticks it was entered for, and the phase then;
-    // `remaining` and the deceleration budget are brought up to date from these on leaving.
-    // Idle: ticks left (0: off).
+    // Fast paths (`fast.rs`). A run (cruise or ramp): ticks left (0: off), ticks it was
+    // entered for, the phase and rate then, its kind and (tracking) the virtual ticks
+    // run; `remaining` and the deceleration budget are brought up to date from these on
+    // leaving. Idle: ticks left (0: off).
     cruise_ticks: u32,
     cruise_len: u32,
     cruise_phase: u32,
+    run_rate0: u32,
+    /// The rate a tracking run rises to (`min(ovr, cap)` on entry).
+    run_target: u32,
+    run_vticks: u32,
+    run: FastRun,
     /// Rising edges of the last [`HIST_TICKS`] ticks while cruising, newest in the low byte.
     hist: u32,
     /// DIR levels in [`StepOutput`]'s place; DIR cannot change during a cruise.
@@ -193,6 +201,10 @@ impl Dda {
             cruise_ticks: 0,
             cruise_len: 0,
             cruise_phase: 0,
+            run_rate0: 0,
+            run_target: 0,
+            run_vticks: 0,
+            run: FastRun::Cruise,
             hist: 0,
             cruise_dir: 0,
             idle_ticks: 0,
@@ -226,10 +238,13 @@ impl Dda {
         if self.cruise_ticks != 0 {
             self.cruise_ticks -= 1;
             // Direct calls (no function pointer): the divide check follows every one.
-            return if self.wide {
-                self.cruise_tick::<true>()
-            } else {
-                self.cruise_tick::<false>()
+            return match (self.run, self.wide) {
+                (FastRun::Cruise, true) => self.cruise_tick::<true>(),
+                (FastRun::Cruise, false) => self.cruise_tick::<false>(),
+                (FastRun::Accelerate, true) => self.accelerate_tick::<true>(),
+                (FastRun::Accelerate, false) => self.accelerate_tick::<false>(),
+                (FastRun::Track, true) => self.track_tick::<true>(),
+                (FastRun::Track, false) => self.track_tick::<false>(),
             };
         }
         if self.idle_ticks != 0 {
@@ -238,54 +253,6 @@ impl Dda {
             return StepOutput::new(0, 0, self.dir, 0);
         }
         self.full_tick()
-    }
-
-    /// A tick at a settled rate (<= 1.0) with one-tick pulses, no gate and no command due, at
-    /// least a virtual tick before the segment ends or deceleration could begin: exactly what
-    /// [`Dda::full_tick`] would do there, without re-deriving the rate. Only the phase (held
-    /// as `phase - ONE`, wrapping, while cruising), the lanes and `hist` change: `now`,
-    /// `remaining`, the budget and the edge ring are brought up to date on leaving (see
-    /// [`Dda::leave_fast`]). One instance per lane count
-    /// (`WIDE`: six lanes), picked on entering the cruise. Out of line: the idle path stays
-    /// free of the register saves the lane kernel needs.
-    #[inline(never)]
-    fn cruise_tick<const WIDE: bool>(&mut self) -> StepOutput {
-        let hist = self.hist;
-        // One-tick pulses: what rose last tick (the low byte) falls now.
-        let fall = hist & 0xff;
-        // The phase is kept less ONE here: the add carries exactly when a virtual tick is due.
-        let (p, vtick) = self.phase.overflowing_add(self.rate);
-        if !vtick {
-            self.phase = p;
-            self.hist = hist << 8;
-            return StepOutput::falling(fall, self.cruise_dir);
-        }
-        self.phase = p.wrapping_sub(ONE);
-        let rise = lanes::step(&mut self.lanes, WIDE, self.minus_t);
-        // `rise` has no bits past the low byte, so this is `rise & fall`.
-        if rise & hist != 0 {
-            return self.cruise_too_soon(fall as u8, rise as u8);
-        }
-        self.hist = (hist << 8) | rise;
-        StepOutput::falling(fall, self.cruise_dir).with_rise(rise)
-    }
-
-    /// Virtual ticks the cruise path has run: its phase advanced by `rate` every tick.
-    fn cruise_vticks(&self) -> u32 {
-        let ticks = self.cruise_elapsed() as u64;
-        ((self.cruise_phase as u64 + ticks * self.rate as u64) >> RATE_FRAC_BITS) as u32
-    }
-
-    /// A step due while the axis's last pulse is still too close: finished as the full tick
-    /// would (held back, released when allowed).
-    #[cold]
-    #[inline(never)]
-    fn cruise_too_soon(&mut self, fall: u8, rise: u8) -> StepOutput {
-        // This tick's edges are settled below, in the rebuilt ring.
-        self.hist <<= 8;
-        self.leave_fast();
-        let slot = (self.now & RING_MASK) as usize;
-        self.settle_edges(slot, fall, rise, rise & fall)
     }
 
     /// The end of every tick that left the fast paths: steps due too soon are held back, gates
@@ -302,88 +269,6 @@ impl Dda {
         }
         self.ring[slot] = rise;
         StepOutput::new(fall, dir_write, self.dir, rise)
-    }
-
-    /// Ticks the cruise path has run (the current one included while it runs).
-    fn cruise_elapsed(&self) -> u32 {
-        self.cruise_len - self.cruise_ticks
-    }
-
-    /// Leaves a fast path; after cruising, brings `now`, `remaining`, the budget and the edge
-    /// ring up to date. The ring gets the last [`HIST_TICKS`] ticks from `hist` and zeros
-    /// before them: with one-tick pulses and at most [`HIST_TICKS`] ticks of DIR hold, nothing
-    /// reads further back (see [`Dda::try_cruise`]).
-    #[inline]
-    fn leave_fast(&mut self) {
-        if self.cruise_len != 0 {
-            let vticks = self.cruise_vticks();
-            self.remaining -= vticks;
-            self.budget -= vticks as u64 * self.two_dr;
-            self.now += self.cruise_elapsed() as u64;
-            self.phase = self.phase.wrapping_add(ONE);
-            self.ring = [0; TIMING_RING_TICKS as usize];
-            for back in 0..HIST_TICKS {
-                self.ring[(self.now.wrapping_sub(back as u64) & RING_MASK) as usize] =
-                    (self.hist >> (8 * back)) as u8;
-            }
-            self.cruise_len = 0;
-            self.cruise_ticks = 0;
-        }
-        self.idle_ticks = 0;
-    }
-
-    fn ticks_until_command(&self) -> u32 {
-        self.next_due.saturating_sub(self.now + 1).min(u32::MAX as u64) as u32
-    }
-
-    /// After an idle full tick: idle ticks output nothing at all until a command is due or a
-    /// segment is pushed, once no pulse is still in flight.
-    #[cold]
-    #[inline(never)]
-    fn try_idle(&mut self) {
-        let until_command = self.ticks_until_command();
-        if self.cruise_enabled && until_command != 0 && self.ring.iter().all(|&r| r == 0) {
-            self.idle_ticks = until_command;
-        }
-    }
-
-    /// After a moving full tick: cruise while nothing can change for a known number of ticks.
-    #[cold]
-    #[inline(never)]
-    fn try_cruise(&mut self) {
-        if !self.cruise_enabled || self.remaining == 0 {
-            return;
-        }
-        let until_command = self.ticks_until_command();
-        let settled = self.rate == self.ovr.min(self.cap) && self.rate_sq < self.budget;
-        if !settled || self.rate > ONE || self.gated != 0 || self.holding {
-            return;
-        }
-        if self.timing.pulse_ticks != 1 || self.timing.hold_ticks > HIST_TICKS {
-            return;
-        }
-        // Virtual ticks before rate_sq >= budget could hold: floor((budget - rate_sq) / 2dr),
-        // from below through the reciprocal. At most one virtual tick passes per tick, so n - 1
-        // ticks stay short of both that point and the segment's last virtual tick, which the
-        // full tick handles.
-        let diff = self.budget - self.rate_sq;
-        let inv = self.inv_two_dr as u64;
-        let n = (diff >> 32) * inv + (((diff & 0xffff_ffff) * inv) >> 32);
-        let n = n.min(self.remaining as u64) as u32;
-        let ticks = n.saturating_sub(1).min(until_command);
-        if ticks == 0 {
-            return;
-        }
-        self.cruise_len = ticks;
-        self.cruise_ticks = ticks;
-        self.cruise_phase = self.phase;
-        self.phase = self.phase.wrapping_sub(ONE);
-        self.cruise_dir = StepOutput::dir_bits(self.dir);
-        self.hist = 0;
-        for back in (0..HIST_TICKS).rev() {
-            let rise = self.ring[(self.now.wrapping_sub(back as u64) & RING_MASK) as usize];
-            self.hist = (self.hist << 8) | rise as u32;
-        }
     }
 
     /// The complete tick: commands, segment changes, ramps, gates. Kept out of line so the
@@ -432,7 +317,7 @@ impl Dda {
             }
         }
         let out = self.settle_edges(slot, fall, rise, rise & self.recent_rises());
-        self.try_cruise();
+        self.try_fast_run();
         out
     }
 

@@ -178,7 +178,7 @@ proptest! {
     }
 }
 
-/// The cruise fast path and the full tick produce the same pins, tick for tick, through ramps,
+/// The fast runs (cruise and ramps) and the full tick produce the same pins, tick for tick, through ramps,
 /// junctions, overrides, holds, commands scheduled ahead and commands applied between ticks.
 #[test]
 fn cruise_fast_path_equals_the_full_tick() {
@@ -190,6 +190,8 @@ fn cruise_fast_path_equals_the_full_tick() {
     );
     let mut runner = TestRunner::new(Config { cases: 96, ..Config::default() });
     let cases_cruising = std::cell::Cell::new(0u32);
+    // Cases in which each kind of run (cruise, accelerate, track) ran.
+    let cases_by_kind = std::cell::Cell::new([0u32; 3]);
     runner
         .run(&strategy, |(segs, cmds, immediate)| {
             let c = cfg(2_500, 5_000, 5_000);
@@ -204,6 +206,7 @@ fn cruise_fast_path_equals_the_full_tick() {
             }
             let mut next = 0;
             let mut cruising = 0u64;
+            let mut kinds = [false; 3];
             while fast.now() < 3_000_000 {
                 while next < segs.len() && fast.ready_free() > 0 {
                     fast.push(&pf.prepare(&segs[next]).unwrap()).unwrap();
@@ -230,17 +233,28 @@ fn cruise_fast_path_equals_the_full_tick() {
                 }
                 prop_assert!(!full.in_cruise());
                 cruising += fast.in_cruise() as u64;
+                if let Some(kind) = fast.fast_run() {
+                    kinds[kind as usize] = true;
+                }
             }
             prop_assert_eq!(fast.positions(), full.positions());
             prop_assert!(fast.is_idle() && full.is_idle());
             if cruising > 0 {
                 cases_cruising.set(cases_cruising.get() + 1);
             }
+            let mut by_kind = cases_by_kind.get();
+            for (n, ran) in by_kind.iter_mut().zip(kinds) {
+                *n += ran as u32;
+            }
+            cases_by_kind.set(by_kind);
             Ok(())
         })
         .unwrap();
     // About a third of these random jobs settle somewhere; the comparison must cover those.
     assert!(cases_cruising.get() >= 24, "fast path ran in only {} cases", cases_cruising.get());
+    // Ramps are most of a short segment's ticks: both kinds must be covered as well.
+    let [_, up, track] = cases_by_kind.get();
+    assert!(up >= 24 && track >= 24, "accelerating runs in {up} cases, tracking in {track}");
 }
 
 #[test]

@@ -44,7 +44,7 @@ impl Dda {
         };
         let exit_sq = (self.seg_exit as u64 * self.seg_exit as u64) >> RATE_FRAC_BITS;
         // budget = exit^2 + 2 dr * left; stopping from `rate` takes rate^2 / (2 dr) of `left`.
-        self.rate_sq + exit_sq + margin_vticks as u64 * self.two_dr >= budget
+        self.live_rate_sq() + exit_sq + margin_vticks as u64 * self.two_dr >= budget
     }
 
     pub fn ready_free(&self) -> usize {
@@ -158,12 +158,12 @@ impl Dda {
         self.deferred_steps
     }
 
-    /// True while ticks take the cruise fast path.
+    /// True while ticks take a fast run (cruise or ramp, [`Dda::fast_run`]).
     pub fn in_cruise(&self) -> bool {
         self.cruise_ticks != 0
     }
 
-    /// Runs every tick through the full path. The cruise fast path must be indistinguishable
+    /// Runs every tick through the full path. The fast runs must be indistinguishable
     /// from it; tests compare the two.
     pub fn disable_cruise_path(&mut self) {
         self.leave_fast();

@@ -428,13 +428,16 @@ How these are measured:
   for the DMA's half interrupt), traced the same way on a job of four axes at 250 kHz each from
   a 500 kHz slot clock with 1-tick (1 us) pulses (`cargo xtask isr-profile streamed`). Each
   handler run fills a half buffer of 40 slots, one machine tick per slot, and must end before
-  the DMA has played the other half: 40 slots = 13 440 cycles at 500 kHz. Over the fills that
-  moved: `stream_fill_cycles_max` the longest, `step_rate_max_hz_per_axis` half the slot clock
+  the DMA has played the other half: 40 slots = 13 440 cycles at 500 kHz. Over the fills of
+  job motion (the DDA ran, the machine quiet: not homing, at most 10 full machine ticks in
+  the fill): `stream_fill_cycles_max` the longest, `step_rate_max_hz_per_axis` half the slot clock
   it holds (168 MHz x 40 / that, at most 500 kHz), `_aggregate` four axes at that rate,
   `stream_cycles_per_slot_mean` and `stream_cpu_percent_500khz` the mean fill per slot and its
-  share of the core at 500 kHz. `stream_fill_cycles_max_full_ticks`: the longest fill with no
-  motion, the boot's (the machine in Fault until the host sends a config, at the safe default's
-  50 kHz): a state that runs a full tick on every slot, which at 500 kHz does not fit its half
+  share of the core at 500 kHz. `stream_fill_cycles_max_full_ticks`: the longest of the other
+  fills, while the machine homes, is not quiet or nothing moves (the boot's: the machine in
+  Fault until the host sends a config, at the safe default's 50 kHz; the homing before the job
+  and its end, at 500 kHz): states that run a full tick on every slot, which at 500 kHz does
+  not fit its half
   (the F405's stream driver waits for that: a late fill on a board lets the DMA play the last
   half's words again). The board can time its own handler: the link firmware built with the
   `isr-cycles` feature reads its cycle counter on entry and before return and logs a histogram

@@ -50,7 +50,10 @@ const JOB_TIMEOUT: Duration = Duration::from_secs(20 * 60);
 /// How a tick is classified: the first situation whose functions ran in it (in this order);
 /// a tick where none ran is "idle". A function counts when its name, or the name of a function
 /// inlined into the instruction, contains one of the patterns.
-const SITUATIONS: [(&str, &[&str]); 5] = [
+const SITUATIONS: [(&str, &[&str]); 6] = [
+    // The machine's homing watch runs on full ticks only, and a homing machine takes no
+    // step-only ones: its ticks are the supervision's, whatever the DDA did in them.
+    (HOMING, &["::watch_homing"]),
     ("segment change", &["Dda::load_next", "Dda::finish_segment"]),
     ("command", &["Dda::run_due_commands"]),
     (
@@ -67,10 +70,18 @@ const SITUATIONS: [(&str, &[&str]); 5] = [
             "wire::link_job::",
         ],
     ),
-    ("ramp", &["Dda::full_tick"]),
-    ("cruise", &["Dda::cruise_tick"]),
+    // The fast runs live in `motion::dda::fast`, whose symbols name the impl, not `Dda::`.
+    ("ramp", &["Dda::full_tick", "::accelerate_tick", "::track_tick"]),
+    ("cruise", &["::cruise_tick"]),
 ];
 const IDLE: &str = "idle";
+const HOMING: &str = "homing";
+/// The machine's full tick, out of line in the stream build: its entries per fill tell a fill
+/// the machine supervised slot by slot from one of job motion.
+const FULL_TICK_FN: &str = "Machine::tick_with";
+/// More full machine ticks than this in a fill: the machine supervised its slots (a quiet one
+/// takes one per `supervise_ticks`, 2 per fill at 500 kHz, plus one per host command).
+const SUPERVISED_FULL_TICKS: u32 = board_contract::STREAM_SLOTS as u32 / 4;
 
 /// One profiled job.
 struct Job {
@@ -233,6 +244,9 @@ fn profile_job(
         let reader = scope.spawn(|| -> Result<Pair<'_>> {
             let keep = std::env::var_os(PCS_ENV).is_some();
             let mut a = trace::Analyzer::new(prog, entry, &markers).keep_pcs(keep);
+            if job.stream && !a.count_entries(FULL_TICK_FN) {
+                println!("  note: no `{FULL_TICK_FN}` in the ELF: fills are not told apart by it");
+            }
             let mut force = trace::Analyzer::new(prog, force_entry, &[]);
             let f = std::fs::File::open(&fifo).context("opening the trace FIFO")?;
             a.read(BufReader::with_capacity(1 << 20, f), job.max_ticks, &capped, &mut force)?;
@@ -321,7 +335,7 @@ fn profile_job(
 
 /// Set to a directory: each job also writes `<job>-idle.pcs` and `<job>-busy.pcs` (`PC COUNT`
 /// per line, hex PC) for `llvm-symbolizer` to map onto source lines, and `<job>-longest.pcs`
-/// (the longest tick's PCs in execution order).
+/// (the longest tick's PCs in execution order, of the ticks in which a situation's function ran).
 const PCS_ENV: &str = "ISR_PROFILE_PCS";
 
 fn write_pcs(dir: &Path, job: &str, a: &trace::Analyzer<'_>) -> Result<()> {
@@ -481,19 +495,23 @@ fn figures(all_profiles: &[JobProfile]) -> Result<Figures> {
 
 /// The streamed output's figures from its job's fills: each handler run ticks
 /// [`STREAM_SLOTS`] slots, and the DMA plays the other half meanwhile, so a fill must end
-/// within [`STREAM_SLOTS`] slot periods. Over the fills that moved (a DDA function ran): the
-/// slot clock the longest holds (at most [`motion::config::MAX_STREAM_TICK_HZ`]) gives the step
-/// rate, one step per axis every other slot, and the mean fill's share of the core at the
-/// stream's fastest clock the CPU figure. The fills with no motion are reported apart: they
-/// include the boot's, at the safe default's 50 kHz, where the machine (in Fault until the host
-/// sends a config) runs a full tick on every slot.
+/// within [`STREAM_SLOTS`] slot periods. Over the fills of job motion (a DDA function ran, the
+/// machine not homing): the slot clock the longest holds (at most
+/// [`motion::config::MAX_STREAM_TICK_HZ`]) gives the step rate, one step per axis every other
+/// slot, and the mean fill's share of the core at the stream's fastest clock the CPU figure.
+/// The fills in which the machine supervises its slots are reported apart: homing (the run
+/// homes first), more than [`SUPERVISED_FULL_TICKS`] full machine ticks (the machine not quiet:
+/// a freeze at the end of homing, an input changing) and no motion, which includes the boot's
+/// at the safe default's 50 kHz, where the machine (in Fault until the host sends a config) runs
+/// a full tick on every slot.
 fn stream_figures(p: &JobProfile) -> (Vec<(&'static str, f64)>, String) {
+    let supervised = |i: &&trace::Instance| {
+        matches!(JobProfile::situation(i), IDLE | HOMING) || i.entries > SUPERVISED_FULL_TICKS
+    };
     let moving: Vec<u32> =
-        p.instances.iter().filter(|i| JobProfile::situation(i) != IDLE).map(|i| i.cycles).collect();
+        p.instances.iter().filter(|i| !supervised(i)).map(|i| i.cycles).collect();
     let c = Stats::of(moving);
-    let still = Stats::of(
-        p.instances.iter().filter(|i| JobProfile::situation(i) == IDLE).map(|i| i.cycles).collect(),
-    );
+    let still = Stats::of(p.instances.iter().filter(supervised).map(|i| i.cycles).collect());
     let max_slot_hz = motion::config::MAX_STREAM_TICK_HZ as f64;
     let held_hz = max_slot_hz.min(STREAM_SLOTS * CORE_HZ / (c.max.max(1) as f64));
     let per_axis = (held_hz * STEPS_PER_TICK_PER_AXIS).floor();
@@ -512,8 +530,8 @@ fn stream_figures(p: &JobProfile) -> (Vec<(&'static str, f64)>, String) {
         "Streamed step output ({}): {} fills of {} slots that moved, at {} kHz; cycles per fill \
          min / median / p99 / max {} / {} / {} / {} (a fill's budget at {} kHz: {:.0} cycles); \
          mean {:.1} cycles per slot, {:.1} % of the core; the longest holds a {:.0} kHz slot \
-         clock. {} fills with no motion: median {}, max {} cycles (the max: full ticks on every \
-         slot, {:.1} per slot).\n\n",
+         clock. {} fills homing, with the machine not quiet or with no motion: median {}, max {} \
+         cycles (the max: {:.1} per slot).\n\n",
         p.name,
         c.n,
         STREAM_SLOTS,

@@ -23,6 +23,8 @@ pub struct Instance {
     pub marks: u32,
     /// A VFP instruction ran (lazy FP stacking would add to the entry).
     pub fp: bool,
+    /// Entries into the counted functions ([`Analyzer::count_entries`]).
+    pub entries: u32,
 }
 
 /// Per-handler analysis state, fed one PC at a time.
@@ -48,6 +50,8 @@ pub struct Analyzer<'p> {
     pub pcs_longest: Vec<u32>,
     longest_cycles: u32,
     keep_pcs: bool,
+    /// First instructions of the functions whose calls [`Instance::entries`] counts.
+    entry_pcs: std::collections::HashSet<u32>,
     current: Option<Current>,
 }
 
@@ -95,6 +99,7 @@ impl<'p> Analyzer<'p> {
             pcs_longest: Vec::new(),
             longest_cycles: 0,
             keep_pcs: false,
+            entry_pcs: Default::default(),
             current: None,
         }
     }
@@ -103,6 +108,17 @@ impl<'p> Analyzer<'p> {
     pub fn keep_pcs(mut self, yes: bool) -> Self {
         self.keep_pcs = yes;
         self
+    }
+
+    /// Counts, per instance, the entries into the out-of-line functions whose names contain
+    /// `pattern`; false when there is none.
+    pub fn count_entries(&mut self, pattern: &str) -> bool {
+        for s in self.prog.symbols() {
+            if s.name.contains(pattern) {
+                self.entry_pcs.insert(s.addr);
+            }
+        }
+        !self.entry_pcs.is_empty()
     }
 
     /// Markers whose functions exist in the ELF (a renamed function would silently never mark).
@@ -194,7 +210,8 @@ impl<'p> Analyzer<'p> {
                     for &a in &cur.pcs {
                         *to.entry(a).or_insert(0) += 1;
                     }
-                    if self.keep_pcs && cur.inst.cycles > self.longest_cycles {
+                    if self.keep_pcs && cur.inst.marks != 0 && cur.inst.cycles > self.longest_cycles
+                    {
                         self.longest_cycles = cur.inst.cycles;
                         self.pcs_longest = std::mem::take(&mut cur.pcs);
                     }
@@ -230,6 +247,9 @@ impl<'p> Analyzer<'p> {
         cur.inst.fp |= insn.fp;
         if let Some(m) = self.marks.get(&pc) {
             cur.inst.marks |= m;
+        }
+        if self.entry_pcs.contains(&pc) {
+            cur.inst.entries += 1;
         }
         let f = self.prog.symbol_at(pc).map_or(pc, |s| s.addr);
         *self.per_function.entry(f).or_insert(0) += 1;
