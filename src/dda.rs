@@ -26,6 +26,7 @@ pub mod lanes;
 mod prepare;
 mod step_output;
 pub use fast::FastRun;
+use fast::RunFn;
 use feed_arbiter::{FeedArbiter, OverrideSource};
 use lanes::{Lane, Lanes};
 pub use prepare::{Prepared, Preparer};
@@ -135,6 +136,8 @@ pub struct Dda {
     run_target: u32,
     run_vticks: u32,
     run: FastRun,
+    /// The run's tick function (kind and lane count in one byte: one dispatch per tick).
+    run_fn: RunFn,
     /// Rising edges of the last [`HIST_TICKS`] ticks while cruising, newest in the low byte.
     hist: u32,
     /// DIR levels in [`StepOutput`]'s place; DIR cannot change during a cruise.
@@ -205,6 +208,7 @@ impl Dda {
             run_target: 0,
             run_vticks: 0,
             run: FastRun::Cruise,
+            run_fn: RunFn::CruiseNarrow,
             hist: 0,
             cruise_dir: 0,
             idle_ticks: 0,
@@ -238,13 +242,13 @@ impl Dda {
         if self.cruise_ticks != 0 {
             self.cruise_ticks -= 1;
             // Direct calls (no function pointer): the divide check follows every one.
-            return match (self.run, self.wide) {
-                (FastRun::Cruise, true) => self.cruise_tick::<true>(),
-                (FastRun::Cruise, false) => self.cruise_tick::<false>(),
-                (FastRun::Accelerate, true) => self.accelerate_tick::<true>(),
-                (FastRun::Accelerate, false) => self.accelerate_tick::<false>(),
-                (FastRun::Track, true) => self.track_tick::<true>(),
-                (FastRun::Track, false) => self.track_tick::<false>(),
+            return match self.run_fn {
+                RunFn::CruiseNarrow => self.cruise_tick::<false>(),
+                RunFn::CruiseWide => self.cruise_tick::<true>(),
+                RunFn::AccelerateNarrow => self.accelerate_tick::<false>(),
+                RunFn::AccelerateWide => self.accelerate_tick::<true>(),
+                RunFn::TrackNarrow => self.track_tick::<false>(),
+                RunFn::TrackWide => self.track_tick::<true>(),
             };
         }
         if self.idle_ticks != 0 {

@@ -34,6 +34,30 @@ pub enum FastRun {
 /// Cruises and climbs shorter than this are tracked instead ([`Dda::try_fast_run`]).
 const MIN_PLAIN_RUN: u64 = 8;
 
+/// A run's kind and lane count together: [`Dda::tick`] dispatches on one byte.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum RunFn {
+    CruiseNarrow,
+    CruiseWide,
+    AccelerateNarrow,
+    AccelerateWide,
+    TrackNarrow,
+    TrackWide,
+}
+
+impl RunFn {
+    fn of(run: FastRun, wide: bool) -> Self {
+        match (run, wide) {
+            (FastRun::Cruise, false) => RunFn::CruiseNarrow,
+            (FastRun::Cruise, true) => RunFn::CruiseWide,
+            (FastRun::Accelerate, false) => RunFn::AccelerateNarrow,
+            (FastRun::Accelerate, true) => RunFn::AccelerateWide,
+            (FastRun::Track, false) => RunFn::TrackNarrow,
+            (FastRun::Track, true) => RunFn::TrackWide,
+        }
+    }
+}
+
 impl Dda {
     /// A cruise tick: the rate is settled. Out of line (as are the ramps): the idle path stays
     /// free of the register saves the lane kernel needs. One instance per lane count (`WIDE`:
@@ -250,6 +274,7 @@ impl Dda {
             return;
         }
         self.run = run;
+        self.run_fn = RunFn::of(run, self.wide);
         self.run_rate0 = rate;
         self.run_target = target;
         self.run_vticks = 0;

@@ -73,7 +73,11 @@ impl QuadratureEncoder {
             window: [0; MAX_WINDOW_TICKS],
             head: 0,
             window_counts: 0,
-            still: 0,
+            // Every slot of the window already holds the position (0) and the timer has not
+            // moved: an update with the same count changes nothing but the window's rotation,
+            // which nothing reads while the slots are equal. So the encoder starts still, and
+            // a board skips its updates until the spindle turns.
+            still: 1 << cfg.window_log2,
             fault: None,
         })
     }
@@ -198,9 +202,20 @@ mod tests {
         let mut e = QuadratureEncoder::new(cfg, 100).unwrap();
         let mut history = vec![0i64];
         let (mut pos, mut count, mut index_at) = (0i64, 100u16, None::<i64>);
-        // Speed per update in counts: runs, stops of 3 windows, a reversal, a stop of 1 tick.
-        let plan: Vec<(i64, usize)> =
-            vec![(3, 500), (0, 48), (7, 900), (0, 1), (-5, 300), (0, 100), (2, 2000), (0, 17)];
+        // Speed per update in counts: a start from still (the encoder starts still), runs,
+        // stops of 3 windows, a reversal, a stop of 1 tick.
+        let plan: Vec<(i64, usize)> = vec![
+            (0, 5),
+            (3, 500),
+            (0, 48),
+            (7, 900),
+            (0, 1),
+            (-5, 300),
+            (0, 100),
+            (2, 2000),
+            (0, 17),
+        ];
+        assert!(e.is_still());
         for (speed, n) in plan {
             for _ in 0..n {
                 let before = pos;

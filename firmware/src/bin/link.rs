@@ -236,16 +236,20 @@ mod app {
         let full = one_tick(&mut cx.local, &mut cx.shared.motion, port, |p, step| p.write(step));
         // The stream's half buffer: one machine tick per slot, each a set/reset word. The
         // supervision below then runs once per fill, whatever the ticks were.
+        // One lock for the whole fill: nothing that shares the motion state can run during a
+        // fill anyway (TIM2 has the ceiling's priority), so a lock per slot only costs time.
         #[cfg(feature = "step-stream")]
         let full = {
             use board_contract::StepStream as _;
             let stream = cx.shared.step_stream;
             let layout = stream.layout();
-            for w in stream.half().iter_mut() {
-                one_tick(&mut cx.local, &mut cx.shared.motion, port, |_, step| {
-                    *w = layout.word(*step)
-                });
-            }
+            let l = &mut cx.local;
+            cx.shared.motion.lock(|m| {
+                let mut held = HeldForFill(m);
+                for w in stream.half().iter_mut() {
+                    one_tick(l, &mut held, port, |_, step| *w = layout.word(*step));
+                }
+            });
             true
         };
         let l = cx.local;
@@ -257,6 +261,21 @@ mod app {
         #[cfg(feature = "isr-cycles")]
         motion_firmware::isr_cycles::BINS
             .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
+    }
+
+    /// The motion state locked once for a whole fill of the streamed output: `one_tick`'s
+    /// own locks are then plain calls.
+    #[cfg(feature = "step-stream")]
+    struct HeldForFill<'a>(&'a mut Motion);
+
+    #[cfg(feature = "step-stream")]
+    impl rtic::Mutex for HeldForFill<'_> {
+        type T = Motion;
+
+        #[inline(always)]
+        fn lock<R>(&mut self, f: impl FnOnce(&mut Motion) -> R) -> R {
+            f(self.0)
+        }
     }
 
     /// One machine tick, its step output to `emit` (the port's write, or the stream's word);
