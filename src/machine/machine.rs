@@ -32,7 +32,9 @@ mod pending;
 mod source;
 mod watch;
 pub use command::{MachineCommand, Refusal};
-pub use fast::{supervise_ticks, MAX_SUPERVISE_TICKS, SUPERVISE_HZ, SUPERVISE_TICKS};
+pub use fast::{
+    supervise_ticks, MAX_SUPERVISE_TICKS, STREAM_SAMPLE_STRIDE, SUPERVISE_HZ, SUPERVISE_TICKS,
+};
 pub use source::{DdaSource, SourceJob, StepSource};
 
 /// Slack, in virtual ticks, between the point where a starved job is held and the last point
@@ -191,6 +193,9 @@ pub struct Machine {
     room_since: u64,
     /// Ticks from one full tick to the next while quiet, at the config's tick rate.
     supervise_ticks: u8,
+    /// The board runs full ticks on every this many ticks at most ([`Machine::held_tick`]
+    /// between them): the input filter counts its samples at that rate.
+    sample_stride: u8,
     /// The probe move (G38.x): armed, watched, its result.
     probe: ProbeRun,
 }
@@ -247,6 +252,7 @@ impl Machine {
             limit_room: 0,
             room_since: 0,
             supervise_ticks: fast::supervise_ticks(cfg.link.machine.tick_hz),
+            sample_stride: 1,
             probe: ProbeRun::new(),
         }
     }
@@ -291,11 +297,18 @@ impl Machine {
         self.state
     }
 
+    /// The input filter's debounce in samples: one per full tick, which comes at most every
+    /// `sample_stride` ticks while inputs change.
+    fn set_filter_ticks(&mut self, cfg: &BoardConfig) {
+        let sample_hz = cfg.link.machine.tick_hz / self.sample_stride as u32;
+        self.switch_filter.set_ticks(cfg.link.inputs.debounce_ticks(sample_hz));
+    }
+
     fn install(&mut self, cfg: BoardConfig) {
         self.limits = SoftLimits::from_scale(&cfg.link.scale, cfg.link.machine.axis_count);
         self.raw_limits = self.limits.minus(&self.offset);
         self.limit_room = 0;
-        self.switch_filter.set_ticks(cfg.link.inputs.debounce_ticks(cfg.link.machine.tick_hz));
+        self.set_filter_ticks(&cfg);
         self.supervise_ticks = fast::supervise_ticks(cfg.link.machine.tick_hz);
         self.cfg = cfg;
         self.config_set = true;

@@ -35,7 +35,8 @@ pub use debounce::SwitchFilter;
 pub use faults::{reaction, FaultLatch, Reaction};
 pub use following::{FollowingConfig, FollowingMonitor};
 pub use machine::{
-    BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, SourceJob, StepSource, TickOut,
+    BootConfig, DdaSource, Inputs, Machine, MachineCommand, Refusal, SourceJob, StepSource,
+    TickOut, STREAM_SAMPLE_STRIDE,
 };
 pub use outputs::{Outputs, Z_DAC_MID_SCALE};
 pub use probe::{ProbeKind, ProbePhase, ProbeRun};

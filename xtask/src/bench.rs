@@ -435,11 +435,10 @@ How these are measured:
   `stream_cycles_per_slot_mean` and `stream_cpu_percent_500khz` the mean fill per slot and its
   share of the core at 500 kHz. `stream_fill_cycles_max_full_ticks`: the longest of the other
   fills, while the machine homes, is not quiet or nothing moves (the boot's: the machine in
-  Fault until the host sends a config, at the safe default's 50 kHz; the homing before the job
-  and its end, at 500 kHz): states that run a full tick on every slot, which at 500 kHz does
-  not fit its half
-  (the F405's stream driver waits for that: a late fill on a board lets the DMA play the last
-  half's words again). The board can time its own handler: the link firmware built with the
+  Fault until the host sends a config; the homing before the job and its end): the machine then
+  runs a full tick on at most every 5th slot (`Machine::held_tick` between), 8 per fill, which
+  must fit the half as well (on a board a late fill lets the DMA play the last half's words
+  again). The board can time its own handler: the link firmware built with the
   `isr-cycles` feature reads its cycle counter on entry and before return and logs a histogram
   every 100 ms over defmt (`firmware/src/isr_cycles.rs`). On an F405 that is DWT CYCCNT, the
   check of this cycle model: `cargo run --release -p motion-firmware --bin link

@@ -126,6 +126,9 @@ mod app {
             defmt::error!("the safe default config is refused: the firmware is broken");
             board::exit(false)
         };
+        // A fill samples the inputs at most every `STREAM_SAMPLE_STRIDE` slots (`fill_slot`).
+        #[cfg(feature = "step-stream")]
+        motion.machine.set_sample_stride(motion::machine::STREAM_SAMPLE_STRIDE);
         let tick_hz = motion.machine.config().link.machine.tick_hz;
         if !tick_rate.set(tick_hz) {
             defmt::error!("tick rate {=u32} Hz not supported by this board", tick_hz);
@@ -219,14 +222,15 @@ mod app {
     ///
     /// With the streamed step output (`step-stream`), TIM2's update is the fill interrupt, once
     /// per `STREAM_SLOTS` slots (the real board's TIM2 counts the slot timer's updates; QEMU's
-    /// runs at the fill rate): the same ticks, one per slot, each a set/reset word into the
-    /// half buffer the DMA has just played, and the overrun check once per fill.
+    /// runs at the fill rate): a tick per slot (`fill_slot`: full ticks at most every
+    /// `STREAM_SAMPLE_STRIDE` slots), each a set/reset word into the half buffer the DMA has
+    /// just played, and the overrun check once per fill.
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port, step_stream],
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: i32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
             overran: bool = false, drivers_on: bool = true,
             plain: bool = false, capability: u8 = 0, spindle_at_rest: bool = false,
-            copy_counts: [i32; 2] = [0; 2]])]
+            copy_counts: [i32; 2] = [0; 2], last_full: i32 = i32::MIN / 2])]
     fn tick(mut cx: tick::Context) {
         #[cfg(feature = "isr-cycles")]
         let entry = board_contract::CycleCounter::now(&*cx.local.cycles);
@@ -246,9 +250,16 @@ mod app {
             let l = &mut cx.local;
             cx.shared.motion.lock(|m| {
                 let mut held = HeldForFill(m);
-                for w in stream.half().iter_mut() {
-                    one_tick(l, &mut held, port, |_, step| *w = layout.word(*step));
+                // The slot of the last full tick, counted from this fill's first (kept in a
+                // register through the fill, carried to the next one below).
+                let mut last_full = *l.last_full;
+                for (slot, w) in stream.half().iter_mut().enumerate() {
+                    let emit = |_: &mut board::StepPort, step: &motion::StepOutput| {
+                        *w = layout.word(*step)
+                    };
+                    fill_slot(l, &mut held, port, slot as i32, &mut last_full, emit);
                 }
+                *l.last_full = last_full.max(-FULL_STRIDE) - board_contract::STREAM_SLOTS as i32;
             });
             true
         };
@@ -262,6 +273,10 @@ mod app {
         motion_firmware::isr_cycles::BINS
             .record(board_contract::CycleCounter::now(&*l.cycles).wrapping_sub(entry));
     }
+
+    /// Slots from one full tick to the next at most, in a fill (`fill_slot`).
+    #[cfg(feature = "step-stream")]
+    const FULL_STRIDE: i32 = motion::machine::STREAM_SAMPLE_STRIDE as i32;
 
     /// The motion state locked once for a whole fill of the streamed output: `one_tick`'s
     /// own locks are then plain calls.
@@ -278,14 +293,63 @@ mod app {
         }
     }
 
-    /// One machine tick, its step output to `emit` (the port's write, or the stream's word);
-    /// true for a full tick (inputs read, the machine's `tick`), false for a step-only one.
+    /// One slot of a fill: a step-only tick when the machine grants one; else a full tick once
+    /// `STREAM_SAMPLE_STRIDE` slots have passed since the last (at once for an e-stop edge or a
+    /// capability's job), and a held tick (`Machine::held_tick`: the DDA and the step counters)
+    /// before that. So a machine that is not quiet (homing, probing, a fault, a switch being
+    /// timed) takes 8 full ticks per 40 slots, not 40, and the fill keeps to its half.
+    #[cfg(feature = "step-stream")]
+    #[inline(always)]
+    fn fill_slot(
+        l: &mut tick::LocalResources<'_>,
+        motion: &mut HeldForFill<'_>,
+        port: &mut board::StepPort,
+        slot: i32,
+        last_full: &mut i32,
+        mut emit: impl FnMut(&mut board::StepPort, &motion::StepOutput),
+    ) {
+        if step_only_tick(l, motion, port, &mut emit) {
+            return;
+        }
+        if slot - *last_full >= FULL_STRIDE || !*l.plain || ESTOP_EDGE.load(Relaxed) {
+            *last_full = slot;
+            full_tick(l, motion, port, emit);
+            return;
+        }
+        // The spindle is read on every tick, as a step-only tick reads it.
+        if !*l.spindle_at_rest {
+            l.spindle.update();
+        }
+        let m = &mut *motion.0;
+        let step = m.machine.held_tick(&mut m.dda);
+        emit(port, &step);
+        *l.wake -= 1;
+    }
+
+    /// One machine tick, its step output to `emit` (the port's write); true for a full tick
+    /// (inputs read, the machine's `tick`), false for a step-only one.
+    #[cfg(not(feature = "step-stream"))]
     #[inline(always)]
     fn one_tick(
         l: &mut tick::LocalResources<'_>,
         motion: &mut impl rtic::Mutex<T = Motion>,
         port: &mut board::StepPort,
         mut emit: impl FnMut(&mut board::StepPort, &motion::StepOutput),
+    ) -> bool {
+        if step_only_tick(l, motion, port, &mut emit) {
+            return false;
+        }
+        full_tick(l, motion, port, emit);
+        true
+    }
+
+    /// A step-only tick if the machine grants one (see below); false: none was run.
+    #[inline(always)]
+    fn step_only_tick(
+        l: &mut tick::LocalResources<'_>,
+        motion: &mut impl rtic::Mutex<T = Motion>,
+        port: &mut board::StepPort,
+        emit: &mut impl FnMut(&mut board::StepPort, &motion::StepOutput),
     ) -> bool {
         // A step-only tick (`Machine::fast_tick`) while the last full tick found nothing but
         // the job's stepping with work: a plain segment job (or none) with the copy encoders
@@ -310,7 +374,7 @@ mod app {
             if let Some(step) = step {
                 emit(port, &step);
                 *l.wake -= 1;
-                return false;
+                return true;
             }
         } else if *l.capability != 0 && !ESTOP_EDGE.load(Relaxed) {
             let which = *l.capability;
@@ -323,9 +387,21 @@ mod app {
             if let Some(step) = step {
                 emit(port, &step);
                 *l.wake -= 1;
-                return false;
+                return true;
             }
         }
+        false
+    }
+
+    /// A full tick: the inputs read, the machine's `tick` (or the capability's), the outputs
+    /// written, whoever has work woken.
+    #[inline(always)]
+    fn full_tick(
+        l: &mut tick::LocalResources<'_>,
+        motion: &mut impl rtic::Mutex<T = Motion>,
+        port: &mut board::StepPort,
+        mut emit: impl FnMut(&mut board::StepPort, &motion::StepOutput),
+    ) {
         let raw = l.io.read();
         let copy_counts = l.copy_encoders.read();
         let inputs = Inputs {
@@ -391,7 +467,6 @@ mod app {
             *l.wake -= 1;
         }
         WATCHDOG.tick_alive();
-        true
     }
 
     /// Force ADC half buffer (real board): the force job's chain per frame, its control law

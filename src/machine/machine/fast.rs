@@ -17,6 +17,14 @@
 //! e-stop's own interrupt has already cut the step drivers, and the board takes a full tick as
 //! soon as it has fired. Soft limits still hold on every step: near one the runs shorten, down to full ticks. The job bookkeeping runs on
 //! every full tick in this mode, so it keeps its [`JOB_WATCH_TICKS`] period and the starve margin.
+//!
+//! A board whose ticks cannot all afford a full one (a streamed step output's fill at 500 kHz)
+//! runs full ticks on at most every [`STREAM_SAMPLE_STRIDE`]-th tick while the machine is not
+//! quiet, and [`Machine::held_tick`]s between: the DDA and the step counters with the soft
+//! limits checked on every step, nothing when frozen. The inputs are then sampled every
+//! [`STREAM_SAMPLE_STRIDE`] ticks and the switch debounce counts those samples
+//! ([`Machine::set_sample_stride`]); homing, probing and jog-off see their switch up to that
+//! many ticks later (10 us at 500 kHz).
 
 use super::{DdaSource, Inputs, Machine, StepSource, JOB_WATCH_TICKS};
 use crate::dda::{Dda, StepOutput};
@@ -48,7 +56,14 @@ pub const fn supervise_ticks(tick_hz: u32) -> u8 {
     }
 }
 
+/// A streamed step output's fill runs a full tick on at most every this many slots while the
+/// machine is not quiet ([`Machine::held_tick`] between): 8 full ticks of a 40-slot fill, whose
+/// cost (700 to 900 cycles each) and the held ticks' then fit a half at a 500 kHz slot clock,
+/// where a full tick on every slot does not. Inputs are then sampled every 10 us.
+pub const STREAM_SAMPLE_STRIDE: u8 = 5;
+
 const _: () = assert!(2 * MAX_SUPERVISE_TICKS as u32 <= super::STARVE_MARGIN_VTICKS * 3 / 4);
+const _: () = assert!(STREAM_SAMPLE_STRIDE <= MAX_SUPERVISE_TICKS);
 // A run's steps fit the step counters' byte lanes (`pending.rs`): at most one per tick.
 const _: () = assert!((MAX_SUPERVISE_TICKS as u32) < 256);
 
@@ -98,6 +113,37 @@ impl Machine {
             self.pending.add(step.rise(), step.dir());
         }
         Some(step)
+    }
+
+    /// For a board that runs a full tick on at most every `stride`-th tick and
+    /// [`Machine::held_tick`]s between them (a streamed step output's fill, whose slots cannot
+    /// all afford one): the input filter's debounce is counted in those samples from now on.
+    pub fn set_sample_stride(&mut self, stride: u8) {
+        self.sample_stride = stride.max(1);
+        let cfg = self.cfg;
+        self.set_filter_ticks(&cfg);
+    }
+
+    /// A tick between two full ticks of a board that runs them only every
+    /// [`Machine::set_sample_stride`] ticks, when no step-only run was granted: the DDA and the
+    /// step counters, with the soft limits checked on every step as the full tick does. The
+    /// inputs, holds and the state's watches (homing, probing, jog-off, the job's books) wait
+    /// for the next full tick, at most `stride - 1` ticks away; a frozen machine steps nothing.
+    /// A plain job's ticks only (the DDA's steps): a capability's job takes full ticks.
+    #[inline]
+    pub fn held_tick(&mut self, dda: &mut Dda) -> StepOutput {
+        self.ticks += 1;
+        if self.frozen {
+            return StepOutput::new(0, 0, self.last_dir, 0);
+        }
+        // The soft-limit check reads `raw`: the step-only ticks' lanes go in first.
+        self.pending.fold_into(&mut self.raw);
+        let step = DdaSource.tick(dda, self.paused);
+        self.last_dir = step.dir();
+        if step.rise() != 0 {
+            self.count(step);
+        }
+        step
     }
 
     /// The next tick may be a step-only one ([`Machine::fast_tick`] would step): a board that

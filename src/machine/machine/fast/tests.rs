@@ -1,6 +1,6 @@
 //! The step-only tick against the full tick: the same steps, faults seen within its bound.
 
-use super::{supervise_ticks, MAX_SUPERVISE_TICKS, SUPERVISE_TICKS};
+use super::{supervise_ticks, MAX_SUPERVISE_TICKS, STREAM_SAMPLE_STRIDE, SUPERVISE_TICKS};
 use crate::dda::{Dda, Preparer, StepOutput};
 use crate::machine::{
     homed, BoardConfig, Inputs, Machine, MachineCommand, MachineState, ProbeKind,
@@ -39,6 +39,8 @@ struct Run {
     first_fast: Option<usize>,
     /// The tick on which the machine left `Running`.
     left_running: Option<usize>,
+    /// Held ticks ([`run_strided`]).
+    held: usize,
 }
 
 /// Ticks `ticks` times as the link firmware does (`fast`: a step-only tick whenever the machine
@@ -49,7 +51,8 @@ fn run(
     fast: bool,
     inputs: impl Fn(usize) -> Inputs,
 ) -> (Run, Machine) {
-    let mut r = Run { steps: Vec::new(), fast_ticks: 0, first_fast: None, left_running: None };
+    let mut r =
+        Run { steps: Vec::new(), fast_ticks: 0, first_fast: None, left_running: None, held: 0 };
     for t in 0..ticks {
         let step = match if fast { m.fast_tick(&mut dda) } else { None } {
             Some(s) => {
@@ -263,4 +266,134 @@ fn the_sensor_is_read_once_on_every_tick_whichever_path_runs_it() {
     }
     assert_eq!(reads, fast_ticks + full_ticks);
     assert!(fast_ticks > 0 && full_ticks > 0, "{fast_ticks} step-only, {full_ticks} full ticks");
+}
+
+/// Full ticks at most every `stride` ticks, as a streamed output's fill runs them: a step-only
+/// tick when granted, else a full tick once `stride` ticks have passed since the last one, and
+/// held ticks between. The background (an abort after an immediate stop) runs after each fill of
+/// [`FILL_TICKS`], as the feeder task does: a frozen machine stays frozen through the held
+/// ticks up to there.
+fn run_strided(
+    (mut m, mut dda, mut prep): (Machine, Dda, Preparer),
+    ticks: usize,
+    stride: usize,
+    inputs: impl Fn(usize) -> Inputs,
+) -> (Run, Machine) {
+    m.set_sample_stride(stride as u8);
+    let mut r =
+        Run { steps: Vec::new(), fast_ticks: 0, first_fast: None, left_running: None, held: 0 };
+    let mut since_full = stride;
+    for t in 0..ticks {
+        let step = match m.fast_tick(&mut dda) {
+            Some(s) => {
+                r.fast_ticks += 1;
+                since_full += 1;
+                s
+            }
+            None if since_full >= stride => {
+                since_full = 1;
+                m.tick(&mut dda, &inputs(t)).step
+            }
+            None => {
+                since_full += 1;
+                r.held += 1;
+                m.held_tick(&mut dda)
+            }
+        };
+        r.steps.push(step);
+        if m.state() != MachineState::Running && r.left_running.is_none() {
+            r.left_running = Some(t);
+        }
+        if t % FILL_TICKS == FILL_TICKS - 1 && m.wants_background() {
+            m.background(&mut dda, &mut prep);
+        }
+    }
+    (r, m)
+}
+
+const STRIDE: usize = STREAM_SAMPLE_STRIDE as usize;
+/// Slots per fill of the streamed output.
+const FILL_TICKS: usize = 40;
+
+#[test]
+fn with_full_ticks_every_5th_a_job_steps_exactly_as_with_full_ticks() {
+    let (plain, pm) = run(running(Case::EStop, &JOB), JOB_TICKS, false, |_| Inputs::QUIET);
+    let (held, hm) = run_strided(running(Case::EStop, &JOB), JOB_TICKS, STRIDE, |_| Inputs::QUIET);
+    assert_same_pins(&held.steps, &plain.steps);
+    assert_eq!(hm.positions(), pm.positions());
+    assert_eq!(hm.state(), MachineState::Ready);
+}
+
+#[test]
+fn with_full_ticks_every_5th_a_limit_switch_is_seen_within_a_supervision_period_and_stops_all() {
+    for close_at in [1_000usize, 1_003, 5_557] {
+        let inputs =
+            |t: usize| Inputs { limit_max: if t >= close_at { 1 } else { 0 }, ..Inputs::QUIET };
+        // No debounce: the switch acts on the sample that reads it.
+        let mut cfg = config(Case::EStop);
+        cfg.link.inputs.switch_debounce_us = 0;
+        let (plain, pm) = run(running_with(cfg, &JOB), 20_000, false, inputs);
+        let (held, hm) = run_strided(running_with(cfg, &JOB), 20_000, STRIDE, inputs);
+        for m in [&pm, &hm] {
+            assert_eq!(m.state(), MachineState::Fault);
+            assert!(m.faults().has(FaultCode::LimitSwitch));
+        }
+        let (tp, th) = (plain.left_running.unwrap(), held.left_running.unwrap());
+        // A step-only run granted just before may delay the full tick that sees it.
+        let bound = SUPERVISE_TICKS as usize;
+        assert!(th >= tp && th - tp < bound, "close {close_at}: {tp} {th}");
+        assert_same_pins(&held.steps[..tp], &plain.steps[..tp]);
+        assert!(held.steps[th + 1..].iter().all(|s| s.rise() == 0), "close {close_at}");
+        assert!(held.held > 0, "close {close_at}: no held tick");
+    }
+}
+
+#[test]
+fn with_full_ticks_every_5th_a_soft_limit_latches_on_the_tick_it_is_crossed() {
+    let cfg = config(Case::SoftLimitRun);
+    let build = || {
+        let (mut m, mut dda, mut prep) = homed(cfg);
+        let mut p = Planner::new(&cfg.link.machine);
+        p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+        p.finish();
+        m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
+        let mut p = Planner::new(&cfg.link.machine);
+        p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+        p.finish();
+        dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
+        m.command(MachineCommand::Start, &mut dda).unwrap();
+        (m, dda, prep)
+    };
+    let (plain, pm) = run(build(), 200_000, false, |_| Inputs::QUIET);
+    let (held, hm) = run_strided(build(), 200_000, STRIDE, |_| Inputs::QUIET);
+    assert!(pm.faults().has(FaultCode::SoftLimit) && hm.faults().has(FaultCode::SoftLimit));
+    assert_eq!(held.left_running, plain.left_running);
+    assert_eq!(hm.positions(), pm.positions());
+    // Near the limit no step-only run is granted: the held ticks check the steps.
+    assert!(held.held > 0);
+}
+
+#[test]
+fn with_full_ticks_every_5th_the_switch_debounce_keeps_its_time() {
+    let (m, _, _) = running(Case::EStop, &JOB);
+    let c = m.config().link;
+    let debounce = c.inputs.debounce_ticks(c.machine.tick_hz) as usize;
+    assert!(debounce > 4 * STRIDE);
+    // Closed two strides short of the debounce time (its samples are a stride apart):
+    // forgotten. Closed for good: a fault, seen within two strides of when full ticks alone
+    // see it.
+    let closed = |from: usize, to: usize| {
+        move |t: usize| Inputs { limit_min: u8::from((from..to).contains(&t)), ..Inputs::QUIET }
+    };
+    let short = closed(2_000, 2_000 + debounce - 2 * STRIDE);
+    let (_, hm) = run_strided(running(Case::EStop, &JOB), 20_000, STRIDE, short);
+    assert!(!hm.faults().has(FaultCode::LimitSwitch), "a short closure tripped");
+    assert_ne!(hm.state(), MachineState::Fault);
+    let long = closed(2_000, 20_000);
+    let (plain, _) = run(running(Case::EStop, &JOB), 20_000, false, long);
+    let (held, hm) = run_strided(running(Case::EStop, &JOB), 20_000, STRIDE, long);
+    assert!(hm.faults().has(FaultCode::LimitSwitch));
+    assert!(held.held > 0);
+    let (tp, th) = (plain.left_running.unwrap(), held.left_running.unwrap());
+    assert!(th + STRIDE >= tp && th < tp + 2 * STRIDE, "full ticks {tp}, strided {th}");
 }
