@@ -174,25 +174,29 @@ fn a_switch_being_timed_keeps_every_tick_full() {
     assert!(m.fast_tick(&mut dda).is_some());
 }
 
+/// A running machine whose DDA was handed a longer move than the one admitted inside the soft
+/// limits, as a wrong segment would be.
+fn past_the_soft_limit(cfg: BoardConfig) -> (Machine, Dda, Preparer) {
+    let (mut m, mut dda, mut prep) = homed(cfg);
+    let mut p = Planner::new(&cfg.link.machine);
+    p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+    p.finish();
+    m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
+    let mut p = Planner::new(&cfg.link.machine);
+    p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
+    p.finish();
+    dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
+    m.command(MachineCommand::Start, &mut dda).unwrap();
+    (m, dda, prep)
+}
+
 #[test]
 fn a_soft_limit_crossed_in_a_quiet_job_latches_on_the_tick_it_is_crossed() {
     // Admitted inside the limits; the DDA is handed a longer move, as a wrong segment would be.
     // The step-only runs shorten as the axis nears the limit (they do not check it), down to
     // full ticks, which do.
     let cfg = config(Case::SoftLimitRun);
-    let build = || {
-        let (mut m, mut dda, mut prep) = homed(cfg);
-        let mut p = Planner::new(&cfg.link.machine);
-        p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
-        p.finish();
-        m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
-        let mut p = Planner::new(&cfg.link.machine);
-        p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
-        p.finish();
-        dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
-        m.command(MachineCommand::Start, &mut dda).unwrap();
-        (m, dda, prep)
-    };
+    let build = || past_the_soft_limit(cfg);
     let (plain, pm) = run(build(), 200_000, false, |_| Inputs::QUIET);
     let (fast, fm) = run(build(), 200_000, true, |_| Inputs::QUIET);
     assert!(pm.faults().has(FaultCode::SoftLimit) && fm.faults().has(FaultCode::SoftLimit));
@@ -351,19 +355,7 @@ fn with_full_ticks_every_5th_a_limit_switch_is_seen_within_a_supervision_period_
 #[test]
 fn with_full_ticks_every_5th_a_soft_limit_latches_on_the_tick_it_is_crossed() {
     let cfg = config(Case::SoftLimitRun);
-    let build = || {
-        let (mut m, mut dda, mut prep) = homed(cfg);
-        let mut p = Planner::new(&cfg.link.machine);
-        p.push(&Move { steps: [10, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
-        p.finish();
-        m.command(MachineCommand::Queue(&p.pop().unwrap()), &mut dda).unwrap();
-        let mut p = Planner::new(&cfg.link.machine);
-        p.push(&Move { steps: [1_000_000, 0, 0, 0, 0, 0], feed_hz: 5_000 }).unwrap();
-        p.finish();
-        dda.push(&prep.prepare(&p.pop().unwrap()).unwrap()).unwrap();
-        m.command(MachineCommand::Start, &mut dda).unwrap();
-        (m, dda, prep)
-    };
+    let build = || past_the_soft_limit(cfg);
     let (plain, pm) = run(build(), 200_000, false, |_| Inputs::QUIET);
     let (held, hm) = run_strided(build(), 200_000, STRIDE, |_| Inputs::QUIET);
     assert!(pm.faults().has(FaultCode::SoftLimit) && hm.faults().has(FaultCode::SoftLimit));
