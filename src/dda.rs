@@ -135,8 +135,7 @@ pub struct Dda {
     /// The rate a tracking run rises to (`min(ovr, cap)` on entry).
     run_target: u32,
     run_vticks: u32,
-    run: FastRun,
-    /// The run's tick function (kind and lane count in one byte: one dispatch per tick).
+    /// The run's kind and lane count in one byte: one dispatch per tick.
     run_fn: RunFn,
     /// Rising edges of the last [`HIST_TICKS`] ticks while cruising, newest in the low byte.
     hist: u32,
@@ -207,7 +206,6 @@ impl Dda {
             run_rate0: 0,
             run_target: 0,
             run_vticks: 0,
-            run: FastRun::Cruise,
             run_fn: RunFn::CruiseNarrow,
             hist: 0,
             cruise_dir: 0,

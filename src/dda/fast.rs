@@ -56,6 +56,15 @@ impl RunFn {
             (FastRun::Track, true) => RunFn::TrackWide,
         }
     }
+
+    /// The kind of run.
+    fn kind(self) -> FastRun {
+        match self {
+            RunFn::CruiseNarrow | RunFn::CruiseWide => FastRun::Cruise,
+            RunFn::AccelerateNarrow | RunFn::AccelerateWide => FastRun::Accelerate,
+            RunFn::TrackNarrow | RunFn::TrackWide => FastRun::Track,
+        }
+    }
 }
 
 impl Dda {
@@ -133,7 +142,7 @@ impl Dda {
         let e = self.cruise_elapsed() as u64;
         let rate0 = self.run_rate0 as u64;
         // Tick k of the run (k = 1..=e) adds its rate to the phase.
-        let sum = match self.run {
+        let sum = match self.run_fn.kind() {
             FastRun::Cruise => e * rate0,
             // rate0 + k dr each; the rate stays <= ONE, so the sum stays below e * 2^30.
             FastRun::Accelerate => e * rate0 + self.dr as u64 * (e * (e + 1) / 2),
@@ -273,7 +282,6 @@ impl Dda {
         if ticks == 0 {
             return;
         }
-        self.run = run;
         self.run_fn = RunFn::of(run, self.wide);
         self.run_rate0 = rate;
         self.run_target = target;
@@ -303,6 +311,6 @@ impl Dda {
 
     /// The kind of fast run the ticks are taking (`None`: full or idle ticks).
     pub fn fast_run(&self) -> Option<FastRun> {
-        (self.cruise_ticks != 0).then_some(self.run)
+        (self.cruise_ticks != 0).then_some(self.run_fn.kind())
     }
 }
