@@ -21,6 +21,7 @@ mod control;
 pub mod edge_stream;
 mod fast;
 pub mod feed_arbiter;
+mod fill;
 pub mod lane_kernel_check;
 pub mod lanes;
 mod prepare;
@@ -28,6 +29,7 @@ mod step_output;
 pub use fast::FastRun;
 use fast::RunFn;
 use feed_arbiter::{FeedArbiter, OverrideSource};
+pub use fill::TickSink;
 use lanes::{Lane, Lanes};
 pub use prepare::{Prepared, Preparer};
 pub use step_output::StepOutput;
@@ -97,7 +99,7 @@ struct Gate {
     open_at: u64,
 }
 
-/// `repr(C)` with the lanes first: the cruise tick's `ldm` takes the DDA's own address.
+/// `repr(C)` with the lanes first: the lane kernel addresses the lanes from the DDA's own address.
 #[repr(C)]
 pub struct Dda {
     lanes: Lanes,

@@ -257,6 +257,77 @@ fn cruise_fast_path_equals_the_full_tick() {
     assert!(up >= 24 && track >= 24, "accelerating runs in {up} cases, tracking in {track}");
 }
 
+/// Ticks a buffer at a time (`Dda::ticks_into`, a streamed output's fill) give the same pins as
+/// one tick at a time, whatever the buffers' lengths and wherever they start in a run.
+#[test]
+fn ticks_into_a_buffer_equal_one_tick_at_a_time() {
+    use motion::dda::{FastRun, StepOutput};
+    use proptest::test_runner::{Config, TestRunner};
+    const LONGEST: usize = 48;
+    let strategy = (
+        prop::collection::vec(segment_strategy(2), 1..10),
+        prop::collection::vec(command_strategy(), 0..8),
+        prop::collection::vec(1..=LONGEST, 1..12),
+    );
+    let mut runner = TestRunner::new(Config { cases: 96, ..Config::default() });
+    // Cases in which each kind of run (cruise, accelerate, track) ran inside a buffer.
+    let cases_by_kind = std::cell::Cell::new([0u32; 3]);
+    runner
+        .run(&strategy, |(segs, cmds, lengths)| {
+            let c = cfg(2_500, 5_000, 5_000);
+            let mut many = motion::Dda::new(&c).unwrap();
+            let mut one = motion::Dda::new(&c).unwrap();
+            let mut pm = motion::dda::Preparer::new(&c).unwrap();
+            let mut po = motion::dda::Preparer::new(&c).unwrap();
+            for &(at, cmd) in finishing(cmds).iter() {
+                many.schedule(at, cmd).ok();
+                one.schedule(at, cmd).ok();
+            }
+            let mut buf = [StepOutput::new(0, 0, 0, 0); LONGEST];
+            let mut next = 0;
+            let mut kinds = [false; 3];
+            for &len in lengths.iter().cycle() {
+                // Segments go in between buffers, to both alike.
+                while next < segs.len() && one.ready_free() > 0 {
+                    many.push(&pm.prepare(&segs[next]).unwrap()).unwrap();
+                    one.push(&po.prepare(&segs[next]).unwrap()).unwrap();
+                    next += 1;
+                }
+                if (next == segs.len() && one.is_idle() && one.now() > 40_001)
+                    || one.now() >= 3_000_000
+                {
+                    break;
+                }
+                if let Some(kind) = many.fast_run() {
+                    kinds[kind as usize] |= len > 1;
+                }
+                many.ticks_into(&mut buf[..len], &mut |w: &mut StepOutput, s| *w = s);
+                for got in &buf[..len] {
+                    let want = one.tick();
+                    prop_assert_eq!(*got, want, "tick {}", one.now());
+                }
+                prop_assert_eq!(many.now(), one.now());
+                prop_assert_eq!(many.rate(), one.rate());
+                prop_assert_eq!(many.fast_run(), one.fast_run());
+                prop_assert_eq!(many.positions(), one.positions(), "tick {}", one.now());
+            }
+            prop_assert!(many.is_idle());
+            let mut by_kind = cases_by_kind.get();
+            for (n, ran) in by_kind.iter_mut().zip(kinds) {
+                *n += ran as u32;
+            }
+            cases_by_kind.set(by_kind);
+            Ok(())
+        })
+        .unwrap();
+    let [cruise, up, track] = cases_by_kind.get();
+    assert_eq!([FastRun::Cruise as usize, FastRun::Accelerate as usize], [0, 1]);
+    assert!(
+        cruise >= 24 && up >= 24 && track >= 24,
+        "buffers began in a cruise in {cruise} cases, a climb in {up}, tracking in {track}"
+    );
+}
+
 #[test]
 fn hold_stops_on_the_path_and_resumes_from_the_exact_position() {
     let seg = Segment {

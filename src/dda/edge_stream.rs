@@ -34,9 +34,15 @@ const PORT_PINS: u8 = 16;
 /// [`StepOutput::dir`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PortWords {
-    step_shift: u8,
-    dir_shift: u8,
-    axes: u8,
+    /// The axes' bits of a [`StepOutput`] byte.
+    mask: u32,
+    /// Multipliers that place an axis byte on the port's pins: a multiply by `2^shift` is a
+    /// shift whose amount needs no masking, and the M4 multiplies (and accumulates) in one
+    /// cycle. `_hi`: into the word's reset half.
+    step_mul: u32,
+    step_mul_hi: u32,
+    dir_mul: u32,
+    dir_mul_hi: u32,
 }
 
 /// A pin layout [`PortWords::new`] refuses.
@@ -64,30 +70,39 @@ impl PortWords {
         if (mask << step_shift) & (mask << dir_shift) != 0 {
             return Err(LayoutError::Overlap);
         }
-        Ok(PortWords { step_shift, dir_shift, axes })
+        Ok(PortWords {
+            mask,
+            step_mul: 1 << step_shift,
+            step_mul_hi: 1 << (step_shift + PORT_PINS),
+            dir_mul: 1 << dir_shift,
+            dir_mul_hi: 1 << (dir_shift + PORT_PINS),
+        })
     }
 
     /// The axes' STEP pins on the port.
     pub const fn step_pins(&self) -> u16 {
-        (((1u32 << self.axes) - 1) << self.step_shift) as u16
+        (self.mask * self.step_mul) as u16
     }
 
     /// The axes' DIR pins on the port.
     pub const fn dir_pins(&self) -> u16 {
-        (((1u32 << self.axes) - 1) << self.dir_shift) as u16
+        (self.mask * self.dir_mul) as u16
     }
 
     /// One tick's output as one set/reset word: rises set STEP pins, falls reset them, DIR
-    /// writes set or reset DIR pins. Shifts and masks only (slot rate).
+    /// writes set or reset DIR pins. Masks and multiplies only (slot rate); the four parts
+    /// never share a bit (the layout's pins do not overlap), so adding them is or-ing them.
     #[inline(always)]
     pub const fn word(&self, out: StepOutput) -> u32 {
-        let mask = (1u32 << self.axes) - 1;
-        let (fall, rise) = (out.fall() as u32 & mask, out.rise() as u32 & mask);
-        let write = out.dir_write() as u32 & mask;
-        let (dir_set, dir_reset) = (out.dir() as u32 & write, !(out.dir() as u32) & write);
-        let set = rise << self.step_shift | dir_set << self.dir_shift;
-        let reset = fall << self.step_shift | dir_reset << self.dir_shift;
-        set | reset << PORT_PINS
+        let m = self.mask;
+        let (fall, rise) = (out.fall() as u32 & m, out.rise() as u32 & m);
+        let (write, dir) = (out.dir_write() as u32 & m, out.dir() as u32);
+        let set =
+            rise.wrapping_mul(self.step_mul).wrapping_add((dir & write).wrapping_mul(self.dir_mul));
+        let reset = fall
+            .wrapping_mul(self.step_mul_hi)
+            .wrapping_add((write & !dir).wrapping_mul(self.dir_mul_hi));
+        set.wrapping_add(reset)
     }
 
     /// Fills `words` with one word per tick of `tick` (the DDA's step-only tick, or the full
@@ -97,6 +112,15 @@ impl PortWords {
         for w in words.iter_mut() {
             *w = self.word(tick());
         }
+    }
+}
+
+/// A fill's words, put by the DDA ([`Dda::ticks_into`](super::Dda::ticks_into)) or the
+/// machine around it.
+impl super::TickSink<u32> for PortWords {
+    #[inline(always)]
+    fn put(&mut self, slot: &mut u32, step: StepOutput) {
+        *slot = self.word(step);
     }
 }
 

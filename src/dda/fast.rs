@@ -67,13 +67,45 @@ impl RunFn {
     }
 }
 
+/// One tick of a fast run at `rate` on its registers: `phase`, kept less ONE (wrapping: the add
+/// carries exactly when a virtual tick is due), and `hist`, the last ticks' rises, a byte each.
+/// `Err((fall, rise))`: a step due too soon, which [`Dda::cruise_too_soon`] finishes (`hist` is
+/// left as it was, `phase` has taken the tick).
+#[inline(always)]
+pub(super) fn run_step<const WIDE: bool>(
+    lanes: &mut Lanes,
+    minus_t: u32,
+    dir: u32,
+    rate: u32,
+    phase: &mut u32,
+    hist: &mut u32,
+) -> Result<StepOutput, (u8, u8)> {
+    let h = *hist;
+    // One-tick pulses: what rose last tick (the low byte) falls now.
+    let fall = h & 0xff;
+    let (p, vtick) = phase.overflowing_add(rate);
+    if !vtick {
+        *phase = p;
+        *hist = h << 8;
+        return Ok(StepOutput::falling(fall, dir));
+    }
+    *phase = p.wrapping_sub(ONE);
+    let rise = lanes::step(lanes, WIDE, minus_t);
+    // `rise` has no bits past the low byte, so this is `rise & fall`.
+    if rise & h != 0 {
+        return Err((fall as u8, rise as u8));
+    }
+    *hist = (h << 8) | rise;
+    Ok(StepOutput::falling(fall, dir).with_rise(rise))
+}
+
 impl Dda {
     /// A cruise tick: the rate is settled. Out of line (as are the ramps): the idle path stays
     /// free of the register saves the lane kernel needs. One instance per lane count (`WIDE`:
     /// six lanes), picked on entering the run.
     #[inline(never)]
     pub(super) fn cruise_tick<const WIDE: bool>(&mut self) -> StepOutput {
-        self.run_tick::<WIDE, false>(self.rate)
+        self.run_tick::<WIDE>(self.rate)
     }
 
     /// An accelerating tick: the run was bounded on entry, so `rate + dr` is what
@@ -82,14 +114,25 @@ impl Dda {
     pub(super) fn accelerate_tick<const WIDE: bool>(&mut self) -> StepOutput {
         let rate = self.rate + self.dr;
         self.rate = rate;
-        self.run_tick::<WIDE, false>(rate)
+        self.run_tick::<WIDE>(rate)
     }
 
-    /// A tracking tick: [`Dda::update_rate`]'s choice with the budget as the virtual ticks
-    /// counted so far left it, for a rate that stays within `[floor, target]` (checked on entry,
-    /// with `floor <= target`, which makes the choice exactly this).
+    /// A tracking tick (see [`Dda::track_step`]).
     #[inline(never)]
     pub(super) fn track_tick<const WIDE: bool>(&mut self) -> StepOutput {
+        match self.track_step::<WIDE>() {
+            Some(step) => step,
+            None => self.track_ends(),
+        }
+    }
+
+    /// [`Dda::update_rate`]'s choice with the budget as the virtual ticks counted so far left
+    /// it, for a rate that stays within `[floor, target]` (checked on entry, with
+    /// `floor <= target`, which makes the choice exactly this), and the tick at that rate.
+    /// `None`: the tick would bring the segment's last virtual tick, which is the full tick's
+    /// (it ends the segment): nothing was changed, [`Dda::track_ends`] runs it.
+    #[inline(always)]
+    pub(super) fn track_step<const WIDE: bool>(&mut self) -> Option<StepOutput> {
         let rate = self.rate;
         let rate_sq = (rate as u64 * rate as u64) >> RATE_FRAC_BITS;
         // `two_dr` < 2^32: a 32x32 multiply.
@@ -99,42 +142,43 @@ impl Dda {
         } else {
             (rate + self.dr).min(self.run_target)
         };
-        // The segment's last virtual tick is the full tick's (it ends the segment): this tick
-        // is not the run's when it brings it.
-        if self.run_vticks + 1 >= self.remaining && self.phase.overflowing_add(new_rate).1 {
-            self.cruise_ticks += 1;
-            self.leave_fast();
-            return self.full_tick();
+        let vtick = self.phase.overflowing_add(new_rate).1;
+        if vtick && self.run_vticks + 1 >= self.remaining {
+            return None;
         }
         self.rate = new_rate;
-        self.run_tick::<WIDE, true>(new_rate)
+        // Counted before the tick: a step due too soon leaves the run with it.
+        self.run_vticks += vtick as u32;
+        Some(self.run_tick::<WIDE>(new_rate))
     }
 
-    /// One tick of a run at `rate`. The phase is kept less ONE here (wrapping): the add carries
-    /// exactly when a virtual tick is due. `COUNT`: count the virtual ticks (a tracking run,
-    /// whose rates have no simple sum).
+    /// The tick a tracking run hands to the full tick ([`Dda::track_step`]'s `None`).
+    #[cold]
+    #[inline(never)]
+    pub(super) fn track_ends(&mut self) -> StepOutput {
+        self.cruise_ticks += 1;
+        self.leave_fast();
+        self.full_tick()
+    }
+
+    /// One tick of a run at `rate` ([`run_step`] on the DDA's own registers).
     #[inline(always)]
-    fn run_tick<const WIDE: bool, const COUNT: bool>(&mut self, rate: u32) -> StepOutput {
-        let hist = self.hist;
-        // One-tick pulses: what rose last tick (the low byte) falls now.
-        let fall = hist & 0xff;
-        let (p, vtick) = self.phase.overflowing_add(rate);
-        if !vtick {
-            self.phase = p;
-            self.hist = hist << 8;
-            return StepOutput::falling(fall, self.cruise_dir);
+    fn run_tick<const WIDE: bool>(&mut self, rate: u32) -> StepOutput {
+        let (mut phase, mut hist) = (self.phase, self.hist);
+        let step = run_step::<WIDE>(
+            &mut self.lanes,
+            self.minus_t,
+            self.cruise_dir,
+            rate,
+            &mut phase,
+            &mut hist,
+        );
+        self.phase = phase;
+        self.hist = hist;
+        match step {
+            Ok(step) => step,
+            Err((fall, rise)) => self.cruise_too_soon(fall, rise),
         }
-        self.phase = p.wrapping_sub(ONE);
-        if COUNT {
-            self.run_vticks += 1;
-        }
-        let rise = lanes::step(&mut self.lanes, WIDE, self.minus_t);
-        // `rise` has no bits past the low byte, so this is `rise & fall`.
-        if rise & hist != 0 {
-            return self.cruise_too_soon(fall as u8, rise as u8);
-        }
-        self.hist = (hist << 8) | rise;
-        StepOutput::falling(fall, self.cruise_dir).with_rise(rise)
     }
 
     /// Virtual ticks the current run has done (the current tick's included while it runs).
@@ -155,7 +199,7 @@ impl Dda {
     /// would (held back, released when allowed).
     #[cold]
     #[inline(never)]
-    fn cruise_too_soon(&mut self, fall: u8, rise: u8) -> StepOutput {
+    pub(super) fn cruise_too_soon(&mut self, fall: u8, rise: u8) -> StepOutput {
         // This tick's edges are settled below, in the rebuilt ring.
         self.hist <<= 8;
         self.leave_fast();

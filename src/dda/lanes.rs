@@ -11,7 +11,7 @@
 //! segment takes the same time.
 //!
 //! On the Cortex-M4 the kernel is four instructions per lane (`adds`, `it cs`, `addcs`, `adc`)
-//! between one `ldm` and one `stm`: the compiler's own code for [`step_portable`] re-derives the
+//! between a load of the lane's pair and a store of its error: the compiler's own code for [`step_portable`] re-derives the
 //! carry with a compare and spends about nine. Everything else runs [`step_portable`], and the
 //! `dda_lane_kernel` scenario runs both on the same pseudo-random lanes: its QEMU report must
 //! equal the host's, so the two implementations cannot drift apart unnoticed.
@@ -22,7 +22,7 @@ use crate::config::MAX_AXES;
 pub const NARROW_LANES: usize = 4;
 
 /// One axis of the active segment: Bresenham error and step count, side by side so the kernel
-/// loads both with one `ldm`.
+/// loads both with one `ldrd`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct Lane {
@@ -75,7 +75,9 @@ mod thumb2 {
     use core::arch::asm;
 
     /// Lanes are processed from the highest down, each carry shifted in at bit 0 by `adc`, so
-    /// lane `i` ends at bit `i`.
+    /// lane `i` ends at bit `i`. A lane at a time through two scratch registers (a load of
+    /// its pair, a store of its error): a caller's loop keeps its own state in the registers
+    /// that a load of all lanes at once would take.
     #[inline(always)]
     pub fn step(lanes: &mut Lanes, wide: bool, minus_t: u32) -> u32 {
         let p = lanes.as_mut_ptr();
@@ -86,16 +88,17 @@ mod thumb2 {
             // registers it declares.
             unsafe {
                 asm!(
-                    "ldrd r2, r3, [{p}, #32]",
-                    "ldrd r4, r5, [{p}, #40]",
-                    "adds r4, r4, r5", "it cs", "addcs r4, r4, {mt}", "adc {m}, {m}, {m}",
-                    "adds r2, r2, r3", "it cs", "addcs r2, r2, {mt}", "adc {m}, {m}, {m}",
-                    "str r2, [{p}, #32]",
-                    "str r4, [{p}, #40]",
+                    "ldrd {e}, {d}, [{p}, #40]",
+                    "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                    "str {e}, [{p}, #40]",
+                    "ldrd {e}, {d}, [{p}, #32]",
+                    "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                    "str {e}, [{p}, #32]",
                     p = in(reg) p,
                     mt = in(reg) minus_t,
                     m = inout(reg) mask,
-                    out("r2") _, out("r3") _, out("r4") _, out("r5") _,
+                    e = out(reg) _,
+                    d = out(reg) _,
                     options(nostack),
                 );
             }
@@ -104,17 +107,23 @@ mod thumb2 {
         // the block reads and writes only them and the registers it declares.
         unsafe {
             asm!(
-                "ldm {p}, {{r2, r3, r4, r5, r8, r9, r10, r12}}",
-                "adds r10, r10, r12", "it cs", "addcs r10, r10, {mt}", "adc {m}, {m}, {m}",
-                "adds r8, r8, r9", "it cs", "addcs r8, r8, {mt}", "adc {m}, {m}, {m}",
-                "adds r4, r4, r5", "it cs", "addcs r4, r4, {mt}", "adc {m}, {m}, {m}",
-                "adds r2, r2, r3", "it cs", "addcs r2, r2, {mt}", "adc {m}, {m}, {m}",
-                "stm {p}, {{r2, r3, r4, r5, r8, r9, r10, r12}}",
+                "ldrd {e}, {d}, [{p}, #24]",
+                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                "str {e}, [{p}, #24]",
+                "ldrd {e}, {d}, [{p}, #16]",
+                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                "str {e}, [{p}, #16]",
+                "ldrd {e}, {d}, [{p}, #8]",
+                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                "str {e}, [{p}, #8]",
+                "ldrd {e}, {d}, [{p}]",
+                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
+                "str {e}, [{p}]",
                 p = in(reg) p,
                 mt = in(reg) minus_t,
                 m = inout(reg) mask,
-                out("r2") _, out("r3") _, out("r4") _, out("r5") _,
-                out("r8") _, out("r9") _, out("r10") _, out("r12") _,
+                e = out(reg) _,
+                d = out(reg) _,
                 options(nostack),
             );
         }

@@ -427,8 +427,10 @@ How these are measured:
   streamed step output (`--features step-stream`, QEMU board: TIM2 at the fill rate stands in
   for the DMA's half interrupt), traced the same way on a job of four axes at 250 kHz each from
   a 500 kHz slot clock with 1-tick (1 us) pulses (`cargo xtask isr-profile streamed`). Each
-  handler run fills a half buffer of 40 slots, one machine tick per slot, and must end before
-  the DMA has played the other half: 40 slots = 13 440 cycles at 500 kHz. Over the fills of
+  handler run fills a half buffer of 40 slots, one machine tick per slot (the step-only ticks
+  the machine grants in one call, `Machine::fast_fill`, the DDA running them a fast run at a
+  time), and must end before the DMA has played the other half: 40 slots = 13 440 cycles at
+  500 kHz. Over the fills of
   job motion (the DDA ran, the machine quiet: not homing, at most 10 full machine ticks in
   the fill): `stream_fill_cycles_max` the longest, `step_rate_max_hz_per_axis` half the slot clock
   it holds (168 MHz x 40 / that, at most 500 kHz), `_aggregate` four axes at that rate,

@@ -34,7 +34,9 @@ mod app {
         TickTimer as _, Watchdog as _,
     };
     use core::sync::atomic::Ordering::Relaxed;
-    use motion::machine::{BoardConfig, BootConfig, DdaSource, Inputs, OverrunDetector};
+    #[cfg(not(feature = "step-stream"))]
+    use motion::machine::DdaSource;
+    use motion::machine::{BoardConfig, BootConfig, Inputs, OverrunDetector};
     use motion::polar::PLAYBACK_JOB;
     use motion::protocol::{FaultCode, FrameDecoder, MAX_FRAME, MAX_FRAME_LINK};
     use motion_firmware::board;
@@ -222,9 +224,11 @@ mod app {
     ///
     /// With the streamed step output (`step-stream`), TIM2's update is the fill interrupt, once
     /// per `STREAM_SLOTS` slots (the real board's TIM2 counts the slot timer's updates; QEMU's
-    /// runs at the fill rate): a tick per slot (`fill_slot`: full ticks at most every
-    /// `STREAM_SAMPLE_STRIDE` slots), each a set/reset word into the half buffer the DMA has
-    /// just played, and the overrun check once per fill.
+    /// runs at the fill rate): a tick per slot, each a set/reset word into the half buffer the
+    /// DMA has just played, and the overrun check once per fill. The step-only ticks the
+    /// machine grants go in one call (`Machine::fast_fill`: the DDA runs them a fast run at a
+    /// time), the others one at a time (`fill_slot`: full ticks at most every
+    /// `STREAM_SAMPLE_STRIDE` slots).
     #[task(binds = TIM2, priority = 3, shared = [motion, step_port, step_stream],
         local = [tick_timer, io, copy_encoders, spindle, tick_wakes_feeder, tick_wakes_status, cycles,
             wake: i32 = 1, overrun: OverrunDetector = OverrunDetector::new(),
@@ -246,18 +250,41 @@ mod app {
         let full = {
             use board_contract::StepStream as _;
             let stream = cx.shared.step_stream;
-            let layout = stream.layout();
+            let mut layout = stream.layout();
             let l = &mut cx.local;
             cx.shared.motion.lock(|m| {
                 let mut held = HeldForFill(m);
                 // The slot of the last full tick, counted from this fill's first (kept in a
                 // register through the fill, carried to the next one below).
                 let mut last_full = *l.last_full;
-                for (slot, w) in stream.half().iter_mut().enumerate() {
+                let words = stream.half();
+                let mut slot = 0;
+                while slot < words.len() {
+                    // As many step-only ticks in a row as the machine grants, in one call (an
+                    // e-stop edge cannot arrive during a fill: its interrupt has this one's
+                    // priority).
+                    if *l.plain && !ESTOP_EDGE.load(Relaxed) {
+                        let m = &mut *held.0;
+                        let (spindle, at_rest) = (&mut *l.spindle, *l.spindle_at_rest);
+                        let sense = || {
+                            if !at_rest {
+                                spindle.update();
+                            }
+                        };
+                        let n =
+                            m.machine.fast_fill(&mut m.dda, &mut words[slot..], sense, &mut layout);
+                        if n != 0 {
+                            *l.wake -= n as i32;
+                            slot += n;
+                            continue;
+                        }
+                    }
+                    let Some(w) = words.get_mut(slot) else { break };
                     let emit = |_: &mut board::StepPort, step: &motion::StepOutput| {
                         *w = layout.word(*step)
                     };
                     fill_slot(l, &mut held, port, slot as i32, &mut last_full, emit);
+                    slot += 1;
                 }
                 *l.last_full = last_full.max(-FULL_STRIDE) - board_contract::STREAM_SLOTS as i32;
             });
@@ -308,7 +335,8 @@ mod app {
         last_full: &mut i32,
         mut emit: impl FnMut(&mut board::StepPort, &motion::StepOutput),
     ) {
-        if step_only_tick(l, motion, port, &mut emit) {
+        // A plain job's step-only ticks were the fill's own (`Machine::fast_fill`).
+        if capability_step_only_tick(l, motion, port, &mut emit) {
             return;
         }
         if slot - *last_full >= FULL_STRIDE || !*l.plain || ESTOP_EDGE.load(Relaxed) {
@@ -344,6 +372,7 @@ mod app {
     }
 
     /// A step-only tick if the machine grants one (see below); false: none was run.
+    #[cfg(not(feature = "step-stream"))]
     #[inline(always)]
     fn step_only_tick(
         l: &mut tick::LocalResources<'_>,
@@ -376,7 +405,22 @@ mod app {
                 *l.wake -= 1;
                 return true;
             }
-        } else if *l.capability != 0 && !ESTOP_EDGE.load(Relaxed) {
+        } else {
+            return capability_step_only_tick(l, motion, port, emit);
+        }
+        false
+    }
+
+    /// The step-only tick of the capability whose job the last full tick ran, if it grants
+    /// one; false: none was run.
+    #[inline(always)]
+    fn capability_step_only_tick(
+        l: &mut tick::LocalResources<'_>,
+        motion: &mut impl rtic::Mutex<T = Motion>,
+        port: &mut board::StepPort,
+        emit: &mut impl FnMut(&mut board::StepPort, &motion::StepOutput),
+    ) -> bool {
+        if *l.capability != 0 && !ESTOP_EDGE.load(Relaxed) {
             let which = *l.capability;
             let mut b = StepReadings {
                 spindle: &mut *l.spindle,

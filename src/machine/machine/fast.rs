@@ -26,9 +26,32 @@
 //! ([`Machine::set_sample_stride`]); homing, probing and jog-off see their switch up to that
 //! many ticks later (10 us at 500 kHz).
 
+use super::pending::PendingSteps;
 use super::{DdaSource, Inputs, Machine, StepSource, JOB_WATCH_TICKS};
-use crate::dda::{Dda, StepOutput};
+use crate::dda::{Dda, StepOutput, TickSink};
 use crate::machine::MachineState;
+
+/// [`Machine::fast_fill`]'s sink: the step counters and the direction, `sense`, then the
+/// board's sink.
+struct Counting<'a, S, K> {
+    pending: PendingSteps,
+    dir: u8,
+    sense: S,
+    sink: &'a mut K,
+}
+
+impl<W, S: FnMut(), K: TickSink<W>> TickSink<W> for Counting<'_, S, K> {
+    #[inline(always)]
+    fn put(&mut self, slot: &mut W, step: StepOutput) {
+        (self.sense)();
+        self.dir = step.dir();
+        // No soft-limit check: the run granted stays inside them (`arm_fast`).
+        if step.rise() != 0 {
+            self.pending.add(step.rise(), self.dir);
+        }
+        self.sink.put(slot, step);
+    }
+}
 
 /// Ticks from one full tick to the next while the machine is quiet, at the default tick (the
 /// job bookkeeping's period, so that a quiet job is watched as often as a busy one).
@@ -113,6 +136,31 @@ impl Machine {
             self.pending.add(step.rise(), step.dir());
         }
         Some(step)
+    }
+
+    /// [`Machine::fast_tick`] on as many of `out`'s slots in a row as the machine grants, in
+    /// one call (a streamed step output's fill): each tick's output put in its slot by `sink`,
+    /// `sense` once per tick; the count done (0: none granted, a full tick is due). The same
+    /// ticks as one `fast_tick` per slot, but the DDA runs them a fast run at a time
+    /// ([`Dda::ticks_into`]).
+    #[inline(always)]
+    pub fn fast_fill<W>(
+        &mut self,
+        dda: &mut Dda,
+        out: &mut [W],
+        sense: impl FnMut(),
+        sink: &mut impl TickSink<W>,
+    ) -> usize {
+        let n = out.len().min(self.fast_left as usize);
+        if n == 0 {
+            return 0;
+        }
+        self.fast_left -= n as u8;
+        self.ticks += n as u64;
+        let mut counting = Counting { pending: self.pending, dir: self.last_dir, sense, sink };
+        dda.ticks_into(&mut out[..n], &mut counting);
+        (self.pending, self.last_dir) = (counting.pending, counting.dir);
+        n
     }
 
     /// For a board that runs a full tick on at most every `stride`-th tick and

@@ -39,15 +39,21 @@ impl PendingSteps {
         PendingSteps { up: [0; 2], down: [0; 2] }
     }
 
-    /// One tick's rising edges (`dir`: a set bit steps that axis down). Interrupt rate: eight
-    /// data instructions and a multiply per word.
+    /// One tick's rising edges (`dir`: a set bit steps that axis down). Interrupt rate: the
+    /// rises and directions of axes 0..3 spread into lanes (a multiply each), split by an
+    /// and-not and an and; axes 4 and 5 only when one of them rose. Spreading commutes with
+    /// the bitwise ops, so this is counting `rise & !dir` up and `rise & dir` down.
     #[inline(always)]
     pub(super) fn add(&mut self, rise: u8, dir: u8) {
-        let (up, down) = ((rise & !dir) as u32, (rise & dir) as u32);
-        self.up[0] = self.up[0].wrapping_add(spread4(up));
-        self.up[1] = self.up[1].wrapping_add(spread4(up >> LANES));
-        self.down[0] = self.down[0].wrapping_add(spread4(down));
-        self.down[1] = self.down[1].wrapping_add(spread4(down >> LANES));
+        let (rise, dir) = (rise as u32, dir as u32);
+        let (r, d) = (spread4(rise), spread4(dir));
+        self.up[0] = self.up[0].wrapping_add(r & !d);
+        self.down[0] = self.down[0].wrapping_add(r & d);
+        if rise >> LANES != 0 {
+            let (r, d) = (spread4(rise >> LANES), spread4(dir >> LANES));
+            self.up[1] = self.up[1].wrapping_add(r & !d);
+            self.down[1] = self.down[1].wrapping_add(r & d);
+        }
     }
 
     /// Net steps per axis (up minus down).

@@ -73,6 +73,10 @@ pub struct Insn {
     /// A VFP instruction (the tick must use none: lazy FP stacking would cost 17+ cycles).
     pub fp: bool,
     pub in_flash: bool,
+    /// An unconditional transfer (no condition, not `cbz`/`cbnz`): taken even when it lands on
+    /// the next address, as an exception return does that tail-chains into a handler placed
+    /// right after this one.
+    pub always: bool,
 }
 
 impl Insn {
@@ -316,6 +320,7 @@ fn classify(mn: &str, ops: &str) -> Insn {
         taken: 0,
         fp: m.starts_with('v'),
         in_flash: true,
+        always: false,
     };
     let jump = |base: u32, flow: Flow, mem: Mem| Insn {
         size: 2,
@@ -325,6 +330,7 @@ fn classify(mn: &str, ops: &str) -> Insn {
         taken: REFILL,
         fp: false,
         in_flash: true,
+        always: !matches!(m, "cbz" | "cbnz") && m == mn.split('.').next().unwrap_or(mn),
     };
     match m {
         "bl" | "blx" => jump(1, Flow::Call, Mem::None),

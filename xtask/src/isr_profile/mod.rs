@@ -70,9 +70,10 @@ const SITUATIONS: [(&str, &[&str]); 6] = [
             "wire::link_job::",
         ],
     ),
-    // The fast runs live in `motion::dda::fast`, whose symbols name the impl, not `Dda::`.
-    ("ramp", &["Dda::full_tick", "::accelerate_tick", "::track_tick"]),
-    ("cruise", &["::cruise_tick"]),
+    // The fast runs live in `motion::dda::fast` (a tick at a time) and `motion::dda::fill` (a
+    // run at a time), whose symbols name the impl, not `Dda::`.
+    ("ramp", &["Dda::full_tick", "::accelerate_", "::track_"]),
+    ("cruise", &["::cruise_tick", "::cruise_run"]),
 ];
 const IDLE: &str = "idle";
 const HOMING: &str = "homing";

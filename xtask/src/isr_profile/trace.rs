@@ -170,6 +170,7 @@ impl<'p> Analyzer<'p> {
                     taken: 0,
                     fp: false,
                     in_flash: true,
+                    always: false,
                 }
             }
         }
@@ -197,7 +198,7 @@ impl<'p> Analyzer<'p> {
             return;
         };
         let (ppc, p) = cur.pending;
-        let taken = pc != ppc.wrapping_add(p.size as u32);
+        let taken = pc != ppc.wrapping_add(p.size as u32) || p.always;
         cur.inst.cycles += p.cycles(taken, cur.after_single, false);
         cur.inst.cycles_pessimistic += p.cycles(taken, cur.after_single, true);
         cur.after_single = matches!(p.mem, Mem::SingleLoad | Mem::SingleStore);
@@ -308,6 +309,20 @@ mod tests {
         }
         assert_eq!(a.instances.len(), 1);
         assert_eq!(a.instances[0].instructions, 4);
+    }
+
+    #[test]
+    fn a_return_that_tail_chains_into_the_handler_placed_next_ends_it() {
+        // handler: pop {pc}; the next handler's first instruction right after it.
+        let asm = " 8000000:\tpush\t{r4, lr}\n 8000002:\tpop\t{r4, pc}\n \
+                   8000004:\tpush\t{r4, lr}\n 8000006:\tnop\n";
+        let prog = program(asm);
+        let mut a = Analyzer::new(&prog, 0x0800_0000, &[]);
+        for pc in [0x0800_0000, 0x0800_0002, 0x0800_0004, 0x0800_0006] {
+            a.step(pc);
+        }
+        assert_eq!(a.instances.len(), 1);
+        assert_eq!(a.instances[0].instructions, 2);
     }
 
     #[test]

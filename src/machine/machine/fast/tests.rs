@@ -272,11 +272,11 @@ fn the_sensor_is_read_once_on_every_tick_whichever_path_runs_it() {
     assert!(fast_ticks > 0 && full_ticks > 0, "{fast_ticks} step-only, {full_ticks} full ticks");
 }
 
-/// Full ticks at most every `stride` ticks, as a streamed output's fill runs them: a step-only
-/// tick when granted, else a full tick once `stride` ticks have passed since the last one, and
-/// held ticks between. The background (an abort after an immediate stop) runs after each fill of
-/// [`FILL_TICKS`], as the feeder task does: a frozen machine stays frozen through the held
-/// ticks up to there.
+/// Full ticks at most every `stride` ticks, as a streamed output's fill runs them: step-only
+/// ticks as many in a row as granted ([`Machine::fast_fill`]), else a full tick once `stride`
+/// ticks have passed since the last one, and held ticks between. The background (an abort after
+/// an immediate stop) runs after each fill of [`FILL_TICKS`], as the feeder task does: a frozen
+/// machine stays frozen through the held ticks up to there.
 fn run_strided(
     (mut m, mut dda, mut prep): (Machine, Dda, Preparer),
     ticks: usize,
@@ -287,28 +287,36 @@ fn run_strided(
     let mut r =
         Run { steps: Vec::new(), fast_ticks: 0, first_fast: None, left_running: None, held: 0 };
     let mut since_full = stride;
-    for t in 0..ticks {
-        let step = match m.fast_tick(&mut dda) {
-            Some(s) => {
-                r.fast_ticks += 1;
-                since_full += 1;
-                s
+    let mut fill = [StepOutput::new(0, 0, 0, 0); FILL_TICKS];
+    for start in (0..ticks).step_by(FILL_TICKS) {
+        let slots = &mut fill[..FILL_TICKS.min(ticks - start)];
+        let mut slot = 0;
+        while slot < slots.len() {
+            let n =
+                m.fast_fill(&mut dda, &mut slots[slot..], || {}, &mut |w: &mut StepOutput, s| {
+                    *w = s
+                });
+            (r.fast_ticks, since_full, slot) = (r.fast_ticks + n, since_full + n, slot + n);
+            if slot == slots.len() {
+                break;
             }
-            None if since_full >= stride => {
+            let t = start + slot;
+            slots[slot] = if since_full >= stride {
                 since_full = 1;
                 m.tick(&mut dda, &inputs(t)).step
-            }
-            None => {
+            } else {
                 since_full += 1;
                 r.held += 1;
                 m.held_tick(&mut dda)
+            };
+            slot += 1;
+            // Step-only ticks leave the state as it is.
+            if m.state() != MachineState::Running && r.left_running.is_none() {
+                r.left_running = Some(t);
             }
-        };
-        r.steps.push(step);
-        if m.state() != MachineState::Running && r.left_running.is_none() {
-            r.left_running = Some(t);
         }
-        if t % FILL_TICKS == FILL_TICKS - 1 && m.wants_background() {
+        r.steps.extend_from_slice(slots);
+        if m.wants_background() {
             m.background(&mut dda, &mut prep);
         }
     }
