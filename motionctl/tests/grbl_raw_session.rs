@@ -6,7 +6,7 @@
 
 mod grbl_support;
 
-use grbl_support::{bridge, tmp_dir, Raw};
+use grbl_support::{bridge, tmp_dir, wait_for_port, Raw};
 use std::time::{Duration, Instant};
 
 #[test]
@@ -288,4 +288,31 @@ fn a_raw_session_gets_grbl_answers_byte_for_byte() {
     r.expect("ok");
     let st = r.until_idle();
     assert!(st.starts_with("<Idle|MPos:5.000,-2.500,0.000|"), "{st}");
+}
+
+/// A sender that closes the port and opens it again at once (before the bridge's next look)
+/// gets the welcome again, without a Ctrl-X, and what the old session left moving is stopped.
+#[test]
+fn a_sender_that_reopens_the_pty_at_once_is_welcomed_again() {
+    let dir = tmp_dir("reopen");
+    let port = dir.0.join("ttyGRBL");
+    let mut b = bridge(&dir.0, &["--pty", port.to_str().unwrap()]);
+    wait_for_port(&mut b, &port);
+    let x = |st: &str| -> f64 {
+        let at = st.find("MPos:").unwrap() + "MPos:".len();
+        st[at..].split(',').next().unwrap().parse().unwrap()
+    };
+    let mut r = Raw::open_pty(&port);
+    for _ in 0..5 {
+        let before = x(&r.until_idle());
+        r.send(b"G91 G1 X20 F600\n");
+        r.expect("ok");
+        r.until_status(|st| st.starts_with("<Run|"));
+        // Closed and opened again at once: `open_pty` waits for the welcome.
+        drop(r);
+        r = Raw::open_pty(&port);
+        // 20 mm at 10 mm/s (half a second at the simulator's speed): stopped on the way.
+        let after = x(&r.until_idle());
+        assert!(after - before < 20.0 - 1e-3, "from X{before} to X{after}");
+    }
 }

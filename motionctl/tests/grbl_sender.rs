@@ -8,13 +8,11 @@
 
 mod grbl_support;
 
-use grbl_support::{bridge, manifest, tmp_dir};
+use grbl_support::{bridge, manifest, tmp_dir, wait_for_port};
 use motion_gcode::frame::Frame;
 use motion_gcode::{Event, Interpreter, Options};
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
 
 const SENDER_PIN: &str = "grbl-streamer==2.0.2";
 
@@ -97,16 +95,7 @@ fn a_third_party_sender_streams_a_corpus_file_through_the_pty() {
     let dir = tmp_dir("pty");
     let port = dir.0.join("ttyGRBL");
     let mut b = bridge(&dir.0, &["--pty", port.to_str().unwrap()]);
-    let start = Instant::now();
-    while !port.exists() {
-        assert!(start.elapsed() < Duration::from_secs(20), "no pty symlink at {}", port.display());
-        if let Ok(Some(st)) = b.child.try_wait() {
-            let mut err = String::new();
-            let _ = b.child.stderr.take().unwrap().read_to_string(&mut err);
-            panic!("motionctl grbl exited ({st}): {err}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    wait_for_port(&mut b, &port);
     // Plain lines and arcs (bCNC), arcs by R word (SketchUcam), a canned cycle with polar
     // increments (LinuxCNC), a helix in incremental inches (cncjs).
     let files = [

@@ -4,6 +4,7 @@
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
 use nix::pty::openpty;
+use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
 use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
 use std::fs::File;
 use std::io::{self, Read, Write};
@@ -19,6 +20,9 @@ pub struct Input {
     pub opened: bool,
     /// The sender went away.
     pub closed: bool,
+    /// The sender went away and one connected again since the last poll (a sender that closes
+    /// the port and opens it at once): both of the above, in that order.
+    pub reopened: bool,
     pub data: Vec<u8>,
 }
 
@@ -31,11 +35,19 @@ pub trait Endpoint {
 }
 
 /// A pseudo-terminal; `link` points at its slave side.
+///
+/// Whether a sender has the port open is read from the opens and closes of the slave device
+/// (inotify): the master's hang-up only shows while no one has it open, and a sender that closes
+/// the port and opens it again between two polls would never show one, and get no welcome. The
+/// hang-up stays as the fallback should the event queue overflow.
 pub struct Pty {
     master: File,
     slave_name: PathBuf,
     link: PathBuf,
     connected: bool,
+    opens: Inotify,
+    /// File descriptors open on the slave, counted from the events.
+    slave_fds: u32,
 }
 
 impl Pty {
@@ -49,6 +61,16 @@ impl Pty {
         let flags = fcntl(pty.master.as_fd(), FcntlArg::F_GETFL).map_err(io::Error::from)?;
         let flags = OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK;
         fcntl(pty.master.as_fd(), FcntlArg::F_SETFL(flags)).map_err(io::Error::from)?;
+        // Our slave fd closes here: the master then sees a hang-up until a sender opens it.
+        drop(pty.slave);
+        // Watched from here on, with no fd open on it and before the symlink names it: every
+        // open and close is a sender's.
+        let opens = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
+            .map_err(io::Error::from)?;
+        let events = AddWatchFlags::IN_OPEN
+            | AddWatchFlags::IN_CLOSE_WRITE
+            | AddWatchFlags::IN_CLOSE_NOWRITE;
+        opens.add_watch(&slave_name, events).map_err(io::Error::from)?;
         match std::fs::symlink_metadata(link) {
             Ok(m) if m.file_type().is_symlink() => std::fs::remove_file(link)?,
             Ok(_) => {
@@ -62,13 +84,13 @@ impl Pty {
         std::os::unix::fs::symlink(&slave_name, link).map_err(|e| {
             io::Error::new(e.kind(), format!("cannot create the symlink {}: {e}", link.display()))
         })?;
-        // Our slave fd closes here: the master then sees a hang-up until a sender opens it.
-        drop(pty.slave);
         Ok(Pty {
             master: File::from(pty.master),
             slave_name,
             link: link.to_path_buf(),
             connected: false,
+            opens,
+            slave_fds: 0,
         })
     }
 
@@ -89,19 +111,60 @@ fn ms(d: Duration) -> PollTimeout {
     PollTimeout::try_from(d.as_millis().min(10_000) as u64).unwrap_or(PollTimeout::ZERO)
 }
 
+impl Pty {
+    /// The slave's opens and closes since the last call, in order, as connection changes.
+    fn follow_opens(&mut self, input: &mut Input, hung_up: bool) {
+        // EAGAIN: nothing yet. Any other failure leaves the hang-up to decide.
+        for e in self.opens.read_events().unwrap_or_default() {
+            if e.mask.contains(AddWatchFlags::IN_Q_OVERFLOW) {
+                // Events were lost: the hang-up says whether anyone has it open now.
+                self.slave_fds = u32::from(!hung_up);
+            } else if e.mask.contains(AddWatchFlags::IN_OPEN) {
+                self.slave_fds += 1;
+            } else if self.slave_fds > 0 {
+                self.slave_fds -= 1;
+            }
+            self.settle(input);
+        }
+    }
+
+    /// Connected while any fd is open on the slave.
+    fn settle(&mut self, input: &mut Input) {
+        let open = self.slave_fds > 0;
+        if open == self.connected {
+            return;
+        }
+        self.connected = open;
+        if open {
+            if input.closed {
+                input.reopened = true;
+            }
+            input.opened = true;
+        } else {
+            input.closed = true;
+        }
+    }
+}
+
 impl Endpoint for Pty {
     fn poll(&mut self, timeout: Duration) -> io::Result<Input> {
         let mut input = Input::default();
-        let revents = {
-            let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
+        let (master, opens) = {
+            let mut fds = [
+                PollFd::new(self.master.as_fd(), PollFlags::POLLIN),
+                PollFd::new(self.opens.as_fd(), PollFlags::POLLIN),
+            ];
             match poll(&mut fds, ms(timeout)) {
-                Ok(_) => fds[0].revents().unwrap_or(PollFlags::empty()),
-                Err(nix::errno::Errno::EINTR) => PollFlags::empty(),
+                Ok(_) => (
+                    fds[0].revents().unwrap_or(PollFlags::empty()),
+                    fds[1].revents().unwrap_or(PollFlags::empty()),
+                ),
+                Err(nix::errno::Errno::EINTR) => (PollFlags::empty(), PollFlags::empty()),
                 Err(e) => return Err(e.into()),
             }
         };
-        let hup = revents.contains(PollFlags::POLLHUP);
-        if revents.contains(PollFlags::POLLIN) {
+        let hup = master.contains(PollFlags::POLLHUP);
+        if master.contains(PollFlags::POLLIN) {
             let mut buf = [0u8; 4096];
             match self.master.read(&mut buf) {
                 Ok(n) => input.data.extend_from_slice(&buf[..n]),
@@ -111,16 +174,17 @@ impl Endpoint for Pty {
                 Err(e) => return Err(e),
             }
         }
+        if opens.contains(PollFlags::POLLIN) {
+            self.follow_opens(&mut input, hup);
+        }
         if hup && input.data.is_empty() {
-            if self.connected {
-                self.connected = false;
-                input.closed = true;
-            } else {
+            // Closed though no close was counted (the events overflowed): the hang-up decides.
+            if self.connected && !input.opened {
+                self.slave_fds = 0;
+                self.settle(&mut input);
+            } else if !self.connected {
                 std::thread::sleep(timeout.min(Duration::from_millis(20)));
             }
-        } else if !self.connected {
-            self.connected = true;
-            input.opened = true;
         }
         Ok(input)
     }
@@ -227,5 +291,46 @@ impl Endpoint for Tcp {
 
     fn describe(&self) -> String {
         format!("TCP {}", self.addr)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs::OpenOptions;
+    use std::os::unix::fs::OpenOptionsExt;
+
+    fn sender(link: &Path) -> File {
+        OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::libc::O_NOCTTY)
+            .open(link)
+            .unwrap()
+    }
+
+    fn poll(pty: &mut Pty) -> Input {
+        pty.poll(Duration::from_millis(50)).unwrap()
+    }
+
+    #[test]
+    fn a_sender_that_closes_and_opens_again_between_two_polls_is_seen_reconnecting() {
+        let link = std::env::temp_dir().join(format!("motionctl-pty-test-{}", std::process::id()));
+        let mut pty = Pty::open(&link).unwrap();
+        assert_eq!(poll(&mut pty), Input::default());
+        let mut a = sender(&link);
+        let i = poll(&mut pty);
+        assert!(i.opened && !i.closed && !i.reopened, "{i:?}");
+        a.write_all(b"?").unwrap();
+        assert_eq!(poll(&mut pty).data, b"?");
+        // Closed and opened again before the bridge looks: no hang-up in between to see.
+        drop(a);
+        let b = sender(&link);
+        let i = poll(&mut pty);
+        assert!(i.opened && i.closed && i.reopened, "{i:?}");
+        drop(b);
+        let i = poll(&mut pty);
+        assert!(i.closed && !i.opened && !i.reopened, "{i:?}");
+        assert_eq!(poll(&mut pty), Input::default());
     }
 }

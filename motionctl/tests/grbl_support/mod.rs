@@ -1,10 +1,12 @@
 //! Shared helpers of the `grbl_*` tests: a `motionctl grbl` bridge on the simulated board (run
 //! at [`SIM_SPEED`] times real time, so the files take seconds), a scratch directory, and a raw
-//! TCP session with the bridge.
+//! session with the bridge, over TCP or its pseudo-terminal.
 #![allow(dead_code)]
 
+use std::fs::OpenOptions;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -65,9 +67,13 @@ pub fn tmp_dir(tag: &str) -> TmpDir {
     TmpDir(d)
 }
 
-/// A raw TCP session with the bridge.
+/// What a raw session talks through: a TCP stream or the pseudo-terminal.
+pub trait Port: Read + Write {}
+impl<T: Read + Write> Port for T {}
+
+/// A raw session with the bridge.
 pub struct Raw {
-    s: TcpStream,
+    s: Box<dyn Port>,
     buf: Vec<u8>,
 }
 
@@ -77,6 +83,21 @@ impl Raw {
         let (addr, _drain) = listen_addr(b);
         let s = TcpStream::connect(&addr).unwrap();
         s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+        Raw::welcomed(Box::new(s))
+    }
+
+    /// Opens a `--pty` bridge's port, as a sender opens a serial port, and reads the welcome.
+    pub fn open_pty(port: &Path) -> Raw {
+        let f = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
+            .open(port)
+            .unwrap_or_else(|e| panic!("open {}: {e}", port.display()));
+        Raw::welcomed(Box::new(f))
+    }
+
+    fn welcomed(s: Box<dyn Port>) -> Raw {
         let mut r = Raw { s, buf: Vec::new() };
         r.expect("");
         r.expect("Grbl 1.1h ['$' for help]");
@@ -114,7 +135,10 @@ impl Raw {
             match self.s.read(&mut b) {
                 Ok(0) => panic!("the bridge closed the connection"),
                 Ok(n) => self.buf.extend_from_slice(&b[..n]),
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                // A socket waits its read timeout first; the pseudo-terminal does not wait.
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(2))
+                }
                 Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
                 Err(e) => panic!("read: {e}"),
             }
@@ -174,5 +198,19 @@ fn listen_addr(b: &mut Bridge) -> (String, std::thread::JoinHandle<()>) {
             });
             return (addr, drain);
         }
+    }
+}
+
+/// Waits for a `--pty` bridge's symlink (at most 20 s).
+pub fn wait_for_port(b: &mut Bridge, port: &Path) {
+    let start = Instant::now();
+    while !port.exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "no pty symlink at {}", port.display());
+        if let Ok(Some(st)) = b.child.try_wait() {
+            let mut err = String::new();
+            let _ = b.child.stderr.take().unwrap().read_to_string(&mut err);
+            panic!("motionctl grbl exited ({st}): {err}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
     }
 }

@@ -224,6 +224,10 @@ impl<'a> Bridge<'a> {
         }
         let wait = if self.busy() { 1 } else { 5 };
         let input = self.ep.poll(Duration::from_millis(wait))?;
+        // A sender that closed the port and opened it again: the old one's end first.
+        if input.reopened {
+            self.sender_closed()?;
+        }
         if input.opened {
             eprintln!("motionctl: a sender connected on {}", self.ep.describe());
             self.soft_reset()?;
@@ -231,14 +235,19 @@ impl<'a> Bridge<'a> {
         for b in input.data {
             self.byte(b)?;
         }
-        if input.closed {
-            eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
-            self.stop_motion()?;
-            self.rx.clear();
+        if input.closed && !input.reopened {
+            self.sender_closed()?;
         }
         self.lines()?;
         self.link()?;
         Ok(false)
+    }
+
+    fn sender_closed(&mut self) -> Result<()> {
+        eprintln!("motionctl: the sender closed {}; motion stopped", self.ep.describe());
+        self.stop_motion()?;
+        self.rx.clear();
+        Ok(())
     }
 
     fn busy(&self) -> bool {

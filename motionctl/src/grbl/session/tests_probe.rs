@@ -36,7 +36,7 @@ impl Endpoint for SenderPort {
         if data.is_empty() && !opened {
             std::thread::sleep(timeout);
         }
-        Ok(Input { opened, closed: false, data })
+        Ok(Input { opened, data, ..Input::default() })
     }
 
     fn write(&mut self, bytes: &[u8]) {
