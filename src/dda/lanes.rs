@@ -74,6 +74,25 @@ mod thumb2 {
     use super::Lanes;
     use core::arch::asm;
 
+    /// One lane at byte offset `$at` of the lanes: its error plus its step, the correction when
+    /// that carries, the carry shifted into the mask.
+    macro_rules! lane {
+        ($at:literal) => {
+            concat!(
+                "ldrd {e}, {d}, [{p}, #",
+                $at,
+                "]\n",
+                "adds {e}, {e}, {d}\n",
+                "it cs\n",
+                "addcs {e}, {e}, {mt}\n",
+                "adc {m}, {m}, {m}\n",
+                "str {e}, [{p}, #",
+                $at,
+                "]\n",
+            )
+        };
+    }
+
     /// Lanes are processed from the highest down, each carry shifted in at bit 0 by `adc`, so
     /// lane `i` ends at bit `i`. A lane at a time through two scratch registers (a load of
     /// its pair, a store of its error): a caller's loop keeps its own state in the registers
@@ -88,12 +107,8 @@ mod thumb2 {
             // registers it declares.
             unsafe {
                 asm!(
-                    "ldrd {e}, {d}, [{p}, #40]",
-                    "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                    "str {e}, [{p}, #40]",
-                    "ldrd {e}, {d}, [{p}, #32]",
-                    "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                    "str {e}, [{p}, #32]",
+                    lane!(40),
+                    lane!(32),
                     p = in(reg) p,
                     mt = in(reg) minus_t,
                     m = inout(reg) mask,
@@ -107,18 +122,10 @@ mod thumb2 {
         // the block reads and writes only them and the registers it declares.
         unsafe {
             asm!(
-                "ldrd {e}, {d}, [{p}, #24]",
-                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                "str {e}, [{p}, #24]",
-                "ldrd {e}, {d}, [{p}, #16]",
-                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                "str {e}, [{p}, #16]",
-                "ldrd {e}, {d}, [{p}, #8]",
-                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                "str {e}, [{p}, #8]",
-                "ldrd {e}, {d}, [{p}]",
-                "adds {e}, {e}, {d}", "it cs", "addcs {e}, {e}, {mt}", "adc {m}, {m}, {m}",
-                "str {e}, [{p}]",
+                lane!(24),
+                lane!(16),
+                lane!(8),
+                lane!(0),
                 p = in(reg) p,
                 mt = in(reg) minus_t,
                 m = inout(reg) mask,
