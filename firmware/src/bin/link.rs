@@ -305,8 +305,8 @@ mod app {
     #[cfg(feature = "step-stream")]
     const FULL_STRIDE: i32 = motion::machine::STREAM_SAMPLE_STRIDE as i32;
 
-    /// The motion state locked once for a whole fill of the streamed output: `one_tick`'s
-    /// own locks are then plain calls.
+    /// The motion state locked once for a whole fill of the streamed output: the locks of
+    /// `fill_slot`'s ticks are then plain calls.
     #[cfg(feature = "step-stream")]
     struct HeldForFill<'a>(&'a mut Motion);
 
@@ -320,11 +320,12 @@ mod app {
         }
     }
 
-    /// One slot of a fill: a step-only tick when the machine grants one; else a full tick once
-    /// `STREAM_SAMPLE_STRIDE` slots have passed since the last (at once for an e-stop edge or a
-    /// capability's job), and a held tick (`Machine::held_tick`: the DDA and the step counters)
-    /// before that. So a machine that is not quiet (homing, probing, a fault, a switch being
-    /// timed) takes 8 full ticks per 40 slots, not 40, and the fill keeps to its half.
+    /// One slot of a fill that `Machine::fast_fill` did not take: the capability's step-only
+    /// tick when it grants one; else a full tick once `STREAM_SAMPLE_STRIDE` slots have passed
+    /// since the last (at once for an e-stop edge or a capability's job), and a held tick
+    /// (`Machine::held_tick`: the DDA and the step counters) before that. So a machine that is
+    /// not quiet (homing, probing, a fault, a switch being timed) takes 8 full ticks per 40
+    /// slots, not 40, and the fill keeps to its half.
     #[cfg(feature = "step-stream")]
     #[inline(always)]
     fn fill_slot(

@@ -44,9 +44,9 @@ pub struct Pty {
     master: File,
     slave_name: PathBuf,
     link: PathBuf,
-    connected: bool,
     opens: Inotify,
-    /// File descriptors open on the slave, counted from the events.
+    /// File descriptors open on the slave, counted from the events: a sender is connected
+    /// while any is.
     slave_fds: u32,
 }
 
@@ -88,7 +88,6 @@ impl Pty {
             master: File::from(pty.master),
             slave_name,
             link: link.to_path_buf(),
-            connected: false,
             opens,
             slave_fds: 0,
         })
@@ -116,6 +115,7 @@ impl Pty {
     fn follow_opens(&mut self, input: &mut Input, hung_up: bool) {
         // EAGAIN: nothing yet. Any other failure leaves the hang-up to decide.
         for e in self.opens.read_events().unwrap_or_default() {
+            let was = self.connected();
             if e.mask.contains(AddWatchFlags::IN_Q_OVERFLOW) {
                 // Events were lost: the hang-up says whether anyone has it open now.
                 self.slave_fds = u32::from(!hung_up);
@@ -124,24 +124,23 @@ impl Pty {
             } else if self.slave_fds > 0 {
                 self.slave_fds -= 1;
             }
-            self.settle(input);
+            self.settle(was, input);
         }
     }
 
-    /// Connected while any fd is open on the slave.
-    fn settle(&mut self, input: &mut Input) {
-        let open = self.slave_fds > 0;
-        if open == self.connected {
-            return;
-        }
-        self.connected = open;
-        if open {
-            if input.closed {
-                input.reopened = true;
+    fn connected(&self) -> bool {
+        self.slave_fds > 0
+    }
+
+    /// A connection change since `was`, into `input`.
+    fn settle(&self, was: bool, input: &mut Input) {
+        match (was, self.connected()) {
+            (false, true) => {
+                input.reopened |= input.closed;
+                input.opened = true;
             }
-            input.opened = true;
-        } else {
-            input.closed = true;
+            (true, false) => input.closed = true,
+            _ => {}
         }
     }
 }
@@ -179,10 +178,10 @@ impl Endpoint for Pty {
         }
         if hup && input.data.is_empty() {
             // Closed though no close was counted (the events overflowed): the hang-up decides.
-            if self.connected && !input.opened {
+            if self.connected() && !input.opened {
                 self.slave_fds = 0;
-                self.settle(&mut input);
-            } else if !self.connected {
+                self.settle(true, &mut input);
+            } else if !self.connected() {
                 std::thread::sleep(timeout.min(Duration::from_millis(20)));
             }
         }
@@ -190,7 +189,7 @@ impl Endpoint for Pty {
     }
 
     fn write(&mut self, bytes: &[u8]) {
-        if !self.connected {
+        if !self.connected() {
             return;
         }
         let mut rest = bytes;
